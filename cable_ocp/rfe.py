@@ -1,0 +1,140 @@
+"""Equations of one rigid finite element (rfe) from its energies (paper §2, DESIGN.md §4).
+
+An element of length ``l`` spans from ``A_i`` (its coordinates ``x, y, z``) along the axis ``e`` to
+``A_{i+1} = A_i + l e``. The kinetic energy is that of a uniform solid cylinder, which is the
+paper's ``1/2 tr(B' H B'^T)`` (eq. 4-5) written with the rotation matrix; the mass matrix and the
+velocity terms follow from it by automatic differentiation (eq. 6).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import casadi as ca
+
+from cable_ocp.hydro import (
+    HydroCoefficients,
+    added_mass_tensor,
+    drag_force_density,
+    gauss_points,
+)
+from cable_ocp.kinematics import POSITION, axis_direction, rotation_matrix
+
+
+@dataclass(frozen=True)
+class ElementProperties:
+    """Material data shared by every element of a cable.
+
+    Attributes
+    ----------
+    mass_per_length : float, kg/m
+    diameter : float, m
+    submerged_weight_per_length : float, N/m
+        Weight less buoyancy per unit length (eq. 13, 23-24).
+    torsion : bool
+        6-DOF elements (with the twist angle) when true.
+    hydro : HydroCoefficients or None
+        None in air.
+    """
+
+    mass_per_length: float
+    diameter: float
+    submerged_weight_per_length: float
+    torsion: bool
+    hydro: HydroCoefficients | None
+
+    @property
+    def dofs(self) -> int:
+        """Generalised coordinates per element (5 or 6)."""
+        return 6 if self.torsion else 5
+
+
+def element_rotation(q: ca.SX, torsion: bool) -> ca.SX:
+    """Rotation matrix of an element from its generalised coordinates."""
+    return rotation_matrix(q[3], q[4], q[5] if torsion else 0.0)
+
+
+def kinetic_energy(q: ca.SX, qd: ca.SX, length: ca.SX, props: ElementProperties) -> ca.SX:
+    """Kinetic energy (J) of a uniform cylinder element, without added mass.
+
+    ``T = 1/2 m |r'|^2 + m r'.(R' c) + 1/2 tr(R' J R'^T)`` with ``c = (l/2, 0, 0)`` and
+    ``J = diag(m l^2/3, m d^2/16, m d^2/16)``: the trace form of eq. 4 with ``H`` of eq. 5.
+    """
+    mass = props.mass_per_length * length
+    rotation = element_rotation(q, props.torsion)
+    rotation_rate = ca.jtimes(rotation, q, qd)
+    velocity = qd[POSITION]
+    centre = ca.vertcat(length / 2, 0, 0)
+    transverse = mass * props.diameter**2 / 16
+    second_moment = ca.diag(ca.vertcat(mass * length**2 / 3, transverse, transverse))
+    return (
+        0.5 * mass * ca.dot(velocity, velocity)
+        + mass * ca.dot(velocity, rotation_rate @ centre)
+        + 0.5 * ca.trace(rotation_rate @ second_moment @ rotation_rate.T)
+    )
+
+
+def axis_point_jacobian(q: ca.SX, xi: ca.SX) -> ca.SX:
+    """Jacobian (3 x dofs) of the axis point at distance ``xi`` (m) from A_i w.r.t. q."""
+    point = q[POSITION] + xi * axis_direction(q[3], q[4])
+    return ca.jacobian(point, q)
+
+
+def element_functions(props: ElementProperties) -> tuple[ca.Function, ca.Function]:
+    """Build the per-element terms as SX Functions, to be inlined for every element.
+
+    Inputs ``q``, ``qd`` (dofs) and ``length`` (m). Outputs:
+
+    - ``mass_matrix`` (dofs x dofs, kg, kg m, kg m^2): rigid plus added mass;
+    - ``force`` (dofs): generalised force without bonds and springs: ``-h`` (eq. 6, 32), weight
+      less buoyancy (eq. 14, 24 corrected) and Morison drag (eq. 26);
+    - ``axis``, ``axis_rate`` (3): ``e`` and its rate;
+    - ``axis_quadratic`` (3): ``d/dt(e')`` at zero angular acceleration;
+    - ``top_jacobian`` (3 x dofs): Jacobian of ``A_{i+1} = A_i + l e``;
+
+    The second Function gives the element's energy (J): kinetic (with added mass) plus the
+    gravity/buoyancy potential.
+    """
+    dofs = props.dofs
+    q = ca.SX.sym("q", dofs)
+    qd = ca.SX.sym("qd", dofs)
+    length = ca.SX.sym("length")
+
+    kinetic = kinetic_energy(q, qd, length, props)
+    momentum = ca.gradient(kinetic, qd)
+    mass_matrix = ca.jacobian(momentum, qd)
+    velocity_terms = ca.jtimes(momentum, q, qd) - ca.gradient(kinetic, q)
+
+    axis = axis_direction(q[3], q[4])
+    centre_height = q[2] + 0.5 * length * axis[2]
+    potential = props.submerged_weight_per_length * length * centre_height
+    force = -velocity_terms - ca.gradient(potential, q)
+
+    hydro = props.hydro
+    if hydro is not None and hydro.has_added_mass:
+        # Linear in xi, so two Gauss points integrate J^T N J exactly.
+        added_kinetic = 0
+        for xi, weight in gauss_points(length, 2):
+            jac = axis_point_jacobian(q, xi)
+            acc_quadratic = ca.jtimes(jac @ qd, q, qd)
+            tensor = added_mass_tensor(axis, hydro)
+            mass_matrix = mass_matrix + weight * jac.T @ tensor @ jac
+            force = force - weight * jac.T @ tensor @ acc_quadratic
+            point_velocity = jac @ qd
+            added_kinetic = added_kinetic + 0.5 * weight * point_velocity.T @ tensor @ point_velocity
+        kinetic = kinetic + added_kinetic
+    if hydro is not None and hydro.has_drag:
+        for xi, weight in gauss_points(length, hydro.quadrature_points):
+            jac = axis_point_jacobian(q, xi)
+            force = force + weight * jac.T @ drag_force_density(jac @ qd, axis, hydro)
+
+    axis_rate = ca.jtimes(axis, q, qd)
+    axis_quadratic = ca.jtimes(axis_rate, q, qd)
+    top_jacobian = ca.jacobian(q[POSITION] + length * axis, q)
+    return ca.Function(
+        "element",
+        [q, qd, length],
+        [ca.densify(mass_matrix), force, axis, axis_rate, axis_quadratic, top_jacobian],
+        ["q", "qd", "length"],
+        ["mass_matrix", "force", "axis", "axis_rate", "axis_quadratic", "top_jacobian"],
+    ), ca.Function("element_energy", [q, qd, length], [kinetic + potential])

@@ -1,0 +1,544 @@
+"""Scene files: TOML loaded into frozen, validated dataclasses.
+
+This is the only module that reads scene files. Every field is declared once, with its default,
+type, allowed range, unit and meaning (``_param``); one generic checker enforces those declarations
+in each dataclass's ``__post_init__``, so direct construction and :func:`dataclasses.replace` are
+validated exactly like a loaded file. Every error is a :class:`SceneError` (a ``ValueError``)
+whose message starts with the full field path, e.g. ``cable.length = -3.0 is out of range: must
+be > 0 (m)``.
+"""
+
+from __future__ import annotations
+
+import copy
+import math
+import numbers
+import os
+from collections.abc import Callable, Collection, Mapping, Set
+from dataclasses import MISSING, dataclass, field, fields
+from pathlib import Path
+from typing import Any, ClassVar
+
+try:
+    import tomllib
+except ModuleNotFoundError:  # Python 3.10
+    import tomli as tomllib
+
+__all__ = [
+    "Cable",
+    "EndLoad",
+    "Environment",
+    "Hill",
+    "Hydrodynamics",
+    "ModelOptions",
+    "Numerics",
+    "Scene",
+    "SceneError",
+    "Seabed",
+    "TopMotion",
+    "Winch",
+    "load_scene",
+    "scene_from_dict",
+]
+
+Vector3 = tuple[float, float, float]
+
+
+class SceneError(ValueError):
+    """Invalid scene data; ``path`` is the dotted field path the message starts with."""
+
+    def __init__(self, path: str, detail: str) -> None:
+        self.path, self.detail = path, detail
+        super().__init__(path + detail)
+
+    def relocated(self, old: str, new: str) -> SceneError:
+        """Return the same error with the path prefix ``old`` replaced by ``new``."""
+        if old == new or not self.path.startswith(old):
+            return self
+        return SceneError(new + self.path[len(old) :], self.detail)
+
+
+@dataclass(frozen=True)
+class _Spec:
+    kind: str  # float, int, bool, str, choice, path, vec3, section, tuple
+    doc: str
+    unit: str = ""
+    gt: float | None = None
+    ge: float | None = None
+    le: float | None = None
+    optional: bool = False
+    choices: tuple[str, ...] = ()
+    item: type | None = None  # dataclass of a "section" or of the items of a "tuple"
+
+    def rule(self) -> str:
+        """Describe the allowed range, e.g. ``> 0 (m)``."""
+        bounds = ((">", self.gt), (">=", self.ge), ("<=", self.le))
+        text = " and ".join(f"{op} {bound:g}" for op, bound in bounds if bound is not None)
+        return text + (f" ({self.unit})" if self.unit else "")
+
+    def accepts(self, x: float) -> bool:
+        """Whether the number ``x`` lies in the allowed range."""
+        return (
+            (self.gt is None or x > self.gt)
+            and (self.ge is None or x >= self.ge)
+            and (self.le is None or x <= self.le)
+        )
+
+
+def _param(default: Any = MISSING, kind: str = "float", doc: str = "", **spec: Any) -> Any:
+    """Declare a scene field: default, kind, meaning and constraints (see ``_Spec``)."""
+    meta = {"spec": _Spec(kind, doc, **spec)}
+    if kind == "section":
+        return field(default_factory=spec["item"], metadata=meta)
+    return field(default=default, metadata=meta)
+
+
+def _describe(value: Any) -> str:
+    return f"{type(value).__name__} {value!r}"
+
+
+def _number(value: Any, path: str, spec: _Spec, integer: bool = False) -> float | int:
+    """Check one number against ``spec``; booleans are not numbers, floats are not integers."""
+    want = numbers.Integral if integer else numbers.Real
+    if isinstance(value, bool) or not isinstance(value, want):
+        expected = "an integer" if integer else "a number"
+        raise SceneError(path, f": expected {expected}, got {_describe(value)}")
+    value = int(value) if integer else float(value)
+    if not math.isfinite(value):
+        raise SceneError(path, f" = {value!r} is out of range: must be finite")
+    if not spec.accepts(value):
+        raise SceneError(path, f" = {value!r} is out of range: must be {spec.rule()}")
+    return value
+
+
+def _check(spec: _Spec, value: Any, path: str) -> Any:
+    """Validate and normalise one field value (the single checker used by every dataclass)."""
+    if value is None and spec.optional:
+        return None
+    kind = spec.kind
+    if kind in ("float", "int"):
+        return _number(value, path, spec, integer=kind == "int")
+    if kind == "bool" and not isinstance(value, bool):
+        raise SceneError(path, f": expected true or false, got {_describe(value)}")
+    if kind in ("str", "choice") and not isinstance(value, str):
+        raise SceneError(path, f": expected a string, got {_describe(value)}")
+    if kind == "choice" and value not in spec.choices:
+        allowed = ", ".join(repr(c) for c in spec.choices)
+        raise SceneError(path, f" = {value!r} is not allowed: must be one of {allowed}")
+    if kind == "path":
+        if not isinstance(value, str | os.PathLike):
+            raise SceneError(path, f": expected a file path string, got {_describe(value)}")
+        value = str(Path(value).resolve())
+        if not Path(value).is_file():
+            raise SceneError(path, f" = {value!r}: file not found")
+    if kind in ("vec3", "tuple"):
+        if isinstance(value, str | bytes | Mapping | Set) or not isinstance(value, Collection):
+            expected = "3 numbers" if kind == "vec3" else "a list"
+            raise SceneError(path, f": expected {expected}, got {_describe(value)}")
+        if kind == "vec3" and len(value) != 3:
+            raise SceneError(
+                path, f": expected 3 numbers, got {type(value).__name__} of length {len(value)}"
+            )
+        if kind == "vec3":
+            return tuple(_number(v, f"{path}[{k}]", spec) for k, v in enumerate(value))
+        for k, v in enumerate(value):
+            if not isinstance(v, spec.item):
+                expected = f"a {spec.item.__name__}"
+                raise SceneError(f"{path}[{k}]", f": expected {expected}, got {_describe(v)}")
+        return tuple(value)
+    if kind == "section" and not isinstance(value, spec.item):
+        raise SceneError(path, f": expected a {spec.item.__name__}, got {_describe(value)}")
+    return value
+
+
+class _Validated:
+    """Base of the scene dataclasses: generic validation, ``to_dict`` and error helpers."""
+
+    _section: ClassVar[str] = ""
+
+    def __post_init__(self) -> None:
+        for f in fields(self):
+            if "spec" in f.metadata:
+                value = _check(f.metadata["spec"], getattr(self, f.name), self._path(f.name))
+                object.__setattr__(self, f.name, value)
+        self._check_relations()
+
+    def _check_relations(self) -> None:
+        """Check constraints between fields (overridden where there are any)."""
+
+    def _path(self, name: str) -> str:
+        return f"{self._section}.{name}" if self._section else name
+
+    def _fail(self, name: str, rule: str) -> SceneError:
+        unit = next(f.metadata["spec"].unit for f in fields(self) if f.name == name)
+        unit = f" ({unit})" if unit else ""
+        detail = f" = {getattr(self, name)!r} is out of range: must be {rule}{unit}"
+        return SceneError(self._path(name), detail)
+
+    def to_dict(self) -> dict[str, Any]:
+        """Plain nested dict (lists for vectors, optional fields left out when None)."""
+        return {
+            f.name: _plain(getattr(self, f.name))
+            for f in fields(self)
+            if "spec" in f.metadata and getattr(self, f.name) is not None
+        }
+
+
+def _plain(value: Any) -> Any:
+    if isinstance(value, _Validated):
+        return value.to_dict()
+    if isinstance(value, tuple):
+        return [_plain(v) for v in value]
+    return value
+
+
+def _section(path: str) -> Callable[[type], type]:
+    """Set a dataclass's section path and append its field reference to its docstring."""
+
+    def wrap(cls: type) -> type:
+        cls._section = path
+        lines = ["", "    Attributes", "    ----------"]
+        for f in fields(cls):
+            if "spec" in f.metadata:
+                s = f.metadata["spec"]
+                rule = s.rule() if s.kind in ("float", "int", "vec3") else s.unit
+                kind = f"{s.item.__name__}" if s.item else s.kind
+                optional = ", optional" if s.optional else ""
+                lines += [f"    {f.name} : {kind}{optional}", f"        {s.doc} {rule}".rstrip()]
+        cls.__doc__ = (cls.__doc__ or "").rstrip() + "\n" + "\n".join(lines) + "\n"
+        return cls
+
+    return wrap
+
+
+@_section("cable")
+@dataclass(frozen=True)
+class Cable(_Validated):
+    """The cable's geometry and material."""
+
+    length: float = _param(300.0, doc="Length L.", gt=0, unit="m")
+    diameter: float = _param(0.07, doc="Diameter d.", gt=0, unit="m")
+    density: float = _param(6500.0, doc="Density rho.", gt=0, unit="kg/m^3")
+    youngs_modulus: float = _param(1e11, doc="Young's modulus E.", gt=0, unit="Pa")
+    shear_modulus: float = _param(8e10, doc="Shear modulus G.", gt=0, unit="Pa")
+    area: float | None = _param(
+        None, doc="Cross-section area A; None means pi d^2/4.", gt=0, unit="m^2", optional=True
+    )
+    bending_damping: float = _param(
+        0.0, doc="Rayleigh time constant: damping = bending_damping x stiffness.", ge=0, unit="s"
+    )
+    torsion_damping: float = _param(0.0, doc="Rayleigh time constant for torsion.", ge=0, unit="s")
+
+    @property
+    def cross_section_area(self) -> float:
+        """Cross-section area A, m^2 (``area`` if given, else pi d^2/4)."""
+        return self.area if self.area is not None else math.pi * self.diameter**2 / 4
+
+    @property
+    def mass_per_length(self) -> float:
+        """Mass per unit length mu = rho A, kg/m."""
+        return self.density * self.cross_section_area
+
+    @property
+    def bending_stiffness(self) -> float:
+        """Bending stiffness EI = E pi d^4/64, N m^2."""
+        return self.youngs_modulus * math.pi * self.diameter**4 / 64
+
+    @property
+    def torsional_stiffness(self) -> float:
+        """Torsional stiffness G I_p = G pi d^4/32, N m^2."""
+        return self.shear_modulus * math.pi * self.diameter**4 / 32
+
+
+@_section("environment")
+@dataclass(frozen=True)
+class Environment(_Validated):
+    """Gravity and the surrounding fluid."""
+
+    gravity: float = _param(9.81, doc="Gravitational acceleration g.", gt=0, unit="m/s^2")
+    submerged: bool = _param(True, "bool", "Cable in water (true) or in air (false).")
+    water_density: float = _param(
+        1025.0, doc="Water density rho_w (> 0 when submerged).", ge=0, unit="kg/m^3"
+    )
+    current: Vector3 = _param((0.0, 0.0, 0.0), "vec3", "Uniform current velocity.", unit="m/s")
+
+    def _check_relations(self) -> None:
+        if self.submerged and self.water_density <= 0:
+            raise self._fail("water_density", "> 0 when environment.submerged is true")
+
+
+@_section("hydrodynamics")
+@dataclass(frozen=True)
+class Hydrodynamics(_Validated):
+    """Morison drag and added mass (ignored when the cable is in air)."""
+
+    drag: bool = _param(True, "bool", "Morison drag on.")
+    drag_normal: float = _param(1.0, doc="Normal drag coefficient C_dn.", ge=0)
+    drag_axial: float = _param(0.1, doc="Axial drag coefficient C_dt.", ge=0)
+    added_mass: bool = _param(True, "bool", "Added mass on.")
+    added_mass_normal: float = _param(1.0, doc="Normal added-mass C_a = C_M - 1.", ge=0)
+    added_mass_axial: float = _param(0.0, doc="Axial added-mass coefficient.", ge=0)
+    quadrature_points: int = _param(3, "int", "Gauss points per element for drag.", ge=1, le=8)
+
+
+@_section("model")
+@dataclass(frozen=True)
+class ModelOptions(_Validated):
+    """Discretisation and which internal forces the model carries."""
+
+    elements: int = _param(15, "int", "n; the model has n+1 rigid elements.", ge=1, le=1000)
+    torsion: bool = _param(False, "bool", "6-DOF elements with torsion springs.")
+    bending: bool = _param(True, "bool", "Bending springs on.")
+
+
+@_section("top")
+@dataclass(frozen=True)
+class TopMotion(_Validated):
+    """Prescribed motion of the top point A_{n+1}, carried by the vessel (DESIGN section 6)."""
+
+    motion: str = _param("fixed", "choice", "Profile.", choices=("fixed", "tow", "table"))
+    start: Vector3 = _param((0.0, 0.0, 0.0), "vec3", "Position at t = 0.", unit="m")
+    surge_speed: float = _param(1.16, doc="Tow: final surge speed U.", unit="m/s")
+    sway_speed: float = _param(0.40, doc="Tow: sway speed amplitude W.", unit="m/s")
+    ramp_time: float = _param(30.0, doc="Tow: surge ramp time T_r.", gt=0, unit="s")
+    sway_period: float = _param(
+        210.0, doc="Tow: sway period T, v_y = W sin^2(pi t/T).", gt=0, unit="s"
+    )
+    table: str | None = _param(
+        None, "path", "CSV (t,x,y,z) for motion 'table'; absolute path.", optional=True
+    )
+    heave_amplitude: float = _param(0.0, doc="Heave amplitude.", ge=0, unit="m")
+    heave_period: float = _param(10.0, doc="Heave period.", gt=0, unit="s")
+    heave_compensation: bool = _param(False, "bool", "Heave compensated at the top.")
+
+    def _check_relations(self) -> None:
+        if self.motion == "table" and self.table is None:
+            raise SceneError(self._path("table"), ": required when top.motion = 'table'")
+
+
+@_section("end")
+@dataclass(frozen=True)
+class EndLoad(_Validated):
+    """Loads at the free end E = A_0: constant and time-varying force, optional payload.
+
+    The time-varying force's component k is ``force_amplitude[k] * S((t - force_start) /
+    force_ramp) * (sin(2 pi (t - force_start) / force_period[k]) if force_period[k] > 0 else 1)``.
+    """
+
+    force: Vector3 = _param((0.0, 0.0, 0.0), "vec3", "Constant force.", unit="N")
+    force_amplitude: Vector3 = _param((0.0, 0.0, 0.0), "vec3", "Varying force.", unit="N")
+    force_period: Vector3 = _param((0.0, 0.0, 0.0), "vec3", "0 = no oscillation.", ge=0, unit="s")
+    force_start: float = _param(0.0, doc="Start of the varying force.", ge=0, unit="s")
+    force_ramp: float = _param(0.0, doc="Smoothstep ramp time (0 = step).", ge=0, unit="s")
+    payload_mass: float = _param(0.0, doc="Payload mass.", ge=0, unit="kg")
+    payload_volume: float = _param(0.0, doc="Payload volume (buoyancy).", ge=0, unit="m^3")
+    payload_drag_area: float = _param(0.0, doc="Payload drag area.", ge=0, unit="m^2")
+    payload_drag: float = _param(1.0, doc="Payload drag coefficient.", ge=0)
+    payload_added_mass: float = _param(1.0, doc="Payload added-mass coefficient.", ge=0)
+
+
+@_section("winch")
+@dataclass(frozen=True)
+class Winch(_Validated):
+    """Winch: drum, angle bounds, spline knots, top-element length bounds."""
+
+    drum_radius: float = _param(0.5, doc="Drum radius r_D.", gt=0, unit="m")
+    angle_min: float = _param(-16.0, doc="Lower bound of phi (haul-in).", le=0, unit="rad")
+    angle_max: float = _param(24.0, doc="Upper bound of phi (pay-out).", ge=0, unit="rad")
+    rate_max: float | None = _param(None, doc="Bound on |phi'|.", gt=0, unit="rad/s", optional=True)
+    acceleration_max: float | None = _param(
+        None, doc="Bound on |phi''|.", gt=0, unit="rad/s^2", optional=True
+    )
+    knots: int = _param(14, "int", "Cubic-spline subintervals p.", ge=1, le=200)
+    top_length_min: float = _param(2.0, doc="Shortest top element.", gt=0, unit="m")
+    top_length_max: float = _param(22.0, doc="Longest top element.", gt=0, unit="m")
+
+    def _check_relations(self) -> None:
+        if self.angle_min >= self.angle_max:
+            raise self._fail("angle_min", "< winch.angle_max")
+        if self.top_length_max <= self.top_length_min:
+            raise self._fail("top_length_max", "> winch.top_length_min")
+
+
+@_section("hill")
+@dataclass(frozen=True)
+class Hill(_Validated):
+    """Gaussian hill z = height exp(-((x-x0)/width_x)^2 - ((y-y0)/width_y)^2) (eq. 40)."""
+
+    height: float = _param(kind="float", doc="Height k.", unit="m")
+    x0: float = _param(kind="float", doc="Centre x.", unit="m")
+    y0: float = _param(kind="float", doc="Centre y.", unit="m")
+    width_x: float = _param(kind="float", doc="Width p along x.", gt=0, unit="m")
+    width_y: float = _param(kind="float", doc="Width q along y.", gt=0, unit="m")
+
+
+@_section("seabed")
+@dataclass(frozen=True)
+class Seabed(_Validated):
+    """Seabed: the end's clearance delta and the hills (none = flat)."""
+
+    clearance: float = _param(5.0, doc="Initial clearance delta of the end.", ge=0, unit="m")
+    hills: tuple[Hill, ...] = _param((), "tuple", "Hills, summed.", item=Hill)
+
+
+@_section("numerics")
+@dataclass(frozen=True)
+class Numerics(_Validated):
+    """Simulation horizon, RK4 step, Baumgarte gains and output."""
+
+    duration: float = _param(100.0, doc="Horizon T.", gt=0, unit="s")
+    step: float = _param(0.01, doc="RK4 step h (<= duration).", gt=0, unit="s")
+    baumgarte_alpha: float = _param(5.0, doc="Baumgarte alpha.", ge=0, unit="1/s")
+    baumgarte_beta: float = _param(5.0, doc="Baumgarte beta.", ge=0, unit="1/s")
+    constraint_tolerance: float = _param(1e-6, doc="Largest bond residual.", gt=0, unit="m")
+    output_every: int = _param(1, "int", "Keep every k-th RK4 step.", ge=1)
+
+    def _check_relations(self) -> None:
+        if self.step > self.duration:
+            raise self._fail("step", f"<= numerics.duration = {self.duration!r}")
+
+
+@_section("")
+@dataclass(frozen=True)
+class Scene(_Validated):
+    """A complete scene: the sections of a scene file, validated together.
+
+    ``source`` is the absolute path of the file it was loaded from (None otherwise); it is neither
+    compared nor exported by `to_dict`. The scene is hashable, so it can key a cache.
+    """
+
+    name: str = _param("scene", "str", "Scene name (default: the file stem).")
+    description: str = _param("", "str", "Free text.")
+    cable: Cable = _param(kind="section", doc="[cable]", item=Cable)
+    environment: Environment = _param(kind="section", doc="[environment]", item=Environment)
+    hydrodynamics: Hydrodynamics = _param(kind="section", doc="[hydrodynamics]", item=Hydrodynamics)
+    model: ModelOptions = _param(kind="section", doc="[model]", item=ModelOptions)
+    top: TopMotion = _param(kind="section", doc="[top]", item=TopMotion)
+    end: EndLoad = _param(kind="section", doc="[end]", item=EndLoad)
+    winch: Winch = _param(kind="section", doc="[winch]", item=Winch)
+    seabed: Seabed = _param(kind="section", doc="[seabed]", item=Seabed)
+    numerics: Numerics = _param(kind="section", doc="[numerics]", item=Numerics)
+    source: str | None = field(default=None, compare=False)
+
+    @property
+    def segment_length(self) -> float:
+        """Segment length Delta = L / n, m."""
+        return self.cable.length / self.model.elements
+
+    def _check_relations(self) -> None:
+        half = self.segment_length / 2
+        rule = f"Delta/2 = cable.length / model.elements / 2 = {half!r}"
+        if self.winch.top_length_min > half:
+            raise self.winch._fail("top_length_min", f"<= {rule}")
+        if self.winch.top_length_max < half:
+            raise self.winch._fail("top_length_max", f">= {rule}")
+
+    def updated(self, overrides: Mapping[str, Any]) -> Scene:
+        """Return a new validated scene with dotted-key ``overrides`` applied (see `load_scene`)."""
+        base_dir = Path(self.source).parent if self.source else None
+        data = _apply_overrides(self.to_dict(), overrides)
+        return _build(Scene, data, "", base_dir, source=self.source)
+
+
+def _apply_overrides(data: Mapping[str, Any], overrides: Mapping[str, Any] | None) -> dict:
+    """Copy ``data`` and set each dotted key of ``overrides`` (e.g. ``"model.elements"``)."""
+    data = copy.deepcopy(dict(data))
+    for key, value in (overrides or {}).items():
+        parts = str(key).split(".")
+        node = data
+        for depth, part in enumerate(parts[:-1]):
+            node = node.setdefault(part, {})
+            if not isinstance(node, dict):
+                prefix = ".".join(parts[: depth + 1])
+                raise SceneError(key, f": cannot set a key inside {prefix}, which is not a table")
+        node[parts[-1]] = value
+    return data
+
+
+def _build(cls: type, data: Any, path: str, base_dir: Path | None, **extra: Any) -> Any:
+    """Build dataclass ``cls`` from the raw mapping ``data`` found at ``path``."""
+    if not isinstance(data, Mapping):
+        raise SceneError(path or "scene", f": expected a table, got {_describe(data)}")
+    specs = {f.name: f for f in fields(cls) if "spec" in f.metadata}
+    join = (lambda name: f"{path}.{name}") if path else str
+    for name in data:
+        if name not in specs:
+            raise SceneError(join(name), f": unknown key; allowed keys: {', '.join(specs)}")
+    for name, f in specs.items():
+        if name not in data and f.default is MISSING and f.default_factory is MISSING:
+            raise SceneError(join(name), ": missing required key")
+    kwargs = dict(extra)
+    for name, value in data.items():
+        spec = specs[name].metadata["spec"]
+        if spec.kind == "section":
+            value = _build(spec.item, value, join(name), base_dir)
+        elif spec.kind == "tuple" and isinstance(value, list):
+            value = [
+                _build(spec.item, v, f"{join(name)}[{k}]", base_dir) for k, v in enumerate(value)
+            ]
+        elif spec.kind == "path" and isinstance(value, str):
+            value = str(Path(base_dir or Path.cwd()) / Path(value).expanduser())
+        kwargs[name] = value
+    try:
+        return cls(**kwargs)
+    except SceneError as err:
+        raise err.relocated(cls._section, path) from None
+
+
+def scene_from_dict(
+    data: Mapping[str, Any], name: str = "scene", base_dir: str | os.PathLike | None = None
+) -> Scene:
+    """Build a validated scene from a nested dict shaped like a scene file.
+
+    Parameters
+    ----------
+    data : Mapping
+        Sections as nested mappings, as parsed from TOML or given by `Scene.to_dict`.
+    name : str
+        Scene name used when ``data`` has no ``name`` key.
+    base_dir : path-like, optional
+        Folder that relative file paths (``top.table``) are resolved against; default: cwd.
+
+    Returns
+    -------
+    Scene
+        The validated scene (``source`` is None).
+
+    Raises
+    ------
+    SceneError
+        A ``ValueError`` naming the offending field path and what is allowed.
+    """
+    data = {"name": name, **data}
+    return _build(Scene, data, "", Path(base_dir) if base_dir is not None else None)
+
+
+def load_scene(path: str | os.PathLike, overrides: Mapping[str, Any] | None = None) -> Scene:
+    """Load and validate a TOML scene file.
+
+    Parameters
+    ----------
+    path : path-like
+        The scene file; its stem is the default scene name, its folder the base of relative paths.
+    overrides : Mapping, optional
+        Dotted keys and values applied before validation, e.g. ``{"model.elements": 30,
+        "numerics.step": 0.01}``; unknown keys are rejected like unknown keys in the file.
+
+    Returns
+    -------
+    Scene
+        The validated scene, with ``source`` the absolute path of the file.
+
+    Raises
+    ------
+    SceneError
+        A ``ValueError`` naming the offending field path (also for invalid TOML, naming the file).
+    """
+    path = Path(path)
+    with path.open("rb") as fh:
+        try:
+            data = tomllib.load(fh)
+        except tomllib.TOMLDecodeError as err:
+            raise SceneError(str(path), f": invalid TOML: {err}") from err
+    data = {"name": path.stem, **_apply_overrides(data, overrides)}
+    return _build(Scene, data, "", path.parent, source=str(path.resolve()))

@@ -1,0 +1,176 @@
+"""Prescribed motion of the top point ``A_{n+1}`` (the winch on the vessel), with exact rates.
+
+Every motion is a callable ``t -> (position, velocity, acceleration)``, each an array of shape
+``(3, len(t))`` in m, m/s, m/s^2, evaluated vectorised in numpy.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+from pathlib import Path
+
+import numpy as np
+from scipy.interpolate import CubicSpline
+
+TopMotionFunction = Callable[[np.ndarray], tuple[np.ndarray, np.ndarray, np.ndarray]]
+MIN_TABLE_ROWS = 4
+
+
+def smoothstep(tau: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Quintic smoothstep ``S = 10 tau^3 - 15 tau^4 + 6 tau^5`` on [0, 1], 0 before and 1 after.
+
+    Returns
+    -------
+    value, first derivative, integral from 0 : arrays (per unit tau)
+    """
+    s = np.clip(tau, 0.0, 1.0)
+    value = s**3 * (10 - 15 * s + 6 * s**2)
+    slope = 30 * s**2 * (1 - s) ** 2
+    integral = s**4 * (2.5 - 3 * s + s**2) + np.maximum(tau - 1.0, 0.0) * 1.0
+    return value, slope, integral
+
+
+def fixed_top(start) -> TopMotionFunction:
+    """Top held at ``start`` (m)."""
+    start = np.asarray(start, dtype=float).reshape(3, 1)
+
+    def motion(t):
+        t = np.atleast_1d(t)
+        zeros = np.zeros((3, t.size))
+        return start + zeros, zeros, zeros.copy()
+
+    return motion
+
+
+def tow_profile(start, surge_speed, sway_speed, ramp_time, sway_period) -> TopMotionFunction:
+    """The reconstructed vessel motion of DESIGN.md §6.
+
+    ``v_x = U S(t / T_r)``, ``v_y = W sin^2(pi t / T)``; positions are the exact integrals.
+
+    Parameters
+    ----------
+    start : 3 floats, m
+    surge_speed : float, m/s (U)
+    sway_speed : float, m/s (W)
+    ramp_time : float, s (T_r)
+    sway_period : float, s (T)
+    """
+    start = np.asarray(start, dtype=float).reshape(3, 1)
+
+    def motion(t):
+        t = np.atleast_1d(np.asarray(t, dtype=float))
+        value, slope, integral = smoothstep(t / ramp_time)
+        omega = 2 * np.pi / sway_period
+        position = np.vstack(
+            [
+                surge_speed * ramp_time * integral,
+                sway_speed * (t / 2 - np.sin(omega * t) / (2 * omega)),
+                np.zeros_like(t),
+            ]
+        )
+        velocity = np.vstack(
+            [surge_speed * value, sway_speed * np.sin(np.pi * t / sway_period) ** 2, 0 * t]
+        )
+        acceleration = np.vstack(
+            [surge_speed * slope / ramp_time, sway_speed * omega / 2 * np.sin(omega * t), 0 * t]
+        )
+        return start + position, velocity, acceleration
+
+    return motion
+
+
+def tabulated_top(time, points) -> TopMotionFunction:
+    """Top motion through a time history, interpolated by a C2 cubic spline.
+
+    Parameters
+    ----------
+    time : array (k,), s
+        Strictly increasing, at least 4 samples.
+    points : array (k, 3), m
+        Positions x, y, z.
+    """
+    time = np.asarray(time, dtype=float)
+    points = np.asarray(points, dtype=float)
+    if time.ndim != 1 or points.shape != (time.size, 3):
+        raise ValueError(
+            f"top.table: expected columns t, x, y, z; got times {time.shape} and points "
+            f"{points.shape}"
+        )
+    if time.size < MIN_TABLE_ROWS:
+        raise ValueError(f"top.table: {time.size} rows; need at least {MIN_TABLE_ROWS}")
+    if not (np.all(np.isfinite(time)) and np.all(np.isfinite(points))):
+        row = int(np.argmax(~np.isfinite(np.column_stack([time, points])).all(axis=1)))
+        raise ValueError(f"top.table: row {row} has a non-finite value (NaN or inf)")
+    if np.any(np.diff(time) <= 0):
+        row = int(np.argmax(np.diff(time) <= 0)) + 1
+        raise ValueError(f"top.table: time must increase strictly; row {row} has t = {time[row]}")
+    spline = CubicSpline(time, points, axis=0, bc_type="natural")
+    slope, curvature = spline.derivative(1), spline.derivative(2)
+
+    def motion(t):
+        t = np.atleast_1d(np.asarray(t, dtype=float))
+        if t.min() < time[0] - 1e-12 or t.max() > time[-1] + 1e-12:
+            raise ValueError(
+                f"top.table covers t in [{time[0]}, {time[-1]}] s; asked for "
+                f"[{t.min()}, {t.max()}] s"
+            )
+        return spline(t).T, slope(t).T, curvature(t).T
+
+    return motion
+
+
+def read_table(path: str | Path) -> tuple[np.ndarray, np.ndarray]:
+    """Read a CSV time history with columns t, x, y, z (s, m); a header line is allowed.
+
+    Returns
+    -------
+    time : array (k,), s
+    points : array (k, 3), m
+    """
+    try:
+        data = np.genfromtxt(path, delimiter=",", comments="#", names=None, skip_header=0)
+    except (OSError, ValueError) as error:
+        raise ValueError(f"top.table: cannot read {path}: {error}") from error
+    if data.ndim == 2 and np.all(np.isnan(data[0])):
+        data = data[1:]
+    if data.ndim != 2 or data.shape[1] != 4:
+        raise ValueError(f"top.table: {path} must have 4 columns t, x, y, z")
+    return data[:, 0], data[:, 1:]
+
+
+def heave(amplitude: float, period: float) -> TopMotionFunction:
+    """Vertical sinusoid ``z = a sin(2 pi t / T)`` (m) added to a horizontal motion."""
+    omega = 2 * np.pi / period
+
+    def motion(t):
+        t = np.atleast_1d(np.asarray(t, dtype=float))
+        zeros = np.zeros((2, t.size))
+        s, c = np.sin(omega * t), np.cos(omega * t)
+        return (
+            np.vstack([zeros, amplitude * s]),
+            np.vstack([zeros, amplitude * omega * c]),
+            np.vstack([zeros, -amplitude * omega**2 * s]),
+        )
+
+    return motion
+
+
+def top_motion(top) -> TopMotionFunction:
+    """The top motion a scene's ``[top]`` section describes (heave included)."""
+    if top.motion == "fixed":
+        base = fixed_top(top.start)
+    elif top.motion == "tow":
+        base = tow_profile(
+            top.start, top.surge_speed, top.sway_speed, top.ramp_time, top.sway_period
+        )
+    else:
+        time, points = read_table(top.table)
+        base = tabulated_top(time, points)
+    if top.heave_amplitude == 0:
+        return base
+    vertical = heave(top.heave_amplitude, top.heave_period)
+
+    def motion(t):
+        return tuple(a + b for a, b in zip(base(t), vertical(t), strict=True))
+
+    return motion

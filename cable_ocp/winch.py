@@ -1,0 +1,57 @@
+"""Winch angle ``phi(t)`` and the top-element length it sets (DESIGN.md §3, paper eq. 38, 41).
+
+``l_n(t) = Delta/2 + r_D (phi(t) - phi(0))`` with ``phi > 0`` paying out. An angle history is a
+callable ``t -> (phi, phi', phi'')`` in rad, rad/s, rad/s^2.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+
+import numpy as np
+from scipy.interpolate import CubicSpline
+
+WinchAngleFunction = Callable[[np.ndarray], tuple[np.ndarray, np.ndarray, np.ndarray]]
+
+
+def locked(t: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """A winch that does not turn: ``phi = 0``."""
+    zeros = np.zeros(np.atleast_1d(t).shape)
+    return zeros, zeros.copy(), zeros.copy()
+
+
+def knot_times(duration: float, knots: int) -> np.ndarray:
+    """Equidistant knot times ``t_i = i T / p`` for ``i = 0..p`` (eq. 41), s."""
+    return np.linspace(0.0, duration, knots + 1)
+
+
+def spline_angle(duration: float, knot_values) -> WinchAngleFunction:
+    """Cubic spline through ``phi(t_i)``, ``i = 1..p``, with ``phi(0) = 0`` (the paper's choice).
+
+    The spline starts at rest (``phi'(0) = 0``, the winch is still in the initial equilibrium) and
+    ends free (``phi''(T) = 0``).
+
+    Parameters
+    ----------
+    duration : float, s
+    knot_values : array (p,), rad
+    """
+    values = np.concatenate([[0.0], np.asarray(knot_values, dtype=float).ravel()])
+    spline = CubicSpline(knot_times(duration, values.size - 1), values, bc_type=((1, 0.0), (2, 0.0)))
+    rate, acceleration = spline.derivative(1), spline.derivative(2)
+
+    def angle(t):
+        t = np.clip(np.atleast_1d(np.asarray(t, dtype=float)), 0.0, duration)
+        return spline(t), rate(t), acceleration(t)
+
+    return angle
+
+
+def top_length(
+    angle: WinchAngleFunction, t: np.ndarray, segment_length: float, drum_radius: float
+) -> np.ndarray:
+    """Top-element length and its rates (3, len(t)): m, m/s, m/s^2."""
+    phi, rate, acceleration = angle(t)
+    return np.vstack(
+        [segment_length / 2 + drum_radius * phi, drum_radius * rate, drum_radius * acceleration]
+    )

@@ -1,0 +1,162 @@
+import dataclasses
+import math
+from pathlib import Path
+
+import pytest
+
+from cable_ocp.scene import (
+    Cable,
+    Hill,
+    Numerics,
+    Scene,
+    SceneError,
+    Seabed,
+    load_scene,
+    scene_from_dict,
+)
+
+MODELS = Path(__file__).resolve().parent.parent / "models"
+SCENES = ["catenary", "paper_flat", "paper_hill", "end_force", "hanging"]
+HILL = {"height": 15.0, "x0": 70.0, "y0": 20.0, "width_x": 20.0, "width_y": 20.0}
+
+
+@pytest.fixture(scope="module")
+def flat() -> Scene:
+    return load_scene(MODELS / "paper_flat.toml")
+
+
+@pytest.mark.parametrize("name", SCENES)
+def test_bundled_scene_loads_and_round_trips(name):
+    scene = load_scene(MODELS / f"{name}.toml")
+    assert scene.name == name
+    assert scene.source == str((MODELS / f"{name}.toml").resolve())
+    assert scene_from_dict(scene.to_dict()) == scene
+    assert hash(scene_from_dict(scene.to_dict())) == hash(scene)
+
+
+def test_scene_values():
+    cat = load_scene(MODELS / "catenary.toml")
+    assert cat.cable.cross_section_area == pytest.approx(0.07**2 / 4)
+    assert cat.end.force == (20000.0, 0.0, 50000.0)
+    assert not cat.environment.submerged and not cat.model.bending
+    hill = load_scene(MODELS / "paper_hill.toml")
+    assert hill.seabed.hills == (Hill(**HILL),)
+    assert hill.top.motion == "tow" and hill.segment_length == 20.0
+    end = load_scene(MODELS / "end_force.toml")
+    assert end.model.elements == 100 and end.end.force_period == (0.0, 50.0, 0.0)
+    assert load_scene(MODELS / "hanging.toml").end.force == (0.0, 0.0, 0.0)
+
+
+def test_defaults_and_derived_properties():
+    cable = Cable()
+    assert cable.cross_section_area == pytest.approx(math.pi * 0.07**2 / 4)
+    assert cable.mass_per_length == pytest.approx(6500 * math.pi * 0.07**2 / 4)
+    assert cable.bending_stiffness == pytest.approx(1e11 * math.pi * 0.07**4 / 64)
+    assert cable.torsional_stiffness == pytest.approx(8e10 * math.pi * 0.07**4 / 32)
+    assert scene_from_dict({}) == Scene()
+    assert Scene().to_dict()["seabed"]["hills"] == []
+    assert isinstance(Cable(length=300).length, float)
+
+
+def test_overrides(flat):
+    scene = load_scene(MODELS / "paper_flat.toml", {"model.elements": 30, "numerics.step": 0.01})
+    assert scene.model.elements == 30 and scene.numerics.step == 0.01
+    assert scene.segment_length == 10.0
+    assert flat.updated({"model.elements": 30, "numerics.step": 0.01}) == scene
+    assert flat.updated({"seabed.hills": [HILL]}).seabed.hills == (Hill(**HILL),)
+    assert flat.updated({"name": "x"}).name == "x"
+    assert flat.updated({}).source == flat.source
+    with pytest.raises(ValueError, match=r"^numerics\.step = -1\.0 is out of range"):
+        flat.updated({"numerics.step": -1})
+    with pytest.raises(ValueError, match=r"^cable\.lenght: unknown key; allowed keys: length"):
+        load_scene(MODELS / "paper_flat.toml", {"cable.lenght": 3.0})
+    with pytest.raises(ValueError, match=r"^cable\.length\.x: cannot set"):
+        flat.updated({"cable.length.x": 1.0})
+
+
+def test_direct_construction_is_validated(flat):
+    with pytest.raises(ValueError, match=r"^cable\.diameter = -1\.0 is out of range: must be > 0"):
+        dataclasses.replace(flat.cable, diameter=-1.0)
+    with pytest.raises(ValueError, match=r"^numerics\.step = 2\.0 .* <= numerics\.duration"):
+        Numerics(duration=1.0, step=2.0)
+    with pytest.raises(ValueError, match=r"^winch\.top_length_min"):
+        dataclasses.replace(flat, cable=Cable(length=30.0))
+    with pytest.raises(ValueError, match=r"^seabed\.hills\[0\]: expected a Hill"):
+        Seabed(hills=(HILL,))
+    with pytest.raises(ValueError, match=r"^hill\.width_x"):
+        Hill(**{**HILL, "width_x": 0.0})
+
+
+def test_table_motion(tmp_path, flat):
+    (tmp_path / "vessel.csv").write_text("t,x,y,z\n0,0,0,0\n")
+    data = flat.to_dict()
+    data["top"].update(motion="table", table="vessel.csv")
+    scene = scene_from_dict(data, base_dir=tmp_path)
+    assert scene.top.table == str((tmp_path / "vessel.csv").resolve())
+    assert scene_from_dict(scene.to_dict()) == scene
+    (tmp_path / "s.toml").write_text('[top]\nmotion = "table"\ntable = "vessel.csv"\n')
+    assert load_scene(tmp_path / "s.toml").top.table == scene.top.table
+
+
+def test_invalid_toml(tmp_path):
+    (tmp_path / "bad.toml").write_text("[cable\n")
+    with pytest.raises(ValueError, match="invalid TOML"):
+        load_scene(tmp_path / "bad.toml")
+
+
+BAD = [
+    # unknown keys
+    ({"colour": "red"}, r"^colour: unknown key; allowed keys: name, description, cable"),
+    ({"cable.lenght": 3.0}, r"^cable\.lenght: unknown key; allowed keys: length, diameter"),
+    ({"seabed.hills": [{**HILL, "hieght": 1.0}]}, r"^seabed\.hills\[0\]\.hieght: unknown key"),
+    ({"seabed.hills": [{"height": 1.0}]}, r"^seabed\.hills\[0\]\.x0: missing required key"),
+    ({"cable": 3}, r"^cable: expected a table, got int 3"),
+    # wrong types
+    ({"cable.length": "300"}, r"^cable\.length: expected a number, got str '300'"),
+    ({"environment.gravity": True}, r"^environment\.gravity: expected a number, got bool"),
+    ({"model.elements": 15.5}, r"^model\.elements: expected an integer, got float 15\.5"),
+    ({"model.elements": 15.0}, r"^model\.elements: expected an integer, got float 15\.0"),
+    ({"model.torsion": 1}, r"^model\.torsion: expected true or false, got int 1"),
+    ({"environment.current": [0.0, 0.0]}, r"^environment\.current: expected 3 numbers"),
+    ({"environment.current": 1.0}, r"^environment\.current: expected 3 numbers"),
+    ({"end.force": [0.0, "x", 0.0]}, r"^end\.force\[1\]: expected a number"),
+    ({"cable.length": math.nan}, r"^cable\.length = nan is out of range: must be finite"),
+    # out of range
+    ({"cable.length": -3.0}, r"^cable\.length = -3\.0 is out of range: must be > 0 \(m\)"),
+    ({"cable.diameter": -0.07}, r"^cable\.diameter = -0\.07 is out of range: must be > 0 \(m\)"),
+    ({"model.elements": 0}, r"^model\.elements = 0 is out of range: must be >= 1 and <= 1000"),
+    ({"numerics.step": 0.0}, r"^numerics\.step = 0\.0 is out of range: must be > 0 \(s\)"),
+    ({"numerics.step": -0.01}, r"^numerics\.step = -0\.01 is out of range"),
+    ({"numerics.step": 300.0}, r"^numerics\.step = 300\.0 .* <= numerics\.duration = 210\.0"),
+    ({"numerics.baumgarte_alpha": -1.0}, r"^numerics\.baumgarte_alpha = -1\.0 .* >= 0 \(1/s\)"),
+    ({"numerics.baumgarte_beta": -1.0}, r"^numerics\.baumgarte_beta = -1\.0 .* >= 0 \(1/s\)"),
+    ({"winch.angle_min": 1.0}, r"^winch\.angle_min = 1\.0 is out of range: must be <= 0"),
+    ({"winch.angle_max": -1.0}, r"^winch\.angle_max = -1\.0 is out of range: must be >= 0"),
+    ({"winch.angle_min": 0.0, "winch.angle_max": 0.0}, r"^winch\.angle_min .* < winch\.angle_max"),
+    ({"winch.top_length_min": 12.0}, r"^winch\.top_length_min = 12\.0 .* <= Delta/2"),
+    ({"winch.top_length_max": 8.0}, r"^winch\.top_length_max = 8\.0 .* >= Delta/2"),
+    ({"model.elements": 100}, r"^winch\.top_length_min = 2\.0 .* Delta/2 .* = 1\.5"),
+    ({"winch.top_length_max": 1.0}, r"^winch\.top_length_max .* > winch\.top_length_min"),
+    ({"end.force_period": [0.0, -1.0, 0.0]}, r"^end\.force_period\[1\] = -1\.0 .* >= 0 \(s\)"),
+    ({"environment.water_density": 0.0}, r"^environment\.water_density = 0\.0 .* when"),
+    ({"seabed.hills": [{**HILL, "width_x": 0.0}]}, r"^seabed\.hills\[0\]\.width_x = 0\.0 .* > 0"),
+    ({"hydrodynamics.quadrature_points": 0}, r"^hydrodynamics\.quadrature_points = 0 .* >= 1"),
+    ({"hydrodynamics.quadrature_points": 9}, r"^hydrodynamics\.quadrature_points = 9 .* <= 8"),
+    # top motion
+    ({"top.motion": "towing"}, r"^top\.motion = 'towing' is not allowed: must be one of 'fixed'"),
+    ({"top.motion": "table"}, r"^top\.table: required when top\.motion = 'table'"),
+    ({"top.motion": "table", "top.table": "missing.csv"}, r"^top\.table = '.*missing\.csv'"),
+]
+
+
+@pytest.mark.parametrize(("overrides", "message"), BAD)
+def test_rejected(flat, overrides, message):
+    with pytest.raises(SceneError, match=message):
+        load_scene(MODELS / "paper_flat.toml", overrides)
+    with pytest.raises(ValueError, match=message):
+        flat.updated(overrides)
+
+
+def test_air_needs_no_water_density(flat):
+    scene = flat.updated({"environment.submerged": False, "environment.water_density": 0.0})
+    assert scene.environment.water_density == 0.0
