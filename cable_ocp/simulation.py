@@ -1,0 +1,113 @@
+"""The front door for simulation: ``simulate(scene, winch=...)`` returns a :class:`Trajectory`."""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+
+import numpy as np
+
+from cable_ocp import winch as winch_angles
+from cable_ocp.drive import Drive
+from cable_ocp.integrate import integrate
+from cable_ocp.model import CableModel
+from cable_ocp.seabed import clearance_error, rms_objective
+from cable_ocp.statics import equilibrium
+from cable_ocp.trajectory import Trajectory
+
+WinchSpec = None | np.ndarray | Callable
+
+
+def winch_function(scene, winch: WinchSpec) -> winch_angles.WinchAngleFunction:
+    """Turn a winch specification into an angle history.
+
+    Parameters
+    ----------
+    winch : None, array or callable
+        None: locked. An array of ``scene.winch.knots`` values: the cubic spline through them
+        (rad, ``phi(0) = 0``). A callable ``t -> (phi, phi', phi'')``: used as it is.
+    """
+    if winch is None:
+        return winch_angles.locked
+    if callable(winch):
+        return winch
+    values = np.asarray(winch, dtype=float).ravel()
+    if values.size != scene.winch.knots:
+        raise ValueError(
+            f"winch: {values.size} knot values given; the scene has winch.knots = "
+            f"{scene.winch.knots}"
+        )
+    return winch_angles.spline_angle(scene.numerics.duration, values)
+
+
+def check_top_length(scene, drive: Drive, times: np.ndarray) -> None:
+    """Raise before integrating if the winch takes the top element out of its length range."""
+    length = drive.inputs(times)[9]
+    low, high = scene.winch.top_length_min, scene.winch.top_length_max
+    outside = (length < low) | (length > high)
+    if outside.any():
+        k = int(np.argmax(outside))
+        raise ValueError(
+            f"the winch sets the top-element length to {length[k]:.4g} m at t = {times[k]:.6g} s, "
+            f"outside [winch.top_length_min, winch.top_length_max] = [{low}, {high}] m"
+        )
+
+
+def simulate(
+    scene,
+    winch: WinchSpec = None,
+    model: CableModel | None = None,
+    initial_state: np.ndarray | None = None,
+    quiet: bool = True,
+) -> Trajectory:
+    """Simulate a scene by RK4 from its static equilibrium.
+
+    Parameters
+    ----------
+    scene : Scene
+    winch : None, array or callable
+        See :func:`winch_function`; locked by default.
+    model : CableModel, optional
+        A model built for the scene (built here if not given); it may have another number of
+        elements than the scene.
+    initial_state : array, optional
+        Defaults to the static equilibrium under the inputs at t = 0.
+    quiet : bool
+        No progress bar when true.
+
+    Returns
+    -------
+    Trajectory
+    """
+    numerics = scene.numerics
+    model = model or CableModel.from_scene(scene)
+    drive = Drive.from_scene(scene, winch_function(scene, winch), elements=model.spec.elements)
+    sample_times = np.linspace(0.0, numerics.duration, 1 + int(round(numerics.duration / numerics.step)))
+    check_top_length(scene, drive, sample_times)
+    x0 = equilibrium(model, drive) if initial_state is None else initial_state
+    run = integrate(
+        model,
+        x0,
+        drive,
+        numerics.duration,
+        numerics.step,
+        output_every=numerics.output_every,
+        tolerance=numerics.constraint_tolerance,
+        quiet=quiet,
+    )
+    count = run.time.size
+    joints, _, _, _, _, tensions, _ = model.outputs.map(count)(run.states.T, run.inputs.T)
+    joints = np.array(joints).reshape(3, count, -1).transpose(1, 0, 2)
+    tensions = np.array(tensions).T
+    error = clearance_error(scene.seabed.hills, joints[:, :, 0])
+    return Trajectory(
+        time=run.time,
+        states=run.states,
+        inputs=run.inputs,
+        joints=joints,
+        tensions=tensions,
+        winch_angle=drive.winch_angle(run.time)[0],
+        clearance_error=error,
+        omega=rms_objective(run.time, error),
+        scene_name=scene.name,
+        state_names=model.state_names,
+    )
