@@ -69,7 +69,9 @@ def gauss_points(length: ca.SX, count: int) -> list[tuple[ca.SX, ca.SX]]:
     list of (xi, weight), (m, m)
     """
     nodes, weights = np.polynomial.legendre.leggauss(count)
-    return [(0.5 * length * (1.0 + x), 0.5 * length * w) for x, w in zip(nodes, weights, strict=True)]
+    return [
+        (0.5 * length * (1.0 + x), 0.5 * length * w) for x, w in zip(nodes, weights, strict=True)
+    ]
 
 
 def smooth_norm(v: ca.SX) -> ca.SX:
@@ -95,4 +97,6 @@ def added_mass_tensor(axis: ca.SX, hydro: HydroCoefficients) -> ca.SX:
     """Added mass per unit length (kg/m, 3x3) of a point of an element with unit ``axis``."""
     along = axis @ axis.T
     rho_a = hydro.water_density * hydro.area
-    return rho_a * (hydro.added_mass_normal * (ca.DM.eye(3) - along) + hydro.added_mass_axial * along)
+    return rho_a * (
+        hydro.added_mass_normal * (ca.DM.eye(3) - along) + hydro.added_mass_axial * along
+    )

@@ -129,8 +129,15 @@ def integrate(
         steps = times[first * output_every : (first + size) * output_every]
         block = np.array(fn(state, stage_inputs(drive, steps, step)))
         sample_times = (np.arange(first, first + size) + 1) * output_every * step
-        _check_block(model, block, drive.inputs(sample_times), sample_times, step, tolerance,
-                     residual if size == per_segment else _residual_norms(model, size))
+        _check_block(
+            model,
+            block,
+            drive.inputs(sample_times),
+            sample_times,
+            step,
+            tolerance,
+            residual if size == per_segment else _residual_norms(model, size),
+        )
         states.append(block)
         state = block[:, -1]
         progress.update(sample_times[-1])
@@ -190,8 +197,13 @@ def reference_solution(
         return np.array(rhs(x, drive.inputs(np.array([t]))[:, 0])).ravel()
 
     solution = solve_ivp(
-        f, (times[0], times[-1]), np.asarray(x0, float), method="DOP853", t_eval=times,
-        rtol=rtol, atol=atol,
+        f,
+        (times[0], times[-1]),
+        np.asarray(x0, float),
+        method="DOP853",
+        t_eval=times,
+        rtol=rtol,
+        atol=atol,
     )
     if not solution.success:
         raise SimulationError(f"reference integrator failed: {solution.message}")

@@ -129,6 +129,11 @@ def sparse_kkt_solve(
     accelerations, bond_forces : MX
     """
     size = mass.shape[0]
-    kkt = ca.blockcat([[mass, -bond_jacobian.T], [bond_jacobian, ca.MX(bond_jacobian.shape[0], bond_jacobian.shape[0])]])
+    kkt = ca.blockcat(
+        [
+            [mass, -bond_jacobian.T],
+            [bond_jacobian, ca.MX(bond_jacobian.shape[0], bond_jacobian.shape[0])],
+        ]
+    )
     solution = ca.solve(kkt, ca.vertcat(force, bond_rhs), solver)
     return solution[:size], solution[size:]

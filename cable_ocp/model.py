@@ -209,7 +209,9 @@ class CableModel:
         """Split a state (SX or array) into per-element ``q_i`` and ``q'_i``."""
         size = self.dofs * self.element_count
         q = [x[i * self.dofs : (i + 1) * self.dofs] for i in range(self.element_count)]
-        qd = [x[size + i * self.dofs : size + (i + 1) * self.dofs] for i in range(self.element_count)]
+        qd = [
+            x[size + i * self.dofs : size + (i + 1) * self.dofs] for i in range(self.element_count)
+        ]
         return q, qd
 
     # ----------------------------------------------------------------------------------------
@@ -257,7 +259,8 @@ class CableModel:
         rate = [lo - up for lo, up in zip(lower_rates, upper_rates, strict=True)]
         alpha, beta = spec.baumgarte_alpha, spec.baumgarte_beta
         bond_rhs = [
-            g - 2 * alpha * r - beta**2 * p for g, r, p in zip(quadratic, rate, residual, strict=True)
+            g - 2 * alpha * r - beta**2 * p
+            for g, r, p in zip(quadratic, rate, residual, strict=True)
         ]
 
         accelerations, bond_forces = thomas_solve(mass, forces, top_jacobians, bond_rhs)
@@ -308,7 +311,7 @@ class CableModel:
         self.energy = ca.Function("energy", [self.x, u], [energy], ["x", "u"], ["energy"])
 
     def _spring_energies(self, q, qd, axes, axis_rates) -> tuple[ca.SX, ca.SX]:
-        """Bending (and torsion) potential and Rayleigh dissipation of the joints between elements."""
+        """Bending (and torsion) potential and Rayleigh dissipation of the joints."""
         spec = self.spec
         bending = spec.bending_stiffness / spec.segment_length
         potential = ca.SX(0)
@@ -316,7 +319,9 @@ class CableModel:
         for i in range(1, self.element_count):
             potential += bending * (1 - ca.dot(axes[i - 1], axes[i]))
             relative_rate = axis_rates[i] - axis_rates[i - 1]
-            dissipation += 0.5 * spec.bending_damping * bending * ca.dot(relative_rate, relative_rate)
+            dissipation += (
+                0.5 * spec.bending_damping * bending * ca.dot(relative_rate, relative_rate)
+            )
         if spec.element.torsion:
             torsion = spec.torsional_stiffness / spec.segment_length
             rotations = [element_rotation(qi, True) for qi in q]
@@ -336,7 +341,9 @@ class CableModel:
         if payload.mass > 0 or payload.volume > 0:
             water = spec.water_density
             added = payload.added_mass_coefficient * water * payload.volume
-            mass = mass + ca.diagcat(ca.SX.eye(3) * (payload.mass + added), ca.SX(self.dofs - 3, self.dofs - 3))
+            mass = mass + ca.diagcat(
+                ca.SX.eye(3) * (payload.mass + added), ca.SX(self.dofs - 3, self.dofs - 3)
+            )
             weight = (payload.mass - water * payload.volume) * spec.gravity
             payload_force = ca.vertcat(0, 0, -weight)
             if water > 0 and payload.drag_area > 0:

@@ -121,7 +121,9 @@ def element_functions(props: ElementProperties) -> tuple[ca.Function, ca.Functio
             mass_matrix = mass_matrix + weight * jac.T @ tensor @ jac
             force = force - weight * jac.T @ tensor @ acc_quadratic
             point_velocity = jac @ qd
-            added_kinetic = added_kinetic + 0.5 * weight * point_velocity.T @ tensor @ point_velocity
+            added_kinetic = (
+                added_kinetic + 0.5 * weight * point_velocity.T @ tensor @ point_velocity
+            )
         kinetic = kinetic + added_kinetic
     if hydro is not None and hydro.has_drag:
         for xi, weight in gauss_points(length, hydro.quadrature_points):

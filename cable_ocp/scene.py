@@ -388,8 +388,12 @@ class Numerics(_Validated):
 
     duration: float = _param(100.0, doc="Horizon T.", gt=0, unit="s")
     step: float = _param(0.01, doc="RK4 step h (<= duration).", gt=0, unit="s")
-    baumgarte_alpha: float = _param(1.0, doc="Baumgarte alpha (damping of bond drift).", ge=0, unit="1/s")
-    baumgarte_beta: float = _param(1.0, doc="Baumgarte beta (stiffness of bond drift).", ge=0, unit="1/s")
+    baumgarte_alpha: float = _param(
+        1.0, doc="Baumgarte alpha (damping of bond drift).", ge=0, unit="1/s"
+    )
+    baumgarte_beta: float = _param(
+        1.0, doc="Baumgarte beta (stiffness of bond drift).", ge=0, unit="1/s"
+    )
     constraint_tolerance: float = _param(1e-6, doc="Largest bond residual.", gt=0, unit="m")
     output_every: int = _param(1, "int", "Keep every k-th RK4 step.", ge=1)
 

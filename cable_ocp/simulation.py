@@ -81,7 +81,9 @@ def simulate(
     numerics = scene.numerics
     model = model or CableModel.from_scene(scene)
     drive = Drive.from_scene(scene, winch_function(scene, winch), elements=model.spec.elements)
-    sample_times = np.linspace(0.0, numerics.duration, 1 + int(round(numerics.duration / numerics.step)))
+    sample_times = np.linspace(
+        0.0, numerics.duration, 1 + int(round(numerics.duration / numerics.step))
+    )
     check_top_length(scene, drive, sample_times)
     x0 = equilibrium(model, drive) if initial_state is None else initial_state
     run = integrate(

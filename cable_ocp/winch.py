@@ -37,7 +37,9 @@ def spline_angle(duration: float, knot_values) -> WinchAngleFunction:
     knot_values : array (p,), rad
     """
     values = np.concatenate([[0.0], np.asarray(knot_values, dtype=float).ravel()])
-    spline = CubicSpline(knot_times(duration, values.size - 1), values, bc_type=((1, 0.0), (2, 0.0)))
+    spline = CubicSpline(
+        knot_times(duration, values.size - 1), values, bc_type=((1, 0.0), (2, 0.0))
+    )
     rate, acceleration = spline.derivative(1), spline.derivative(2)
 
     def angle(t):
