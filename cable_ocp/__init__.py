@@ -1,1 +1,33 @@
-"""cable_ocp: dynamics and optimal winch control of a cable-suspended load."""
+"""cable_ocp: dynamics and optimal winch control of a cable-suspended load.
+
+The front door: load a scene, build its model, simulate it (and, later, optimise its winch).
+"""
+
+from cable_ocp import plots
+from cable_ocp.catenary import catenary_shape
+from cable_ocp.drive import Drive
+from cable_ocp.integrate import SimulationError, integrate, reference_solution
+from cable_ocp.model import INPUT_NAMES, CableModel
+from cable_ocp.scene import Scene, load_scene
+from cable_ocp.simulation import simulate
+from cable_ocp.statics import EquilibriumError, equilibrium
+from cable_ocp.trajectory import Trajectory
+from cable_ocp.validation import catenary_check
+
+__all__ = [
+    "INPUT_NAMES",
+    "CableModel",
+    "Drive",
+    "EquilibriumError",
+    "Scene",
+    "SimulationError",
+    "Trajectory",
+    "catenary_check",
+    "catenary_shape",
+    "equilibrium",
+    "integrate",
+    "load_scene",
+    "plots",
+    "reference_solution",
+    "simulate",
+]

@@ -1,0 +1,82 @@
+"""Validation cases that compare the model with independent references (DESIGN.md §8)."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from cable_ocp.catenary import catenary_shape, relative_errors
+from cable_ocp.drive import Drive
+from cable_ocp.model import CableModel
+from cable_ocp.statics import equilibrium
+
+
+@dataclass(frozen=True)
+class CatenaryCheck:
+    """The statics check of the paper's §4.1 for one number of elements.
+
+    Attributes
+    ----------
+    elements : int
+    max_error_x, max_error_z : float
+        ``eps_x^max``, ``eps_z^max`` (eq. 35-36) against the elastic catenary, as fractions.
+    max_error_inextensible : float
+        ``max(eps_x, eps_z)`` against the inextensible catenary, as a fraction.
+    top_tension_error : float
+        Relative error of the top tension against eq. 34c.
+    joints : array (2, n+2), m
+        x and z of the model's joints.
+    arc_length : array (n+2,), m
+        Arc length of each joint from the pinned top.
+    """
+
+    elements: int
+    max_error_x: float
+    max_error_z: float
+    max_error_inextensible: float
+    top_tension_error: float
+    joints: np.ndarray
+    arc_length: np.ndarray
+
+
+def catenary_check(scene, elements: int | None = None) -> CatenaryCheck:
+    """Equilibrium of the catenary scene against the analytic catenary (eq. 34-36).
+
+    The top is pinned at the origin and the end carries ``(H, 0, V)``; joints ``A_0 .. A_{n-1}``
+    are compared (the paper's ``i = 1..n``, which leaves out the joint next to the pin).
+    """
+    model = CableModel.from_scene(scene, elements)
+    drive = Drive.from_scene(scene, elements=model.spec.elements)
+    state = equilibrium(model, drive)
+    u = drive.inputs(np.zeros(1))[:, 0]
+    outputs = model.outputs(state, u)
+    joints = np.array(outputs[0]) - u[0:3, None]
+    lengths = np.array(model.element_lengths(model.spec.segment_length / 2))
+    length = scene.cable.length
+    arc = length - np.concatenate([[0.0], np.cumsum(lengths)])
+    horizontal, vertical = float(np.hypot(u[12], u[13])), float(u[14])
+    weight = scene.cable.mass_per_length * scene.environment.gravity
+    stiffness = scene.cable.youngs_modulus * scene.cable.cross_section_area
+    compared = slice(0, model.element_count - 1)
+    x_el, z_el, tension = catenary_shape(arc, length, weight, horizontal, vertical, stiffness)
+    x_in, z_in, _ = catenary_shape(arc, length, weight, horizontal, vertical)
+    planar_x = np.hypot(joints[0], joints[1])
+    errors = {
+        "x": relative_errors(planar_x[compared], x_el[compared]).max(),
+        "z": relative_errors(joints[2][compared], z_el[compared]).max(),
+        "inextensible": max(
+            relative_errors(planar_x[compared], x_in[compared]).max(),
+            relative_errors(joints[2][compared], z_in[compared]).max(),
+        ),
+    }
+    top_tension = float(np.array(outputs[5]).ravel()[-1])
+    return CatenaryCheck(
+        elements=model.spec.elements,
+        max_error_x=float(errors["x"]),
+        max_error_z=float(errors["z"]),
+        max_error_inextensible=float(errors["inextensible"]),
+        top_tension_error=abs(top_tension / tension[-1] - 1),
+        joints=np.vstack([planar_x, joints[2]]),
+        arc_length=arc,
+    )
