@@ -1,4 +1,4 @@
-"""The command line: ``cable-ocp simulate|validate|bench``."""
+"""The command line: ``cable-ocp simulate|validate|study|bench``."""
 
 from __future__ import annotations
 
@@ -104,6 +104,26 @@ def _bench(args) -> int:
     return 0
 
 
+def _study(args) -> int:
+    from cable_ocp import studies
+    from cable_ocp.output import atomic_directory
+
+    scene = load_scene(args.scene, parse_overrides(args.set))
+    with atomic_directory(args.out) as folder:
+        if args.name == "step":
+            result = studies.step_halving(scene, quiet=args.quiet)
+        elif args.name == "elements":
+            result = studies.element_convergence(scene, quiet=args.quiet)
+            result.chart(folder / "element_convergence.png")
+        else:
+            result = studies.end_positions(scene, studies.END_FORCE_SETTINGS, quiet=args.quiet)
+        text = result.table()
+        (folder / f"{args.name}.md").write_text(f"# {args.name} study of {scene.name}\n\n{text}\n")
+    print(text)
+    print(f"written to {Path(args.out).resolve()}")
+    return 0
+
+
 def build_parser() -> argparse.ArgumentParser:
     """The argument parser of ``cable-ocp``."""
     parser = argparse.ArgumentParser(prog="cable-ocp", description=__doc__)
@@ -123,6 +143,14 @@ def build_parser() -> argparse.ArgumentParser:
     val.add_argument("--elements", type=int, nargs="+", default=[15, 5, 30, 60])
     val.add_argument("--out", type=Path, help="folder for the comparison figure")
     val.set_defaults(run=_validate)
+
+    study = commands.add_parser("study", help="convergence and validation studies of a scene")
+    study.add_argument("name", choices=["step", "elements", "end-force"])
+    study.add_argument("scene", type=Path)
+    study.add_argument("--out", type=Path, required=True)
+    study.add_argument("--set", action="append", default=[], metavar="KEY=VALUE")
+    study.add_argument("--quiet", action="store_true")
+    study.set_defaults(run=_study)
 
     bench = commands.add_parser("bench", help="speed benchmarks against baselines")
     bench.add_argument("--quick", action="store_true", help="fewer steps at n = 100")

@@ -49,6 +49,39 @@ def spline_angle(duration: float, knot_values) -> WinchAngleFunction:
     return angle
 
 
+def tabulated_angle(time, angles) -> WinchAngleFunction:
+    """Winch angle through a time series, interpolated by a C2 cubic spline (natural ends).
+
+    Parameters
+    ----------
+    time : array (k,), s
+        Strictly increasing, starting at 0, at least 4 samples.
+    angles : array (k,), rad
+        The first value must be 0 (``phi(0) = 0``, the initial configuration).
+    """
+    time = np.asarray(time, dtype=float).ravel()
+    angles = np.asarray(angles, dtype=float).ravel()
+    if time.size != angles.size or time.size < 4:
+        raise ValueError(
+            f"winch time series: need at least 4 pairs (t, phi); got {time.size} times and "
+            f"{angles.size} angles"
+        )
+    if not (np.all(np.isfinite(time)) and np.all(np.isfinite(angles))):
+        raise ValueError("winch time series: non-finite value (NaN or inf)")
+    if np.any(np.diff(time) <= 0) or time[0] != 0.0:
+        raise ValueError("winch time series: times must start at 0 s and increase strictly")
+    if angles[0] != 0.0:
+        raise ValueError(f"winch time series: phi(0) = {angles[0]} rad; it must be 0")
+    spline = CubicSpline(time, angles, bc_type="natural")
+    rate, acceleration = spline.derivative(1), spline.derivative(2)
+
+    def angle(t):
+        t = np.clip(np.atleast_1d(np.asarray(t, dtype=float)), 0.0, time[-1])
+        return spline(t), rate(t), acceleration(t)
+
+    return angle
+
+
 def top_length(
     angle: WinchAngleFunction, t: np.ndarray, segment_length: float, drum_radius: float
 ) -> np.ndarray:

@@ -1,4 +1,4 @@
-"""Static equilibria against analytic references: the catenary (paper §4.1) and the hanging cable."""
+"""Static equilibria against analytic references: the catenary (paper §4.1), the hanging cable."""
 
 from __future__ import annotations
 
@@ -13,7 +13,7 @@ from cable_ocp.statics import equilibrium, rest_inputs
 
 
 class CatenaryCase:
-    """The catenary scene at one n: the model's equilibrium beside the analytic catenary (eq. 34)."""
+    """The catenary scene at one n: the equilibrium beside the analytic catenary (eq. 34)."""
 
     def __init__(self, models_dir, elements: int):
         scene = load_scene(models_dir / "catenary.toml", {"model.elements": elements})
@@ -90,8 +90,8 @@ def test_catenary_elastic_error_n15(catenary_case):
 def test_catenary_inextensible_error_converges_second_order(catenary_case):
     """max(eps_x, eps_z) against the inextensible catenary falls strictly with n = 5, 15, 30, 60.
 
-    Measured 0.061, 0.0077, 0.0020, 0.00052 %: second order, so each doubling of n must cut the error
-    by more than 3 (15 -> 30 and 30 -> 60).
+    Measured 0.061, 0.0077, 0.0020, 0.00052 %: second order, so each doubling of n must cut the
+    error by more than 3 (15 -> 30 and 30 -> 60).
     """
     ns = (5, 15, 30, 60)
     error = {n: max(catenary_case(n).errors(np.inf)) for n in ns}
@@ -149,7 +149,7 @@ def test_hanging_top_tension_is_submerged_weight(hanging_case, torsion):
 
 @TORSION
 def test_hanging_elements_are_vertical(hanging_case, torsion):
-    """Every element hangs straight down from the top: |e_x|, |e_y| < 1e-12, joints on the z axis."""
+    """Every element hangs straight down: |e_x|, |e_y| < 1e-12, joints on the z axis (1e-9 m)."""
     _, model, x, u = hanging_case(torsion)
     q, qd = model.coordinates(x)
     psi = np.array([qi[3] for qi in q])
@@ -166,7 +166,7 @@ def test_hanging_elements_are_vertical(hanging_case, torsion):
 
 
 def test_hanging_torsion_variant_same_equilibrium(hanging_case):
-    """The 6-DOF model finds the 5-DOF equilibrium: same positions and bending angles (1e-9), no twist."""
+    """The 6-DOF model finds the 5-DOF equilibrium: same positions and angles (1e-9), no twist."""
     _, model6, x6, _ = hanging_case(True)
     _, model5, x5, _ = hanging_case(False)
     assert model6.dofs == 6 and model5.dofs == 5

@@ -1,0 +1,141 @@
+"""RK4 runs against physics: energy balance, rest, blow-up detection, order of convergence."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from cable_ocp.drive import Drive
+from cable_ocp.integrate import SimulationError, integrate, reference_solution, step_count
+from cable_ocp.model import CableModel
+from cable_ocp.scene import load_scene
+from cable_ocp.statics import equilibrium, rest_inputs
+
+
+def build(models_dir, overrides=None):
+    scene = load_scene(models_dir / "hanging.toml", overrides)
+    model = CableModel.from_scene(scene)
+    drive = Drive.from_scene(scene)
+    return scene, model, drive, rest_inputs(drive)
+
+
+def positions(model: CableModel, states: np.ndarray) -> np.ndarray:
+    """Element positions (k, n+1, 3) of states (k, state_size)."""
+    q = states[:, : model.state_size // 2].reshape(len(states), model.element_count, model.dofs)
+    return q[:, :, :3]
+
+
+@pytest.fixture(scope="module")
+def in_water(models_dir):
+    """hanging.toml as it is: in water, n = 10, top fixed, with its equilibrium."""
+    scene, model, drive, u = build(models_dir)
+    return scene, model, drive, u, equilibrium(model, drive)
+
+
+# ----------------------------------------------------------------------------------------------
+def test_energy_conserved_in_air(models_dir, tilted):
+    """No dissipation (in air, so no drag; bending_damping = 0): energy stays constant.
+
+    Straight line tilted by psi = pi/2 + 0.3, theta = 0.1, released from rest, n = 10, h = 0.01 s,
+    20 s, default Baumgarte gains. max |E - E0| / (E0 - E_eq) <= 1e-6 (measured 6e-11), with E_eq
+    the energy of the hanging equilibrium; bond residual <= 1e-8 m (measured 1.9e-9 m).
+    """
+    scene, model, drive, u = build(models_dir, {"environment.submerged": False})
+    assert model.spec.element.hydro is None and model.spec.bending_damping == 0.0
+    assert model.spec.elements == 10
+    x0 = tilted(model, u)
+    x_eq = equilibrium(model, drive)
+    run = integrate(model, x0, drive, 20.0, 0.01, tolerance=1e-6)
+    count = len(run.time)
+    assert count == 2001 and run.time[-1] == pytest.approx(20.0)
+    energy = np.array(model.energy.map(count)(run.states.T, run.inputs.T)).ravel()
+    released = energy[0] - float(model.energy(x_eq, u))
+    assert released > 1e5  # J: the tilt releases a real amount of energy
+    assert np.abs(energy - energy[0]).max() / released <= 1e-6
+    residual = np.array(model.outputs.map(count)(run.states.T, run.inputs.T)[2])
+    assert np.abs(residual).max() <= 1e-8  # m
+    # The cable really swings: the end moves by metres.
+    assert (
+        np.abs(positions(model, run.states)[:, 0] - positions(model, run.states)[0, 0]).max() > 10
+    )
+
+
+def test_hanging_at_rest_stays_at_rest(in_water):
+    """From the equilibrium in water (n = 10, h = 0.05 s, 100 s): max |r(t) - r(0)| <= 1e-9 m.
+
+    Measured 6e-13 m.
+    """
+    _, model, drive, _, x_eq = in_water
+    run = integrate(model, x_eq, drive, 100.0, 0.05)
+    assert len(run.time) == 2001
+    assert np.abs(positions(model, run.states) - positions(model, x_eq[None, :])).max() <= 1e-9
+
+
+def perturbed(model, u, chained, seed: int = 0) -> np.ndarray:
+    """The hanging chain with every element tilted by ~0.01 rad (bonds exact), at rest."""
+    rng = np.random.default_rng(seed)
+    count = model.element_count
+    return chained(
+        model, u, np.pi / 2 + 0.01 * rng.normal(size=count), 0.01 * rng.normal(size=count)
+    )
+
+
+def test_unstable_step_raises_non_finite(in_water, chained):
+    """h = 5 s, far above the stability limit: the state overflows and the run stops with a remedy.
+
+    The bond check is disabled (tolerance = inf) so that the non-finite check is what fires
+    (measured: non-finite at t = 15 s).
+    """
+    _, model, drive, u, _ = in_water
+    x0 = perturbed(model, u, chained)
+    with pytest.raises(SimulationError) as info:
+        integrate(model, x0, drive, 100.0, 5.0, tolerance=np.inf)
+    message = str(info.value)
+    assert "non-finite" in message
+    assert "t =" in message and "step" in message and "h = 5 s" in message
+    assert "smaller numerics.step" in message
+
+
+def test_unstable_step_raises_bond_residual(in_water, chained):
+    """The same run with the default tolerance stops at the first step, on the bond residual."""
+    _, model, drive, u, _ = in_water
+    x0 = perturbed(model, u, chained)
+    with pytest.raises(SimulationError) as info:
+        integrate(model, x0, drive, 100.0, 5.0)
+    message = str(info.value)
+    assert "bond residual" in message and "t = 5 s" in message
+    assert "t =" in message and "step" in message
+    assert "smaller numerics.step" in message
+
+
+def test_step_count_rejects_non_dividing_step():
+    assert step_count(100.0, 0.05) == 2000
+    assert step_count(0.3, 0.1) == 3
+    with pytest.raises(ValueError, match=r"numerics\.step"):
+        step_count(1.0, 0.3)
+    with pytest.raises(ValueError, match=r"numerics\.step"):
+        step_count(0.01, 0.02)
+
+
+def test_integrate_rejects_non_dividing_step(in_water):
+    _, model, drive, _, x_eq = in_water
+    with pytest.raises(ValueError, match=r"numerics\.step"):
+        integrate(model, x_eq, drive, 1.0, 0.3)
+
+
+def test_rk4_fourth_order_against_dop853(models_dir, tilted):
+    """RK4 vs DOP853 (rtol = atol = 1e-10): in-water tilted release, n = 5, 2 s.
+
+    Error of the final state at h = 0.02 s over h = 0.01 s must exceed 10 (4th order: 16;
+    measured 15.8, errors 1.1e-8 and 7.0e-10).
+    """
+    _, model, drive, u = build(models_dir, {"model.elements": 5})
+    x0 = tilted(model, u)
+    reference = reference_solution(model, x0, drive, np.array([0.0, 2.0]))[-1]
+    assert np.abs(reference - x0).max() > 1.0  # it moves
+    errors = [
+        np.abs(integrate(model, x0, drive, 2.0, h).states[-1] - reference).max()
+        for h in (0.02, 0.01)
+    ]
+    assert errors[1] < 1e-7
+    assert errors[0] / errors[1] > 10, errors
