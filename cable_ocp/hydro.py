@@ -6,7 +6,8 @@ Drag per unit length (DESIGN.md §4, the MoorDyn convention)::
 
 with ``V = v - v_current`` split into its part along the element axis (``V_t``) and across it
 (``V_n``). Added mass acts on the acceleration of each point of the axis with the coefficient
-``C_a`` across and ``C_at`` along the axis; ``C_at = C_a`` is the paper's isotropic eq. 28-32.
+``C_a`` across and ``C_at`` along the axis, through the kinetic energy of the entrained water
+(:func:`cable_ocp.rfe.added_mass_energy`); ``C_at = C_a`` is the paper's isotropic eq. 28-32.
 """
 
 from __future__ import annotations

@@ -169,7 +169,8 @@ def _check_block(model, block, inputs, times, step, tolerance, residual_fn) -> N
         raise SimulationError(
             f"bond residual {norms[k]:.3g} m exceeds numerics.constraint_tolerance = "
             f"{tolerance:g} m at t = {times[k]:.6g} s with step h = {step:g} s. Remedy: a smaller "
-            "numerics.step or larger Baumgarte gains (numerics.baumgarte_alpha/beta)."
+            "numerics.step or other Baumgarte gains (numerics.baumgarte_alpha/beta); if the run "
+            "is otherwise sound, a larger numerics.constraint_tolerance."
         )
     try:
         model.check_regular(block)

@@ -354,10 +354,11 @@ class CableModel:
         return mass, force
 
     def _payload_energy(self, q_end, qd_end) -> ca.SX:
-        payload = self.spec.payload
+        payload, water = self.spec.payload, self.spec.water_density
         velocity = qd_end[POSITION]
-        weight = (payload.mass - self.spec.water_density * payload.volume) * self.spec.gravity
-        return 0.5 * payload.mass * ca.dot(velocity, velocity) + weight * q_end[2]
+        inertia = payload.mass + payload.added_mass_coefficient * water * payload.volume
+        weight = (payload.mass - water * payload.volume) * self.spec.gravity
+        return 0.5 * inertia * ca.dot(velocity, velocity) + weight * q_end[2]
 
     # ----------------------------------------------------------------------------------------
     @cached_property

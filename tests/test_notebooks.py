@@ -13,6 +13,4 @@ NOTEBOOKS = sorted((Path(__file__).resolve().parent.parent / "notebooks").glob("
 def test_notebook_runs(path, monkeypatch):
     monkeypatch.setenv("CABLE_OCP_QUICK", "1")
     notebook = nbformat.read(path, as_version=4)
-    NotebookClient(notebook, timeout=600, kernel_name="python3").execute(
-        cwd=str(path.parent)
-    )
+    NotebookClient(notebook, timeout=600, kernel_name="python3").execute(cwd=str(path.parent))
