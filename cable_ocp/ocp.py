@@ -1,0 +1,352 @@
+"""Optimal winch control by direct multiple shooting and IPOPT (DESIGN.md §5, paper §5).
+
+The horizon ``[0, T]`` is cut into shooting intervals; the state at every node is a decision
+variable, each interval is a fold of RK4 steps of the (possibly reduced) model, and continuity
+constraints join the intervals. The winch angle is linear in its parameters
+(:mod:`cable_ocp.controls`), so the angle, rate, acceleration and top-element length bounds are
+linear constraints imposed at every RK4 step. The objective is ``Omega^2`` of eq. 39 by the
+trapezoidal rule over the RK4 steps.
+"""
+
+from __future__ import annotations
+
+import time
+from dataclasses import dataclass, field
+
+import casadi as ca
+import numpy as np
+
+from cable_ocp import winch
+from cable_ocp.controls import HermiteIntervals, KnotSpline
+from cable_ocp.drive import Drive
+from cable_ocp.integrate import SimulationError, integrate, rk4_step, stage_inputs, step_count
+from cable_ocp.model import CableModel
+from cable_ocp.seabed import clearance_error, seabed_height
+from cable_ocp.statics import equilibrium
+
+# Bond residual allowed in the forward runs that make the initial guess (m): a coarse optimisation
+# model only has to be close, not exact.
+GUESS_TOLERANCE = 1e-3
+NLP_FUNCTIONS = ("nlp_f", "nlp_g", "nlp_grad_f", "nlp_jac_g", "nlp_hess_l", "nlp_grad")
+
+
+@dataclass(frozen=True)
+class IpoptSettings:
+    """How the multiple-shooting NLP is built and solved.
+
+    Attributes
+    ----------
+    elements : int or None
+        Elements of the optimisation model (None: the scene's). Fewer elements make a cheaper
+        model; Omega is always verified on the scene's own model.
+    step : float or None, s
+        RK4 step inside the intervals (None: the scene's step).
+    intervals : int
+        Shooting intervals; the number of RK4 steps must be a multiple of it.
+    control : str
+        ``"hermite"`` (piecewise cubic per control interval) or ``"spline"`` (the paper's knots).
+    control_intervals : int or None
+        Intervals of the Hermite control (None: as many as shooting intervals).
+    hessian : str
+        ``"limited-memory"`` (L-BFGS) or ``"exact"``.
+    max_iter : int
+    tolerance : float
+        IPOPT's ``tol``.
+    threads : int
+        Shooting intervals evaluated in parallel.
+    ipopt_options : dict
+        Further IPOPT options, passed as they are.
+    """
+
+    elements: int | None = None
+    step: float | None = None
+    intervals: int = 42
+    control: str = "hermite"
+    control_intervals: int | None = None
+    hessian: str = "limited-memory"
+    max_iter: int = 300
+    tolerance: float = 1e-8
+    threads: int = 2
+    ipopt_options: dict = field(default_factory=dict)
+
+    def __post_init__(self):
+        if self.control not in ("hermite", "spline"):
+            raise ValueError(f"control = {self.control!r}: must be 'hermite' or 'spline'")
+        if self.hessian not in ("limited-memory", "exact"):
+            raise ValueError(f"hessian = {self.hessian!r}: must be 'limited-memory' or 'exact'")
+        for name in ("intervals", "max_iter", "threads"):
+            if getattr(self, name) < 1:
+                raise ValueError(f"{name} = {getattr(self, name)}: must be >= 1")
+        if self.elements is not None and self.elements < 1:
+            raise ValueError(f"elements = {self.elements}: must be >= 1")
+        if self.step is not None and self.step <= 0:
+            raise ValueError(f"step = {self.step}: must be > 0 s")
+
+
+@dataclass(frozen=True)
+class IpoptOutcome:
+    """What the NLP solve returned (before verification on the full model).
+
+    Attributes
+    ----------
+    parameters : array
+        Winch parameters.
+    control : KnotSpline or HermiteIntervals
+    status : str
+        IPOPT's return status.
+    success : bool
+    iterations : int
+    objective : float, m^2
+        ``Omega^2`` on the optimisation model.
+    build_time, solve_time : float, s
+    function_time : float, s
+        Wall time spent evaluating the NLP functions and derivatives.
+    history : list of float
+        Objective at each iteration, m^2.
+    """
+
+    parameters: np.ndarray
+    control: KnotSpline | HermiteIntervals
+    status: str
+    success: bool
+    iterations: int
+    objective: float
+    build_time: float
+    solve_time: float
+    function_time: float
+    history: list[float]
+
+
+def make_control(scene, settings: IpoptSettings) -> KnotSpline | HermiteIntervals:
+    """The control parametrisation the settings ask for."""
+    duration = scene.numerics.duration
+    if settings.control == "spline":
+        return KnotSpline(duration, scene.winch.knots)
+    return HermiteIntervals(duration, settings.control_intervals or settings.intervals)
+
+
+def angle_bounds(scene, full_segment: float) -> tuple[float, float]:
+    """Winch-angle range (rad) from the angle bounds and the top-element length bounds."""
+    w = scene.winch
+    low = max(w.angle_min, (w.top_length_min - full_segment / 2) / w.drum_radius)
+    high = min(w.angle_max, (w.top_length_max - full_segment / 2) / w.drum_radius)
+    if low > 0 or high < 0:
+        raise ValueError(
+            f"winch bounds leave no room around phi(0) = 0: the angle range is [{low}, {high}] rad "
+            "(winch.angle_min/max with winch.top_length_min/max)"
+        )
+    return low, high
+
+
+def _interval_function(model, step, steps, hills, end_height0) -> ca.Function:
+    """``(x, stage inputs, bias) -> (x_end, integral of (e + bias)^2)`` over one interval.
+
+    ``bias`` (1 x steps+1) is added to the clearance error at the RK4 points: the correction that
+    makes a reduced model reproduce the full model's error (see :class:`MultipleShooting`).
+    """
+    x = ca.MX.sym("x", model.state_size)
+    stages = ca.MX.sym("stages", 15, 3 * steps)
+    bias = ca.MX.sym("bias", 1, steps + 1)
+    states = rk4_step(model, step).mapaccum(steps)(x, stages)
+    points = ca.horzcat(x, states)
+    xe = ca.SX.sym("xe", model.state_size)
+    error = xe[2] - end_height0 - seabed_height(hills, xe[0], xe[1])
+    errors = ca.Function("e", [xe], [error]).map(steps + 1)(points) + bias
+    weights = np.full(steps + 1, step)
+    weights[[0, -1]] = step / 2
+    cost = ca.mtimes(errors**2, ca.DM(weights))
+    return ca.Function("interval", [x, stages, bias], [states[:, -1], cost])
+
+
+def initial_parameters(scene, control, run_time, rise, low, high) -> np.ndarray:
+    """Winch parameters that pay out what the locked winch lets the end rise (rad).
+
+    A least-squares fit of ``phi = e_locked(t) / r_D`` (clipped to the bounds) by the control.
+    """
+    target = np.clip(rise / scene.winch.drum_radius, low, high)
+    basis = control.basis(run_time)[0]
+    guess, *_ = np.linalg.lstsq(basis, target, rcond=None)
+    return guess
+
+
+class MultipleShooting:
+    """The multiple-shooting NLP of a scene, built once and solved as often as needed.
+
+    The NLP has a parameter, the bias ``b(t)`` on the RK4 grid, added to the clearance error:
+    ``Omega^2 = 1/T int (e(t) + b(t))^2 dt``. With ``b = 0`` it is the plain problem; the front door
+    sets ``b = e_full - e_reduced`` to correct a reduced model by the full one.
+
+    Parameters
+    ----------
+    scene : Scene
+    settings : IpoptSettings
+    quiet : bool
+        No IPOPT log when true.
+    """
+
+    def __init__(self, scene, settings: IpoptSettings, quiet: bool = False):
+        started = time.perf_counter()
+        self.scene, self.settings = scene, settings
+        numerics = scene.numerics
+        self.duration = duration = numerics.duration
+        self.step = step = settings.step or numerics.step
+        total_steps = step_count(duration, step)
+        if total_steps % settings.intervals:
+            raise ValueError(
+                f"intervals = {settings.intervals} must divide the {total_steps} RK4 steps "
+                f"(T = {duration} s, h = {step} s)"
+            )
+        self.per_interval = per_interval = total_steps // settings.intervals
+        self.low, self.high = angle_bounds(scene, scene.segment_length)
+        self.control = control = make_control(scene, settings)
+        self.model = model = CableModel.from_scene(scene, settings.elements)
+        self.drive = Drive.from_scene(scene, winch.locked, elements=model.spec.elements)
+        self.x0 = equilibrium(model, self.drive)
+        self.grid = np.arange(total_steps + 1) * step
+
+        step_times = self.grid[:-1]
+        fixed = stage_inputs(self.drive, step_times, step)
+        stage_times = (step_times[:, None] + np.array([0.0, step / 2, step])).ravel()
+        parameters = ca.MX.sym("winch", control.size)
+        radius = scene.winch.drum_radius
+        winch_rows = ca.vertcat(
+            *[(radius * ca.sparsify(ca.DM(b)) @ parameters).T for b in control.basis(stage_times)]
+        )
+        inputs = ca.DM(fixed) + ca.vertcat(
+            ca.DM.zeros(9, fixed.shape[1]), winch_rows, ca.DM.zeros(3, fixed.shape[1])
+        )
+        bias = ca.MX.sym("bias", total_steps + 1)
+        bias_rows = ca.horzcat(
+            *[
+                bias[k * per_interval : (k + 1) * per_interval + 1].T
+                for k in range(settings.intervals)
+            ]
+        )
+        interval = _interval_function(model, step, per_interval, scene.seabed.hills, self.x0[2])
+        nodes = ca.MX.sym("nodes", model.state_size, settings.intervals)
+        starts = ca.horzcat(ca.DM(self.x0), nodes[:, :-1])
+        mapped = interval.map(settings.intervals, "thread", settings.threads)
+        ends, costs = mapped(starts, inputs, bias_rows)
+        objective = ca.sum2(costs) / duration
+        continuity = ca.vec(ends - nodes)
+
+        heave = self.drive.winch_angle(self.grid)[0]
+        bases = control.basis(self.grid)
+        rows = [ca.sparsify(ca.DM(bases[0])) @ parameters]
+        lower, upper = [self.low - heave], [self.high - heave]
+        for index, limit in ((1, scene.winch.rate_max), (2, scene.winch.acceleration_max)):
+            if limit is not None:
+                rows.append(ca.sparsify(ca.DM(bases[index])) @ parameters)
+                lower.append(np.full(self.grid.size, -limit))
+                upper.append(np.full(self.grid.size, limit))
+        variables = ca.vertcat(ca.vec(nodes), parameters)
+        constraints = ca.densify(ca.vertcat(continuity, *rows))
+        self.lbg = np.concatenate([np.zeros(continuity.numel()), *lower])
+        self.ubg = np.concatenate([np.zeros(continuity.numel()), *upper])
+        self.history: list[float] = []
+        self._callback = _History(self.history, variables.numel(), constraints.numel())
+        options = {
+            "ipopt": {
+                "hessian_approximation": settings.hessian,
+                "max_iter": settings.max_iter,
+                "tol": settings.tolerance,
+                "print_level": 0 if quiet else 5,
+                **settings.ipopt_options,
+            },
+            "print_time": not quiet,
+            "iteration_callback": self._callback,
+        }
+        self.solver = ca.nlpsol(
+            "winch_ocp",
+            "ipopt",
+            {"x": variables, "f": objective, "g": constraints, "p": bias},
+            options,
+        )
+        self.build_time = time.perf_counter() - started
+
+    def simulate(self, parameters: np.ndarray) -> np.ndarray:
+        """States of the optimisation model on the RK4 grid under a winch (array (k, nx))."""
+        drive = Drive.from_scene(
+            self.scene, self.control.angle_function(parameters), elements=self.model.spec.elements
+        )
+        run = integrate(
+            self.model, self.x0, drive, self.duration, self.step, tolerance=GUESS_TOLERANCE
+        )
+        return run.states
+
+    def clearance(self, states: np.ndarray) -> np.ndarray:
+        """Clearance error e(t) (m) of the optimisation model's states."""
+        return clearance_error(self.scene.seabed.hills, states[:, :3])
+
+    def first_guess(self) -> np.ndarray:
+        """Winch parameters from the locked run of the optimisation model."""
+        locked = self.simulate(np.zeros(self.control.size))
+        rise = self.clearance(locked)
+        return initial_parameters(self.scene, self.control, self.grid, rise, self.low, self.high)
+
+    def solve(self, parameters: np.ndarray, bias: np.ndarray | None = None) -> IpoptOutcome:
+        """Solve from the forward run of ``parameters`` with the given bias (m, on the grid)."""
+        try:
+            states = self.simulate(parameters)
+        except SimulationError:
+            parameters = np.zeros(self.control.size)
+            states = self.simulate(parameters)
+        nodes = states[self.per_interval :: self.per_interval].T
+        bias = np.zeros(self.grid.size) if bias is None else bias
+        self.history.clear()
+        started = time.perf_counter()
+        solution = self.solver(
+            x0=np.concatenate([nodes.ravel(order="F"), parameters]),
+            lbg=self.lbg,
+            ubg=self.ubg,
+            p=bias,
+        )
+        solve_time = time.perf_counter() - started
+        stats = self.solver.stats()
+        return IpoptOutcome(
+            parameters=np.array(solution["x"][-self.control.size :]).ravel(),
+            control=self.control,
+            status=stats["return_status"],
+            success=bool(stats["success"]),
+            iterations=int(stats["iter_count"]),
+            objective=float(solution["f"]),
+            build_time=self.build_time,
+            solve_time=solve_time,
+            function_time=sum(stats.get(f"t_wall_{name}", 0.0) for name in NLP_FUNCTIONS),
+            history=list(self.history),
+        )
+
+
+class _History(ca.Callback):
+    """Records the objective at every IPOPT iteration."""
+
+    def __init__(self, history: list[float], nx: int, ng: int):
+        ca.Callback.__init__(self)
+        self.history, self.nx, self.ng = history, nx, ng
+        self.construct("history", {})
+
+    def get_n_in(self):
+        return ca.nlpsol_n_out()
+
+    def get_n_out(self):
+        return 1
+
+    def get_name_in(self, i):
+        return ca.nlpsol_out(i)
+
+    def get_name_out(self, i):
+        return "ret"
+
+    def get_sparsity_in(self, i):
+        name = ca.nlpsol_out(i)
+        if name == "f":
+            return ca.Sparsity.scalar()
+        if name in ("x", "lam_x"):
+            return ca.Sparsity.dense(self.nx)
+        if name in ("g", "lam_g"):
+            return ca.Sparsity.dense(self.ng)
+        return ca.Sparsity(0, 0)
+
+    def eval(self, arg):
+        self.history.append(float(arg[ca.nlpsol_out().index("f")]))
+        return [0]
