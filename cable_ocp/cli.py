@@ -1,4 +1,4 @@
-"""The command line: ``cable-ocp simulate|validate|study|bench``."""
+"""The command line: ``cable-ocp simulate|optimize|compare|validate|study|bench``."""
 
 from __future__ import annotations
 
@@ -64,6 +64,116 @@ def _simulate(args) -> int:
     print(json.dumps(summary, indent=1))
     print(f"results and figures written to {Path(args.out).resolve()}")
     return 0
+
+
+def _ipopt_settings(args):
+    from cable_ocp.ocp import IpoptSettings
+
+    return IpoptSettings(
+        elements=args.elements,
+        step=args.step,
+        intervals=args.intervals,
+        control=args.control,
+        hessian=args.hessian,
+        max_iter=args.max_iter,
+    )
+
+
+def _nelder_mead_settings(args):
+    from cable_ocp.nelder_mead import NelderMeadSettings
+
+    return NelderMeadSettings(
+        elements=args.elements, step=args.step, max_evaluations=args.max_evaluations
+    )
+
+
+def _optimize(args) -> int:
+    from cable_ocp import plots
+    from cable_ocp.optimization import optimize
+    from cable_ocp.output import atomic_directory
+    from cable_ocp.simulation import simulate
+
+    scene = load_scene(args.scene, parse_overrides(args.set))
+    if args.method == "ipopt":
+        result = optimize(scene, "ipopt", _ipopt_settings(args), quiet=args.quiet,
+                          refinements=args.refinements)  # fmt: skip
+    else:
+        result = optimize(scene, "nelder-mead", _nelder_mead_settings(args), quiet=args.quiet)
+    locked = simulate(scene, quiet=True)
+    hills, bounds = scene.seabed.hills, (scene.winch.angle_min, scene.winch.angle_max)
+    labels = ["locked winch", f"optimised ({result.method})"]
+    with atomic_directory(args.out) as folder:
+        result.save(folder)
+        pair = [locked, result.trajectory]
+        plots.end_trajectory(pair, labels, path=folder / "end_trajectory.png")
+        plots.clearance(pair, scene.seabed.clearance, labels, path=folder / "clearance.png")
+        plots.winch_angle(pair, labels, bounds, path=folder / "winch_angle.png")
+        plots.cable_shapes(result.trajectory, hills=hills, clearance_depth=scene.seabed.clearance,
+                           path=folder / "cable_shapes.png")  # fmt: skip
+    print(
+        f"{result.method}: success = {result.success} ({result.status}); Omega = "
+        f"{result.omega:.4f} m verified on n = {scene.model.elements} (locked: {locked.omega:.3f}"
+        f" m); iterations {result.iterations}, evaluations {result.evaluations}, wall "
+        f"{result.wall_time:.1f} s (build {result.build_time:.1f} s, solver {result.solve_time:.1f}"
+        f" s of which functions {result.function_time:.1f} s)"
+    )
+    print(f"results and figures written to {Path(args.out).resolve()}")
+    if not result.success:
+        print(f"cable-ocp optimize: the optimiser failed: {result.status}", file=sys.stderr)
+        return 3
+    return 0
+
+
+def _compare(args) -> int:
+    from dataclasses import replace
+
+    from cable_ocp.optimization import optimize
+    from cable_ocp.output import atomic_directory
+
+    rows = []
+    for path in args.scenes:
+        scene = load_scene(path, parse_overrides(args.set))
+        base = _ipopt_settings(args)
+        runs = [
+            ("ipopt, hermite", optimize(scene, "ipopt", base, quiet=True)),
+            ("ipopt, spline",
+             optimize(scene, "ipopt", replace(base, control="spline"), quiet=True)),
+            ("nelder-mead, spline",
+             optimize(scene, "nelder-mead", _nelder_mead_settings(args), quiet=args.quiet)),
+        ]  # fmt: skip
+        rows += [(scene.name, label, r) for label, r in runs]
+    lines = [
+        "| scene | method | control | Omega verified [m] | success | iterations | evaluations "
+        "| wall [s] | build [s] |",
+        "|---|---|---|---:|---|---:|---:|---:|---:|",
+    ]
+    for name, label, r in rows:
+        lines.append(
+            f"| {name} | {label} | {r.control} | {r.omega:.4f} | {r.success} | {r.iterations} "
+            f"| {r.evaluations} | {r.wall_time:.1f} | {r.build_time:.1f} |"
+        )
+    table = "\n".join(lines)
+    with atomic_directory(args.out) as folder:
+        (folder / "comparison.md").write_text(table + "\n")
+    print(table)
+    return 0
+
+
+def _add_optimiser_options(parser) -> None:
+    parser.add_argument(
+        "--elements",
+        type=int,
+        default=3,
+        help="elements of the optimisation model (verification uses the scene's)",
+    )
+    parser.add_argument("--step", type=float, default=0.5, help="RK4 step of the optimisation [s]")
+    parser.add_argument("--intervals", type=int, default=42, help="shooting intervals (IPOPT)")
+    parser.add_argument("--control", choices=["hermite", "spline"], default="hermite")
+    parser.add_argument("--hessian", choices=["limited-memory", "exact"], default="limited-memory")
+    parser.add_argument("--max-iter", type=int, default=300, help="IPOPT iterations")
+    parser.add_argument("--max-evaluations", type=int, default=3000, help="Nelder-Mead runs")
+    parser.add_argument("--set", action="append", default=[], metavar="KEY=VALUE")
+    parser.add_argument("--quiet", action="store_true")  # fmt: skip
 
 
 def _validate(args) -> int:
@@ -143,6 +253,20 @@ def build_parser() -> argparse.ArgumentParser:
     val.add_argument("--elements", type=int, nargs="+", default=[15, 5, 30, 60])
     val.add_argument("--out", type=Path, help="folder for the comparison figure")
     val.set_defaults(run=_validate)
+
+    opt = commands.add_parser("optimize", help="optimise the winch angle of a scene")
+    opt.add_argument("scene", type=Path)
+    opt.add_argument("--method", choices=["ipopt", "nelder-mead"], default="ipopt")
+    opt.add_argument("--out", type=Path, required=True)
+    opt.add_argument("--refinements", type=int, default=3, help="model-correction solves")
+    _add_optimiser_options(opt)
+    opt.set_defaults(run=_optimize)
+
+    cmp = commands.add_parser("compare", help="IPOPT against Nelder-Mead in one table")
+    cmp.add_argument("scenes", type=Path, nargs="+")
+    cmp.add_argument("--out", type=Path, required=True)
+    _add_optimiser_options(cmp)
+    cmp.set_defaults(run=_compare)
 
     study = commands.add_parser("study", help="convergence and validation studies of a scene")
     study.add_argument("name", choices=["step", "elements", "end-force"])

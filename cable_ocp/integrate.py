@@ -41,6 +41,16 @@ def rk4_step(model: CableModel, step: float) -> ca.Function:
     return ca.Function("rk4_step", [x, stages], [x_next], ["x", "stage_inputs"], ["x_next"])
 
 
+def step_function(model: CableModel, step: float, compiled: bool = False) -> ca.Function:
+    """The RK4 step, interpreted or compiled to C (cached; see :mod:`cable_ocp.compile`)."""
+    function = rk4_step(model, step)
+    if not compiled:
+        return function
+    from cable_ocp.compile import compiled as compile_function
+
+    return compile_function(function, f"{model.spec!r}|step={step!r}")[0]
+
+
 def step_count(duration: float, step: float) -> int:
     """Number of RK4 steps in ``duration``; the step must divide it."""
     count = round(duration / step)
@@ -83,6 +93,7 @@ def integrate(
     output_every: int = 1,
     tolerance: float = 1e-6,
     quiet: bool = True,
+    compiled: bool = False,
 ) -> RawRun:
     """Integrate the model by RK4 from ``x0`` over ``[0, duration]``.
 
@@ -99,6 +110,8 @@ def integrate(
         Largest bond residual allowed before the run is stopped.
     quiet : bool
         No progress bar when true.
+    compiled : bool
+        Use the RK4 step compiled to C (cached on disk).
 
     Raises
     ------
@@ -114,7 +127,7 @@ def integrate(
     x0 = np.asarray(x0, dtype=float).ravel()
     model.check_regular(x0)
     outputs = count // output_every
-    chunk = rk4_step(model, step).fold(output_every)
+    chunk = step_function(model, step, compiled).fold(output_every)
     per_segment = max(1, math.ceil(outputs / SEGMENTS))
     segment = chunk.mapaccum(per_segment)
     residual = _residual_norms(model, per_segment)

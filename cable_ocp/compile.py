@@ -1,0 +1,126 @@
+"""C code generation of CasADi Functions, compiled once and cached on disk (DESIGN.md §2, §9).
+
+A Function is written as C with its first forward and reverse derivatives (one direction each, so
+the code stays small and compiles in seconds; CasADi calls them once per direction), compiled with
+the system C compiler into a shared library and loaded back as an external Function. The library
+is cached under a key that hashes the caller's description of the Function, the CasADi version and
+the package's source, so a second run loads it without compiling.
+"""
+
+from __future__ import annotations
+
+import hashlib
+import os
+import shutil
+import subprocess
+import tempfile
+import time
+import warnings
+from pathlib import Path
+
+import casadi as ca
+
+PACKAGE_DIR = Path(__file__).resolve().parent
+# The modules whose code ends up in a compiled model: a change to any of them invalidates the cache.
+MODEL_SOURCES = ("kinematics.py", "rfe.py", "hydro.py", "kkt.py", "model.py", "integrate.py")
+COMPILER_FLAGS = ("-O1", "-fPIC", "-shared")
+
+
+def cache_dir() -> Path:
+    """Folder of compiled libraries: ``$CABLE_OCP_CACHE`` or ``~/.cache/cable_ocp``."""
+    return Path(os.environ.get("CABLE_OCP_CACHE", Path.home() / ".cache" / "cable_ocp"))
+
+
+def find_compiler() -> str | None:
+    """Path of the C compiler (``$CC``, ``cc`` or ``gcc``), or None."""
+    for name in (os.environ.get("CC"), "cc", "gcc"):
+        if name and shutil.which(name):
+            return shutil.which(name)
+    return None
+
+
+def _source_digest() -> str:
+    digest = hashlib.sha256()
+    for name in MODEL_SOURCES:
+        digest.update((PACKAGE_DIR / name).read_bytes())
+    return digest.hexdigest()
+
+
+def cache_key(function: ca.Function, description: str) -> str:
+    """Key of a compiled Function: its name, what built it, CasADi and the model sources."""
+    text = "|".join(
+        [function.name(), description, ca.__version__, _source_digest(), *COMPILER_FLAGS]
+    )
+    return hashlib.sha256(text.encode()).hexdigest()[:20]
+
+
+class CompileReport:
+    """What :func:`compiled` did: ``cache_hit`` (bool) and ``compile_time`` (s)."""
+
+    def __init__(self, cache_hit: bool, compile_time: float, library: Path | None):
+        self.cache_hit, self.compile_time, self.library = cache_hit, compile_time, library
+
+    def __repr__(self) -> str:
+        return (
+            f"CompileReport(cache_hit={self.cache_hit}, compile_time={self.compile_time:.2f} s, "
+            f"library={self.library})"
+        )
+
+
+def compiled(
+    function: ca.Function, description: str, quiet: bool = True
+) -> tuple[ca.Function, CompileReport]:
+    """The Function compiled to C (with first derivatives), from the cache when possible.
+
+    Parameters
+    ----------
+    function : casadi.Function
+        An SX Function.
+    description : str
+        Everything that determines the Function (e.g. the model spec and the step), hashed into
+        the cache key together with the package's sources.
+    quiet : bool
+        No message about compiling.
+
+    Returns
+    -------
+    function : casadi.Function
+        The external (compiled) Function, or ``function`` itself when no C compiler is found (a
+        warning says so).
+    report : CompileReport
+    """
+    compiler = find_compiler()
+    if compiler is None:
+        warnings.warn(
+            "no C compiler found (set $CC or install gcc): using the interpreted model",
+            RuntimeWarning,
+            stacklevel=2,
+        )
+        return function, CompileReport(False, 0.0, None)
+    folder = cache_dir()
+    folder.mkdir(parents=True, exist_ok=True)
+    name = function.name()
+    library = folder / f"{name}_{cache_key(function, description)}.so"
+    if library.exists():
+        return ca.external(name, str(library)), CompileReport(True, 0.0, library)
+    started = time.perf_counter()
+    if not quiet:
+        print(f"compiling {name} to C (cached in {folder}) ...", flush=True)
+    with tempfile.TemporaryDirectory(dir=folder) as scratch:
+        source = Path(scratch) / f"{name}.c"
+        generator = ca.CodeGenerator(source.name, {"with_header": False})
+        generator.add(function)
+        generator.add(function.forward(1))
+        generator.add(function.reverse(1))
+        generator.generate(str(Path(scratch)) + os.sep)
+        target = Path(scratch) / library.name
+        result = subprocess.run(
+            [compiler, *COMPILER_FLAGS, str(source), "-o", str(target), "-lm"],
+            capture_output=True,
+            text=True,
+        )
+        if result.returncode != 0:
+            raise RuntimeError(f"compiling {name} failed:\n{result.stderr[-2000:]}")
+        os.replace(target, library)  # atomic: a half-written library is never seen
+    elapsed = time.perf_counter() - started
+    return ca.external(name, str(library)), CompileReport(False, elapsed, library)
