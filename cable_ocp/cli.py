@@ -104,11 +104,12 @@ def _optimize(args) -> int:
     labels = ["locked winch", f"optimised ({result.method})"]
     with atomic_directory(args.out) as folder:
         result.save(folder)
-        pair = [locked, result.trajectory]
+        pair = [locked, result.trajectory] if result.trajectory is not None else [locked]
+        labels = labels[: len(pair)]
         plots.end_trajectory(pair, labels, path=folder / "end_trajectory.png")
         plots.clearance(pair, scene.seabed.clearance, labels, path=folder / "clearance.png")
         plots.winch_angle(pair, labels, bounds, path=folder / "winch_angle.png")
-        plots.cable_shapes(result.trajectory, hills=hills, clearance_depth=scene.seabed.clearance,
+        plots.cable_shapes(pair[-1], hills=hills, clearance_depth=scene.seabed.clearance,
                            path=folder / "cable_shapes.png")  # fmt: skip
     print(
         f"{result.method}: success = {result.success} ({result.status}); Omega = "

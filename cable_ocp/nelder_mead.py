@@ -35,6 +35,8 @@ class NelderMeadSettings:
     max_evaluations : int
     xatol : float, rad
     fatol : float, m
+    compiled : bool
+        Simulate with the RK4 step compiled to C (cached on disk).
     """
 
     elements: int | None = None
@@ -42,6 +44,7 @@ class NelderMeadSettings:
     max_evaluations: int = 3000
     xatol: float = 1e-3
     fatol: float = 1e-5
+    compiled: bool = True
 
     def __post_init__(self):
         if self.max_evaluations < 1:
@@ -96,16 +99,21 @@ def solve_nelder_mead(
     locked = Drive.from_scene(scene, winch.locked, elements=n)
     x0 = equilibrium(model, locked)
     hills = scene.seabed.hills
+    compiled = settings.compiled
 
     def omega(parameters: np.ndarray) -> float:
         drive = Drive.from_scene(scene, control.angle_function(parameters), elements=n)
         try:
-            run = integrate(model, x0, drive, duration, step, tolerance=GUESS_TOLERANCE)
+            run = integrate(
+                model, x0, drive, duration, step, tolerance=GUESS_TOLERANCE, compiled=compiled
+            )
         except SimulationError:
             return FAILED_RUN_OBJECTIVE
         return rms_objective(run.time, clearance_error(hills, run.states[:, :3]))
 
-    locked_run = integrate(model, x0, locked, duration, step, tolerance=GUESS_TOLERANCE)
+    locked_run = integrate(
+        model, x0, locked, duration, step, tolerance=GUESS_TOLERANCE, compiled=compiled
+    )
     rise = clearance_error(hills, locked_run.states[:, :3])
     guess = np.clip(initial_parameters(scene, control, locked_run.time, rise, low, high), low, high)
 

@@ -16,10 +16,14 @@ from pathlib import Path
 
 import numpy as np
 
+from cable_ocp.integrate import SimulationError
 from cable_ocp.nelder_mead import NelderMeadSettings, solve_nelder_mead
 from cable_ocp.ocp import IpoptSettings, MultipleShooting
 from cable_ocp.simulation import simulate
 from cable_ocp.trajectory import Trajectory
+
+# Model correction stops once a solve improves the verified Omega by less than this factor.
+SMALL_GAIN = 0.5
 
 
 @dataclass(frozen=True, eq=False)
@@ -34,10 +38,11 @@ class OcpResult:
         Winch parameters of the control (rad, rad/s).
     control : str
         ``"spline"`` or ``"hermite"`` with its size, e.g. ``"spline(14)"``.
-    trajectory : Trajectory
-        The scene's full model driven by the optimised winch.
+    trajectory : Trajectory or None
+        The scene's full model driven by the optimised winch; None only for a failed solve whose
+        last iterate cannot even be simulated.
     omega : float, m
-        Omega (eq. 39) of ``trajectory``.
+        Omega (eq. 39) of ``trajectory`` (NaN without one).
     omega_model : float, m
         Omega on the optimisation model, as the optimiser saw it.
     success : bool
@@ -65,7 +70,7 @@ class OcpResult:
     method: str
     parameters: np.ndarray
     control: str
-    trajectory: Trajectory
+    trajectory: Trajectory | None
     omega: float
     omega_model: float
     success: bool
@@ -83,7 +88,8 @@ class OcpResult:
         """Write ``result.json``, ``result.npz`` and the trajectory into ``folder``."""
         folder = Path(folder)
         folder.mkdir(parents=True, exist_ok=True)
-        self.trajectory.save(folder / "trajectory")
+        if self.trajectory is not None:
+            self.trajectory.save(folder / "trajectory")
         meta = {k: v for k, v in asdict(self).items() if k not in ("parameters", "trajectory")}
         (folder / "result.json").write_text(json.dumps(meta, indent=1))
         np.savez(folder / "result.npz", parameters=self.parameters)
@@ -95,11 +101,19 @@ class OcpResult:
         meta = json.loads((folder / "result.json").read_text())
         with np.load(folder / "result.npz") as data:
             parameters = data["parameters"]
-        return cls(parameters=parameters, trajectory=Trajectory.load(folder / "trajectory"), **meta)
+        has_trajectory = (folder / "trajectory.npz").exists()
+        trajectory = Trajectory.load(folder / "trajectory") if has_trajectory else None
+        return cls(parameters=parameters, trajectory=trajectory, **meta)
 
 
-def _verify(scene, control, parameters, quiet):
-    return simulate(scene, winch=control.angle_function(parameters), quiet=quiet)
+def _verify(scene, control, parameters, quiet, solved: bool = True):
+    """Simulate the scene's model with the winch; None if a failed solve's iterate cannot run."""
+    try:
+        return simulate(scene, winch=control.angle_function(parameters), quiet=quiet)
+    except (SimulationError, ValueError):
+        if solved:
+            raise
+        return None
 
 
 def optimize_ipopt(
@@ -121,8 +135,9 @@ def optimize_ipopt(
     settings = settings or IpoptSettings(elements=3, step=0.5)
     problem = MultipleShooting(scene, settings, quiet=quiet)
     outcome = problem.solve(problem.first_guess())
-    best_outcome, best = outcome, _verify(scene, problem.control, outcome.parameters, quiet)
-    verified = [best.omega]
+    best_outcome = outcome
+    best = _verify(scene, problem.control, outcome.parameters, quiet, outcome.success)
+    verified = [best.omega if best is not None else float("nan")]
     outcomes = [outcome]
     reduced = (
         problem.model.spec.elements != scene.model.elements or problem.step != scene.numerics.step
@@ -134,11 +149,15 @@ def optimize_ipopt(
         model_error = problem.clearance(problem.simulate(best_outcome.parameters))
         outcome = problem.solve(best_outcome.parameters, full_error - model_error)
         outcomes.append(outcome)
-        trial = _verify(scene, problem.control, outcome.parameters, quiet)
-        verified.append(trial.omega)
-        if not outcome.success or trial.omega >= best.omega:
+        trial = _verify(scene, problem.control, outcome.parameters, quiet, outcome.success)
+        if trial is None or not outcome.success or trial.omega >= best.omega:
+            verified.append(float("nan") if trial is None else trial.omega)
             break
+        verified.append(trial.omega)
+        gain = trial.omega / best.omega
         best_outcome, best = outcome, trial
+        if gain > SMALL_GAIN:
+            break
     failed = [o for o in outcomes if not o.success]
     status = failed[0].status if failed else best_outcome.status
     return OcpResult(
@@ -146,7 +165,7 @@ def optimize_ipopt(
         parameters=best_outcome.parameters,
         control=f"{settings.control}({problem.control.size})",
         trajectory=best,
-        omega=best.omega,
+        omega=best.omega if best is not None else float("nan"),
         omega_model=float(np.sqrt(max(best_outcome.objective, 0.0))),
         success=not failed,
         status=status,
@@ -168,13 +187,13 @@ def optimize_nelder_mead(
     started = time.perf_counter()
     settings = settings or NelderMeadSettings(elements=3, step=0.5)
     outcome = solve_nelder_mead(scene, settings, quiet=quiet)
-    trajectory = _verify(scene, outcome.control, outcome.parameters, quiet)
+    trajectory = _verify(scene, outcome.control, outcome.parameters, quiet, outcome.success)
     return OcpResult(
         method="nelder-mead",
         parameters=outcome.parameters,
         control=f"spline({outcome.control.size})",
         trajectory=trajectory,
-        omega=trajectory.omega,
+        omega=trajectory.omega if trajectory is not None else float("nan"),
         omega_model=outcome.objective,
         success=outcome.success,
         status=outcome.message,
@@ -185,7 +204,7 @@ def optimize_nelder_mead(
         solve_time=outcome.solve_time,
         function_time=outcome.solve_time,
         history=outcome.history,
-        refinements=[trajectory.omega],
+        refinements=[trajectory.omega if trajectory is not None else float("nan")],
     )
 
 
