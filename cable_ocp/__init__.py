@@ -8,6 +8,9 @@ from cable_ocp.catenary import catenary_shape
 from cable_ocp.drive import Drive
 from cable_ocp.integrate import SimulationError, integrate, reference_solution
 from cable_ocp.model import INPUT_NAMES, CableModel
+from cable_ocp.nelder_mead import NelderMeadSettings
+from cable_ocp.ocp import IpoptSettings
+from cable_ocp.optimization import OcpResult, optimize
 from cable_ocp.scene import Scene, load_scene
 from cable_ocp.simulation import simulate
 from cable_ocp.statics import EquilibriumError, equilibrium
@@ -17,6 +20,9 @@ from cable_ocp.validation import catenary_check
 __all__ = [
     "INPUT_NAMES",
     "CableModel",
+    "IpoptSettings",
+    "NelderMeadSettings",
+    "OcpResult",
     "Drive",
     "EquilibriumError",
     "Scene",
@@ -27,6 +33,7 @@ __all__ = [
     "equilibrium",
     "integrate",
     "load_scene",
+    "optimize",
     "plots",
     "reference_solution",
     "simulate",
