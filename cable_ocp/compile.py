@@ -1,7 +1,7 @@
 """C code generation of CasADi Functions, compiled once and cached on disk (DESIGN.md §2, §9).
 
-A Function is written as C with its first forward and reverse derivatives (one direction each, so
-the code stays small and compiles in seconds; CasADi calls them once per direction), compiled with
+A Function is written as C, optionally with its first forward and reverse derivatives (one
+direction each, so the code stays small; CasADi calls them once per direction), compiled with
 the system C compiler into a shared library and loaded back as an external Function. The library
 is cached under a key that hashes the caller's description of the Function, the CasADi version and
 the package's source, so a second run loads it without compiling.
@@ -68,7 +68,7 @@ class CompileReport:
 
 
 def compiled(
-    function: ca.Function, description: str, quiet: bool = True
+    function: ca.Function, description: str, derivatives: bool = True, quiet: bool = True
 ) -> tuple[ca.Function, CompileReport]:
     """The Function compiled to C (with first derivatives), from the cache when possible.
 
@@ -79,6 +79,9 @@ def compiled(
     description : str
         Everything that determines the Function (e.g. the model spec and the step), hashed into
         the cache key together with the package's sources.
+    derivatives : bool
+        Also generate the first forward and reverse derivatives (needed by optimisation, not by
+        simulation; they roughly triple the code).
     quiet : bool
         No message about compiling.
 
@@ -100,7 +103,8 @@ def compiled(
     folder = cache_dir()
     folder.mkdir(parents=True, exist_ok=True)
     name = function.name()
-    library = folder / f"{name}_{cache_key(function, description)}.so"
+    key = cache_key(function, f"{description}|derivatives={derivatives}")
+    library = folder / f"{name}_{key}.so"
     if library.exists():
         return ca.external(name, str(library)), CompileReport(True, 0.0, library)
     started = time.perf_counter()
@@ -110,8 +114,9 @@ def compiled(
         source = Path(scratch) / f"{name}.c"
         generator = ca.CodeGenerator(source.name, {"with_header": False})
         generator.add(function)
-        generator.add(function.forward(1))
-        generator.add(function.reverse(1))
+        if derivatives:
+            generator.add(function.forward(1))
+            generator.add(function.reverse(1))
         generator.generate(str(Path(scratch)) + os.sep)
         target = Path(scratch) / library.name
         result = subprocess.run(

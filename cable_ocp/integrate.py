@@ -41,14 +41,19 @@ def rk4_step(model: CableModel, step: float) -> ca.Function:
     return ca.Function("rk4_step", [x, stages], [x_next], ["x", "stage_inputs"], ["x_next"])
 
 
-def step_function(model: CableModel, step: float, compiled: bool = False) -> ca.Function:
-    """The RK4 step, interpreted or compiled to C (cached; see :mod:`cable_ocp.compile`)."""
+def step_function(
+    model: CableModel, step: float, compiled: bool = False, derivatives: bool = False
+) -> ca.Function:
+    """The RK4 step, interpreted or compiled to C (cached; see :mod:`cable_ocp.compile`).
+
+    ``derivatives`` compiles its first derivatives too (for optimisation).
+    """
     function = rk4_step(model, step)
     if not compiled:
         return function
     from cable_ocp.compile import compiled as compile_function
 
-    return compile_function(function, f"{model.spec!r}|step={step!r}")[0]
+    return compile_function(function, f"{model.spec!r}|step={step!r}", derivatives)[0]
 
 
 def step_count(duration: float, step: float) -> int:

@@ -162,7 +162,7 @@ def _interval_function(model, step, steps, hills, end_height0, compiled) -> ca.F
     x = ca.MX.sym("x", model.state_size)
     stages = ca.MX.sym("stages", 15, 3 * steps)
     bias = ca.MX.sym("bias", 1, steps + 1)
-    states = step_function(model, step, compiled).mapaccum(steps)(x, stages)
+    states = step_function(model, step, compiled, derivatives=True).mapaccum(steps)(x, stages)
     points = ca.horzcat(x, states)
     xe = ca.SX.sym("xe", model.state_size)
     error = xe[2] - end_height0 - seabed_height(hills, xe[0], xe[1])
