@@ -26,17 +26,21 @@ class SimulationError(RuntimeError):
     """A simulation became non-finite, left its bonds or reached a singular configuration."""
 
 
-def rk4_step(model: CableModel, step: float) -> ca.Function:
-    """One classical RK4 step of length ``step`` (s) as an SX Function.
+def rk4_step(model: CableModel, step: float, rhs: ca.Function | None = None) -> ca.Function:
+    """One classical RK4 step of length ``step`` (s).
 
-    Inputs ``x`` and ``stage_inputs`` (15 x 3: ``u`` at ``t``, ``t + h/2``, ``t + h``).
+    Inputs ``x`` and ``stage_inputs`` (15 x 3: ``u`` at ``t``, ``t + h/2``, ``t + h``). With the
+    model's own right-hand side the step is one SX Function; with another ``rhs`` (a compiled one)
+    it is an MX Function that calls it four times.
     """
-    x = ca.SX.sym("x", model.state_size)
-    stages = ca.SX.sym("stage_inputs", INPUT_SIZE, 3)
-    k1 = model.rhs(x, stages[:, 0])
-    k2 = model.rhs(x + step / 2 * k1, stages[:, 1])
-    k3 = model.rhs(x + step / 2 * k2, stages[:, 1])
-    k4 = model.rhs(x + step * k3, stages[:, 2])
+    kind = ca.SX if rhs is None else ca.MX
+    rhs = model.rhs if rhs is None else rhs
+    x = kind.sym("x", model.state_size)
+    stages = kind.sym("stage_inputs", INPUT_SIZE, 3)
+    k1 = rhs(x, stages[:, 0])
+    k2 = rhs(x + step / 2 * k1, stages[:, 1])
+    k3 = rhs(x + step / 2 * k2, stages[:, 1])
+    k4 = rhs(x + step * k3, stages[:, 2])
     x_next = x + step / 6 * (k1 + 2 * k2 + 2 * k3 + k4)
     return ca.Function("rk4_step", [x, stages], [x_next], ["x", "stage_inputs"], ["x_next"])
 
@@ -44,16 +48,17 @@ def rk4_step(model: CableModel, step: float) -> ca.Function:
 def step_function(
     model: CableModel, step: float, compiled: bool = False, derivatives: bool = False
 ) -> ca.Function:
-    """The RK4 step, interpreted or compiled to C (cached; see :mod:`cable_ocp.compile`).
+    """The RK4 step, interpreted or calling the right-hand side compiled to C.
 
-    ``derivatives`` compiles its first derivatives too (for optimisation).
+    The compiled right-hand side is cached on disk (:mod:`cable_ocp.compile`); ``derivatives``
+    compiles its first derivatives too (for optimisation).
     """
-    function = rk4_step(model, step)
     if not compiled:
-        return function
+        return rk4_step(model, step)
     from cable_ocp.compile import compiled as compile_function
 
-    return compile_function(function, f"{model.spec!r}|step={step!r}", derivatives)[0]
+    rhs, _ = compile_function(model.rhs, repr(model.spec), derivatives)
+    return rk4_step(model, step, rhs)
 
 
 def step_count(duration: float, step: float) -> int:
