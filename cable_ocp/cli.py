@@ -150,7 +150,7 @@ def _compare(args) -> int:
     ]
     for name, label, r in rows:
         lines.append(
-            f"| {name} | {label} | {r.control} | {r.omega:.4f} | {r.success} | {r.iterations} "
+            f"| {name} | {label} | {r.control} | {r.omega:.2e} | {r.success} | {r.iterations} "
             f"| {r.evaluations} | {r.wall_time:.1f} | {r.build_time:.1f} |"
         )
     table = "\n".join(lines)
