@@ -227,7 +227,9 @@ def _study(args) -> int:
             result = studies.element_convergence(scene, quiet=args.quiet)
             result.chart(folder / "element_convergence.png")
         else:
-            result = studies.end_positions(scene, studies.END_FORCE_SETTINGS, quiet=args.quiet)
+            result = studies.end_positions(
+                scene, studies.END_FORCE_SETTINGS, quiet=args.quiet, compiled=args.compiled
+            )
         text = result.table()
         (folder / f"{args.name}.md").write_text(f"# {args.name} study of {scene.name}\n\n{text}\n")
     print(text)
@@ -275,6 +277,7 @@ def build_parser() -> argparse.ArgumentParser:
     study.add_argument("--out", type=Path, required=True)
     study.add_argument("--set", action="append", default=[], metavar="KEY=VALUE")
     study.add_argument("--quiet", action="store_true")
+    study.add_argument("--compiled", action="store_true", help="end-force: model compiled to C")
     study.set_defaults(run=_study)
 
     bench = commands.add_parser("bench", help="speed benchmarks against baselines")

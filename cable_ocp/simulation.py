@@ -58,6 +58,7 @@ def simulate(
     model: CableModel | None = None,
     initial_state: np.ndarray | None = None,
     quiet: bool = True,
+    compiled: bool = False,
 ) -> Trajectory:
     """Simulate a scene by RK4 from its static equilibrium.
 
@@ -73,6 +74,8 @@ def simulate(
         Defaults to the static equilibrium under the inputs at t = 0.
     quiet : bool
         No progress bar when true.
+    compiled : bool
+        Integrate with the model compiled to C (cached on disk; the first build compiles).
 
     Returns
     -------
@@ -95,6 +98,7 @@ def simulate(
         output_every=numerics.output_every,
         tolerance=numerics.constraint_tolerance,
         quiet=quiet,
+        compiled=compiled,
     )
     count = run.time.size
     joints, _, _, _, _, tensions, _ = model.outputs.map(count)(run.states.T, run.inputs.T)

@@ -207,12 +207,13 @@ def end_positions(
     settings: Sequence[tuple[str, dict]],
     times: Sequence[float] = (10, 25, 50, 75, 100),
     quiet: bool = True,
+    compiled: bool = False,
 ) -> EndPositionTable:
     """End positions at ``times`` for each ``(label, scene overrides)`` setting."""
     positions = []
     for _, overrides in settings:
         local = scene.updated(overrides)
-        run = simulate(local, quiet=quiet)
+        run = simulate(local, quiet=quiet, compiled=compiled)
         idx = [int(np.argmin(np.abs(run.time - t))) for t in times]
         positions.append(run.end[idx])
     return EndPositionTable(tuple(times), tuple(lb for lb, _ in settings), np.array(positions))
