@@ -11,7 +11,6 @@ from dataclasses import dataclass
 import numpy as np
 
 from cable_ocp import winch
-from cable_ocp.model import INPUT_SIZE
 from cable_ocp.vessel import TopMotionFunction, smoothstep, top_motion
 
 
@@ -84,10 +83,8 @@ class Drive:
         return phi, rate, acc
 
     def inputs(self, t: np.ndarray) -> np.ndarray:
-        """Input vector ``u`` at the times ``t`` (s): array (15, len(t))."""
+        """Input vector ``u`` at the times ``t`` (s): array (15, len(t)), see ``INPUT_NAMES``."""
         t = np.atleast_1d(np.asarray(t, dtype=float))
         position, velocity, acceleration = self.top(t)
         length = winch.top_length(self.winch_angle, t, self.segment_length, self.drum_radius)
-        u = np.vstack([position, velocity, acceleration, length, end_force(self.end, t)])
-        assert u.shape[0] == INPUT_SIZE
-        return u
+        return np.vstack([position, velocity, acceleration, length, end_force(self.end, t)])

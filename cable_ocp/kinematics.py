@@ -14,7 +14,6 @@ import casadi as ca
 _PAPER_TO_WORLD = ca.DM([[1.0, 0.0, 0.0], [0.0, 0.0, -1.0], [0.0, 1.0, 0.0]])
 
 POSITION = slice(0, 3)
-BENDING_ANGLES = slice(3, 5)
 TWIST_ANGLE = 5
 
 
