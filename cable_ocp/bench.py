@@ -109,3 +109,27 @@ def rk4_report(models_dir: Path, quick: bool = False) -> list[StepTiming]:
         "h = 0.01 s, stable and within 1e-3 m of h = 1e-3 s (studies/end_force_table)"
     )
     return timings
+
+
+def hessian_report(models_dir: Path) -> None:
+    """Print IPOPT with an exact and a limited-memory Hessian on ``small_tow`` (same run).
+
+    The exact Hessian needs second derivatives, so it runs on the interpreted model; the
+    limited-memory runs are timed interpreted and compiled.
+    """
+    from cable_ocp.ocp import IpoptSettings
+    from cable_ocp.optimization import optimize
+
+    scene = load_scene(models_dir / "small_tow.toml")
+    cases = [("limited-memory", False), ("exact", False), ("limited-memory", True)]
+    print("IPOPT Hessian on small_tow (n = 4, h = 0.25 s, 8 intervals), same run")
+    print(f"{'hessian':<16}{'compiled':>9}{'iterations':>12}{'Omega [m]':>12}{'solve [s]':>11}"
+          f"{'s/iteration':>13}{'build [s]':>11}")  # fmt: skip
+    for hessian, compiled in cases:
+        settings = IpoptSettings(step=0.25, intervals=8, hessian=hessian, compiled=compiled)
+        r = optimize(scene, "ipopt", settings, quiet=True)
+        print(
+            f"{hessian:<16}{str(compiled):>9}{r.iterations:>12}{r.omega:>12.3e}"
+            f"{r.solve_time:>11.1f}{r.solve_time / max(r.iterations, 1):>13.2f}"
+            f"{r.build_time:>11.1f}"
+        )

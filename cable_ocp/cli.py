@@ -209,9 +209,12 @@ def _validate(args) -> int:
 
 
 def _bench(args) -> int:
-    from cable_ocp.bench import rk4_report
+    from cable_ocp.bench import hessian_report, rk4_report
 
-    rk4_report(MODELS_DIR, quick=args.quick)
+    if args.hessian:
+        hessian_report(MODELS_DIR)
+    else:
+        rk4_report(MODELS_DIR, quick=args.quick)
     return 0
 
 
@@ -282,6 +285,9 @@ def build_parser() -> argparse.ArgumentParser:
 
     bench = commands.add_parser("bench", help="speed benchmarks against baselines")
     bench.add_argument("--quick", action="store_true", help="fewer steps at n = 100")
+    bench.add_argument(
+        "--hessian", action="store_true", help="IPOPT exact vs limited-memory Hessian instead"
+    )
     bench.set_defaults(run=_bench)
     return parser
 
