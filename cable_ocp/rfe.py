@@ -98,6 +98,49 @@ def added_mass_energy(
     return energy
 
 
+def closed_form_kinetic_energy(
+    q: ca.SX, qd: ca.SX, length: ca.SX, props: ElementProperties
+) -> ca.SX:
+    """Kinetic energy (J) of a 5-DOF element with its added mass, in closed form.
+
+    The same energy as :func:`kinetic_energy` plus :func:`added_mass_energy`, integrated along
+    the element by hand, so that automatic differentiation of it gives a far shorter expression
+    (0.4 times the instructions of the element's equations). With ``v`` the velocity of ``A_i``,
+    ``e`` the axis, ``a_n = rho_w A C_a``, ``a_t = rho_w A C_at``, ``m_n = mu + a_n`` and the
+    section's second moment ``J_s = mu l d^2 / 16``::
+
+        T = 1/2 l (m_n |v|^2 + (a_t - a_n) (v.e)^2) + 1/2 l^2 m_n v.e'
+            + 1/2 (l^3 m_n / 3 + J_s) |e'|^2 + J_s (psi' sin theta)^2
+
+    The last term is the section spinning about the axis, ``J_s (omega.e)^2``; ``e'`` is normal
+    to ``e``, so the added mass acts on it with ``a_n`` alone.
+    """
+    if props.torsion:
+        raise ValueError("the closed-form kinetic energy is for 5-DOF elements (torsion off)")
+    hydro = props.hydro
+    normal_added, axial_added = 0.0, 0.0
+    if hydro is not None and hydro.has_added_mass:
+        water_per_length = hydro.water_density * hydro.area
+        normal_added = water_per_length * hydro.added_mass_normal
+        axial_added = water_per_length * hydro.added_mass_axial
+    mu = props.mass_per_length
+    normal_mass = mu + normal_added
+    section = mu * length * props.diameter**2 / 16
+    axis = axis_direction(q[3], q[4])
+    axis_rate = ca.jtimes(axis, q, qd)
+    velocity = qd[POSITION]
+    translation = (
+        normal_mass * ca.dot(velocity, velocity)
+        + (axial_added - normal_added) * ca.dot(velocity, axis) ** 2
+    )
+    return (
+        0.5 * length * translation
+        + 0.5 * length**2 * normal_mass * ca.dot(velocity, axis_rate)
+        + 0.5 * (length**3 * normal_mass / 3 + section) * ca.dot(axis_rate, axis_rate)
+        + section * (qd[3] * ca.sin(q[4])) ** 2
+    )
+
+
 def element_functions(props: ElementProperties) -> tuple[ca.Function, ca.Function]:
     """Build the per-element terms as SX Functions, to be inlined for every element.
 
@@ -121,9 +164,12 @@ def element_functions(props: ElementProperties) -> tuple[ca.Function, ca.Functio
 
     axis = axis_direction(q[3], q[4])
     hydro = props.hydro
-    kinetic = kinetic_energy(q, qd, length, props)
-    if hydro is not None and hydro.has_added_mass:
-        kinetic = kinetic + added_mass_energy(q, qd, length, axis, hydro)
+    if props.torsion:
+        kinetic = kinetic_energy(q, qd, length, props)
+        if hydro is not None and hydro.has_added_mass:
+            kinetic = kinetic + added_mass_energy(q, qd, length, axis, hydro)
+    else:
+        kinetic = closed_form_kinetic_energy(q, qd, length, props)
     momentum = ca.gradient(kinetic, qd)
     mass_matrix = ca.jacobian(momentum, qd)
     velocity_terms = ca.jtimes(momentum, q, qd) - ca.gradient(kinetic, q)

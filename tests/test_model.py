@@ -9,7 +9,13 @@ import pytest
 from cable_ocp.drive import Drive
 from cable_ocp.kinematics import axis_direction, rotation_matrix
 from cable_ocp.model import INPUT_SIZE, CableModel
-from cable_ocp.rfe import ElementProperties, element_functions, kinetic_energy
+from cable_ocp.rfe import (
+    ElementProperties,
+    added_mass_energy,
+    closed_form_kinetic_energy,
+    element_functions,
+    kinetic_energy,
+)
 from cable_ocp.scene import load_scene
 from cable_ocp.statics import equilibrium, rest_inputs
 
@@ -182,6 +188,23 @@ def test_kinetic_energy_matches_paper_trace_formula(torsion):
         qdv[3:] *= 0.3  # rad/s
         expected = paper_kinetic_energy(qv, qdv, lv, mu, diameter)
         assert float(energy(qv, qdv, lv)) == pytest.approx(expected, rel=1e-12)
+
+
+def test_closed_form_energy_matches_trace_form_with_added_mass(full_model):
+    """The 5-DOF closed form vs trace form + Gauss-integrated added mass (C_at != C_a): 1e-12."""
+    props = full_model(False).spec.element
+    q, qd, length = ca.SX.sym("q", 5), ca.SX.sym("qd", 5), ca.SX.sym("length")
+    axis = axis_direction(q[3], q[4])
+    reference = kinetic_energy(q, qd, length, props) + added_mass_energy(
+        q, qd, length, axis, props.hydro
+    )
+    both = ca.Function(
+        "T", [q, qd, length], [reference, closed_form_kinetic_energy(q, qd, length, props)]
+    )
+    rng = np.random.default_rng(5)
+    for _ in range(8):
+        expected, closed = both(rng.normal(size=5) * 2, rng.normal(size=5), rng.uniform(1, 30))
+        assert float(closed) == pytest.approx(float(expected), rel=1e-12)
 
 
 @pytest.mark.parametrize("submerged", [False, True], ids=["air", "water"])
