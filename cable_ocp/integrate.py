@@ -20,6 +20,9 @@ from cable_ocp.model import INPUT_SIZE, CableModel
 from cable_ocp.progress import Progress
 
 SEGMENTS = 40  # progress updates (and blow-up checks) per run
+# Blow-up checks per run without a progress bar: each costs a call and a bond check (about 3 ms at
+# n = 15, as much as 50 RK4 steps), so a quiet run checks less often.
+QUIET_SEGMENTS = 8
 # Largest RK4 step (SX instructions) compiled whole; beyond it only the right-hand side is compiled.
 WHOLE_STEP_LIMIT = 100_000
 
@@ -55,8 +58,18 @@ def step_function(
     A small model's whole step is compiled (one call per step: at n = 3 its derivatives are 25 %
     faster than around a compiled right-hand side); a large one's right-hand side only, since
     the step's four copies made gcc run out of memory at n = 100. ``derivatives`` compiles the
-    first derivatives too (for optimisation).
+    first derivatives too (for optimisation). The Function is kept on the model, so repeated
+    runs (Nelder-Mead, studies) build and load it once.
     """
+    return model.memo(
+        ("rk4_step", step, compiled, derivatives),
+        lambda: _build_step_function(model, step, compiled, derivatives),
+    )
+
+
+def _build_step_function(
+    model: CableModel, step: float, compiled: bool, derivatives: bool
+) -> ca.Function:
     sx_step = rk4_step(model, step)
     if not compiled:
         return sx_step
@@ -144,10 +157,7 @@ def integrate(
     x0 = np.asarray(x0, dtype=float).ravel()
     model.check_regular(x0)
     outputs = count // output_every
-    chunk = step_function(model, step, compiled).fold(output_every)
-    per_segment = max(1, math.ceil(outputs / SEGMENTS))
-    segment = chunk.mapaccum(per_segment)
-    residual = _residual_norms(model, per_segment)
+    per_segment = max(1, math.ceil(outputs / (QUIET_SEGMENTS if quiet else SEGMENTS)))
 
     times = np.arange(count) * step
     states = [x0[:, None]]
@@ -155,9 +165,9 @@ def integrate(
     state = x0
     for first in range(0, outputs, per_segment):
         size = min(per_segment, outputs - first)
-        fn = segment if size == per_segment else chunk.mapaccum(size)
         steps = times[first * output_every : (first + size) * output_every]
-        block = np.array(fn(state, stage_inputs(drive, steps, step)))
+        run = _segment_function(model, step, compiled, output_every, size)
+        block = np.array(run(state, stage_inputs(drive, steps, step)))
         sample_times = (np.arange(first, first + size) + 1) * output_every * step
         _check_block(
             model,
@@ -166,7 +176,7 @@ def integrate(
             sample_times,
             step,
             tolerance,
-            residual if size == per_segment else _residual_norms(model, size),
+            _residual_norms(model, size, compiled),
         )
         states.append(block)
         state = block[:, -1]
@@ -176,26 +186,51 @@ def integrate(
     return RawRun(all_times, np.hstack(states).T, drive.inputs(all_times).T)
 
 
-def _residual_norms(model: CableModel, count: int) -> ca.Function:
-    x = ca.SX.sym("x", model.state_size)
-    u = ca.SX.sym("u", INPUT_SIZE)
-    residual = model.outputs(x, u)[2]
-    norms = ca.Function("bond_norm", [x, u], [ca.mmax(ca.fabs(residual))])
-    return norms.map(count)
+def _segment_function(
+    model: CableModel, step: float, compiled: bool, output_every: int, size: int
+) -> ca.Function:
+    """``size`` outputs of ``output_every`` RK4 steps each, in one call."""
+    return model.memo(
+        ("segment", step, compiled, output_every, size),
+        lambda: step_function(model, step, compiled).fold(output_every).mapaccum(size),
+    )
+
+
+def _residual_norms(model: CableModel, count: int, compiled: bool) -> ca.Function:
+    """Largest bond residual (m) of each of ``count`` states (compiled along with the step)."""
+
+    def build() -> ca.Function:
+        x = ca.SX.sym("x", model.state_size)
+        u = ca.SX.sym("u", INPUT_SIZE)
+        residual = model.outputs(x, u)[2]
+        norm = ca.Function("bond_norm", [x, u], [ca.mmax(ca.fabs(residual))])
+        if compiled:
+            from cable_ocp.compile import compiled as compile_function
+
+            norm = compile_function(norm, repr(model.spec), derivatives=False)[0]
+        return norm
+
+    single = model.memo(("bond_norm", compiled), build)
+    return model.memo(("bond_norm", compiled, count), lambda: single.map(count))
 
 
 def _check_block(model, block, inputs, times, step, tolerance, residual_fn) -> None:
+    """Raise on the first sample of a block that is non-finite or off its bonds."""
     finite = np.all(np.isfinite(block), axis=0)
-    if not finite.all():
-        t = times[int(np.argmin(finite))]
+    with np.errstate(invalid="ignore"):
+        norms = np.array(residual_fn(block, inputs)).ravel()
+        off_bonds = norms > tolerance
+    first_non_finite = int(np.argmin(finite)) if not finite.all() else times.size
+    first_off_bonds = int(np.argmax(off_bonds)) if off_bonds.any() else times.size
+    if first_non_finite < times.size and first_non_finite <= first_off_bonds:
         raise SimulationError(
-            f"the state became non-finite at t = {t:.6g} s with step h = {step:g} s: the RK4 step "
-            "is beyond its stability limit. Remedy: a smaller numerics.step, more damping "
-            "(cable.bending_damping), or fewer elements (model.elements)."
+            f"the state became non-finite at t = {times[first_non_finite]:.6g} s with step "
+            f"h = {step:g} s: the RK4 step is beyond its stability limit. Remedy: a smaller "
+            "numerics.step, more damping (cable.bending_damping), or fewer elements "
+            "(model.elements)."
         )
-    norms = np.array(residual_fn(block, inputs)).ravel()
-    if np.any(norms > tolerance):
-        k = int(np.argmax(norms > tolerance))
+    if first_off_bonds < times.size:
+        k = first_off_bonds
         raise SimulationError(
             f"bond residual {norms[k]:.3g} m exceeds numerics.constraint_tolerance = "
             f"{tolerance:g} m at t = {times[k]:.6g} s with step h = {step:g} s. Remedy: a smaller "

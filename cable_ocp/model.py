@@ -9,6 +9,7 @@ way of driving it.
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from dataclasses import dataclass, field
 from functools import cached_property
 
@@ -180,6 +181,13 @@ class CableModel:
         self.x = ca.SX.sym("x", 2 * size)
         self.u = ca.SX.sym("u", INPUT_SIZE)
         self._build()
+        self._memo: dict = {}
+
+    def memo(self, key: tuple, build: Callable[[], ca.Function]) -> ca.Function:
+        """A Function derived from this model (a step, a map), built once per ``key``."""
+        if key not in self._memo:
+            self._memo[key] = build()
+        return self._memo[key]
 
     @classmethod
     def from_scene(cls, scene, elements: int | None = None) -> CableModel:
