@@ -1,0 +1,116 @@
+"""The stability study: step bisection, Baumgarte drift, the singular-state message, the report."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from cable_ocp.drive import Drive
+from cable_ocp.integrate import SimulationError
+from cable_ocp.model import CableModel
+from cable_ocp.scene import load_scene
+from cable_ocp.simulation import simulate
+from cable_ocp.stability import (
+    baumgarte_drift,
+    largest_stable_step,
+    pushed_scene,
+    rk4_growth,
+    run_length,
+    run_stability,
+    singular_states,
+)
+from cable_ocp.statics import equilibrium
+
+# Small searches: short runs, a coarse bracket (ratio 1.5).
+QUICK = {"duration": 2.0, "min_steps": 50, "resolution": 1.5}
+TORSION_QUICK = {"duration": 0.5, "min_steps": 50, "resolution": 1.5, "linearised_samples": 2}
+
+
+@pytest.fixture(scope="module")
+def end_force(models_dir):
+    return load_scene(models_dir / "end_force.toml")
+
+
+def pushed_run(scene, elements: int, step: float, duration: float, min_steps: int, tolerance):
+    """An independent run of the pushed scene at ``step`` (raises SimulationError if unstable)."""
+    local = pushed_scene(scene, elements, False).updated(
+        {
+            "numerics.step": step,
+            "numerics.duration": run_length(step, duration, min_steps),
+            "numerics.constraint_tolerance": tolerance,
+        }
+    )
+    model = CableModel.from_scene(local)
+    return simulate(local, model=model, initial_state=equilibrium(model, Drive.from_scene(local)))
+
+
+def test_rk4_growth_on_the_imaginary_axis():
+    """RK4's stability region meets the imaginary axis at |z| = 2 sqrt(2)."""
+    assert rk4_growth(np.array([2j * np.sqrt(2)]))[0] == pytest.approx(1.0, abs=1e-12)
+    assert rk4_growth(np.array([2.7j]))[0] < 1 < rk4_growth(np.array([2.9j]))[0]
+    assert rk4_growth(np.array([-2.78]))[0] < 1 < rk4_growth(np.array([-2.8]))[0]
+
+
+def test_bisection_brackets_the_limit(end_force):
+    """n = 5 without torsion: a fresh run at the found step completes, one at twice it fails."""
+    result = largest_stable_step(end_force, 5, False, **QUICK)
+    assert result.step < result.unstable_step <= 1.5 * result.step
+    assert result.failure
+    tolerance = 1.0  # largest_stable_step's default bond tolerance
+    run = pushed_run(end_force, 5, result.step, 2.0, 50, tolerance)
+    assert run.time[-1] == pytest.approx(result.duration)
+    with pytest.raises(SimulationError):
+        pushed_run(end_force, 5, 2 * result.step, 2.0, 50, tolerance)
+    # Stable here also means accurate to a small fraction of the end's motion.
+    assert result.quarter_step_difference < 0.1 * result.end_excursion
+
+
+def test_limit_falls_with_elements(end_force):
+    """With torsion h_max falls about as 1/n: n = 15 is at least 2x below n = 5 (measured 3.1x).
+
+    The linearised limit agrees with the bisection to within the bracket's ratio and a margin.
+    """
+    coarse = largest_stable_step(end_force, 5, True, **TORSION_QUICK)
+    fine = largest_stable_step(end_force, 15, True, first_step=coarse.step, **TORSION_QUICK)
+    assert fine.step < coarse.step / 2
+    for result in (coarse, fine):
+        assert "twist" in result.failure
+        assert 0.5 < result.step / result.linearised_step < 2
+
+
+def test_no_stabilisation_drifts_more(end_force):
+    """Sharp push, n = 5, h = 0.1 s: without Baumgarte the bonds drift over 10x further."""
+    drift = baumgarte_drift(
+        end_force, ((0.0, 0.0), (1.0, 1.0)), elements=5, step=0.1, reference_step=0.01, duration=10
+    )
+    none, default = drift.runs
+    assert not none.failure and not default.failure
+    assert none.residual.max() > 10 * default.residual.max()
+    # Without stabilisation the residual only grows: it ends at its largest.
+    assert none.residual[-1] == pytest.approx(none.residual.max(), rel=0.05)
+    assert default.residual[-1] < 0.1 * default.residual.max()
+
+
+def test_singular_state_message(models_dir):
+    cases = singular_states(load_scene(models_dir / "hanging.toml"))
+    assert len(cases) == 2
+    for case in cases:
+        assert case.rejected
+        assert "along the y axis" in case.message and "singular" in case.message
+        assert "Rotate the scene" in case.message
+
+
+def test_quick_study_writes_its_folder(models_dir, tmp_path):
+    out = tmp_path / "stability"
+    study = run_stability(out, models_dir, quick=True)
+    assert sorted(p.name for p in out.iterdir()) == [
+        "baumgarte_drift.png",
+        "knots.png",
+        "stability.md",
+        "stable_step.png",
+    ]
+    text = (out / "stability.md").read_text()
+    assert "Largest stable RK4 step" in text and "Euler-angle singularity" in text
+    # Capped at 2 iterations / 10 evaluations: recorded as not converged, never as a success.
+    assert not any(r.success for r in study.knots.runs)
+    assert "Maximum" in text
