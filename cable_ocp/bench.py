@@ -1,8 +1,17 @@
 """Benchmarks that print their figures next to a baseline measured or quoted in the same run.
 
-``cable-ocp bench`` times the RK4 step at n = 15 on ``paper_flat`` and n = 100 on ``end_force``,
-interpreted (CasADi's SX virtual machine) and compiled to C, in the same run, and sets the wall time
-per simulated second beside the paper's (5242 s for 100 s at n = 100, h = 2e-4 s).
+``cable-ocp bench`` has three parts, each printing a table:
+
+- ``rk4``: the simulation loop (:func:`cable_ocp.integrate.integrate`, bond checks included) at
+  n = 15 on ``paper_flat`` (winch locked) and n = 100 on ``end_force``, interpreted (CasADi's SX
+  virtual machine) and compiled to C, at the scene's step and at a larger one, with the error of
+  each step against a run at a quarter of it, so that a faster step is seen to be accurate; the
+  paper's 52 s per simulated second (n = 100) as a ratio; compile and cache-load times.
+- ``moordyn``: the same cable and tow in MoorDyn at its largest stable step (optional extra).
+- ``ocp``: IPOPT (multiple shooting) against the paper's Nelder-Mead on ``paper_flat``:
+  seconds per iteration or evaluation, total, and the verified Omega.
+
+``cable-ocp bench --hessian`` compares IPOPT's exact and limited-memory Hessians.
 """
 
 from __future__ import annotations
@@ -13,9 +22,8 @@ from pathlib import Path
 
 import numpy as np
 
-from cable_ocp.compile import compiled as compile_function
 from cable_ocp.drive import Drive
-from cable_ocp.integrate import rk4_step, stage_inputs
+from cable_ocp.integrate import integrate, stage_inputs, step_compile_report, step_function
 from cable_ocp.model import CableModel
 from cable_ocp.scene import load_scene
 from cable_ocp.statics import equilibrium
@@ -23,11 +31,16 @@ from cable_ocp.statics import equilibrium
 PAPER_WALL_TIME = 5242.0  # s, for 100 s simulated at n = 100 (paper §4.2)
 PAPER_SIMULATED = 100.0  # s
 PAPER_STEP = 2e-4  # s
+# (scene file, n, steps): the scene's own step and a larger one inside the stability limit.
+RK4_CASES = (("paper_flat.toml", 15, (0.05, 0.2)), ("end_force.toml", 100, (0.01, 0.025)))
+# The interpreted baseline runs this much simulated time (s) per case: it is 10-20x slower.
+INTERPRETED_DURATION = {15: 10.0, 100: 2.0}
+ACCURACY_REFINEMENT = 4  # each step's error is measured against a run at step / 4
 
 
 @dataclass(frozen=True)
 class StepTiming:
-    """Cost of RK4 steps of one model.
+    """Cost and accuracy of the RK4 simulation loop of one model at one step.
 
     Attributes
     ----------
@@ -37,11 +50,22 @@ class StepTiming:
     mode : str
         ``"interpreted"`` or ``"compiled"``.
     build_time : float, s
-        Building the symbolic model and the step Function (and compiling it, if not cached).
+        Building the model and its step (compiling it when the cache misses).
+    compile_time : float, s
+        Of ``build_time``, compiling C (0 on a cache hit or interpreted).
+    reload_time : float, s
+        Building a fresh model's step again: the cache hit of a second run (compiled only).
     cache_hit : bool
-        The compiled step came from the disk cache.
+        The first build already found the compiled step in the cache.
+    simulated : float, s
+        Simulated time of the timed run.
     microseconds_per_step : float, us
+        Kernel only: one call of the step map over the whole run.
     wall_per_simulated_second : float, s/s
+        The whole simulation loop (:func:`integrate`: inputs, steps, bond and blow-up checks).
+    end_error : float, m
+        Largest end-position difference against the same run at ``step / 4`` (NaN when not
+        measured: interpreted runs give the same numbers as compiled ones).
     """
 
     scene: str
@@ -49,66 +73,207 @@ class StepTiming:
     step: float
     mode: str
     build_time: float
+    compile_time: float
+    reload_time: float
     cache_hit: bool
+    simulated: float
     microseconds_per_step: float
     wall_per_simulated_second: float
+    end_error: float
 
 
-def time_rk4(
-    scene_path: Path, elements: int, steps: int, compiled: bool = False, repeats: int = 3
-) -> StepTiming:
-    """Time ``steps`` RK4 steps of a scene's model in one mapaccum (best of ``repeats``)."""
-    scene = load_scene(scene_path, {"model.elements": elements})
-    started = time.perf_counter()
-    model = CableModel.from_scene(scene)
-    step = scene.numerics.step
-    function, hit = rk4_step(model, step), False
-    if compiled:
-        rhs, report = compile_function(model.rhs, repr(model.spec), derivatives=False, quiet=False)
-        function, hit = rk4_step(model, step, rhs), report.cache_hit
-    run = function.mapaccum(steps)
-    build = time.perf_counter() - started
-    drive = Drive.from_scene(scene)
-    x0 = equilibrium(model, drive)
-    inputs = stage_inputs(drive, np.arange(steps) * step, step)
+def _best_time(run, repeats: int) -> float:
     best = np.inf
     for _ in range(repeats):
         started = time.perf_counter()
-        run(x0, inputs)
+        run()
         best = min(best, time.perf_counter() - started)
-    per_step = best / steps
-    mode = "compiled" if compiled else "interpreted"
-    return StepTiming(scene.name, elements, step, mode, build, hit, 1e6 * per_step, per_step / step)
+    return best
+
+
+def _build(scene, compiled: bool, step: float):
+    started = time.perf_counter()
+    model = CableModel.from_scene(scene)
+    step_function(model, step, compiled)
+    elapsed = time.perf_counter() - started
+    report = step_compile_report(model, step) if compiled else None
+    return model, elapsed, report
+
+
+def time_simulation(
+    scene_path: Path, elements: int, step: float, compiled: bool, repeats: int = 3
+) -> StepTiming:
+    """Time the RK4 loop of a scene's model (best of ``repeats``) and measure its accuracy.
+
+    Parameters
+    ----------
+    scene_path : Path
+    elements : int
+    step : float, s
+    compiled : bool
+    repeats : int
+    """
+    scene = load_scene(scene_path, {"model.elements": elements, "numerics.step": step})
+    duration = scene.numerics.duration if compiled else INTERPRETED_DURATION[elements]
+    model, build, report = _build(scene, compiled, step)
+    reload = _build(scene, compiled, step)[1] if compiled else 0.0
+    drive = Drive.from_scene(scene)
+    x0 = equilibrium(model, drive)
+    count = round(duration / step)
+    kernel = step_function(model, step, compiled).mapaccum(count)
+    inputs = stage_inputs(drive, np.arange(count) * step, step)
+    per_step = _best_time(lambda: kernel(x0, inputs), repeats) / count
+
+    tolerance = scene.numerics.constraint_tolerance
+
+    def loop():
+        return integrate(model, x0, drive, duration, step, tolerance=tolerance, compiled=compiled)
+
+    wall = _best_time(loop, repeats)
+    error = float("nan")
+    if compiled:
+        coarse = loop()
+        fine = integrate(
+            model,
+            x0,
+            drive,
+            duration,
+            step / ACCURACY_REFINEMENT,
+            output_every=ACCURACY_REFINEMENT,
+            tolerance=np.inf,
+            compiled=True,
+        )
+        error = float(np.max(np.linalg.norm(coarse.states[:, :3] - fine.states[:, :3], axis=1)))
+    return StepTiming(
+        scene=scene.name,
+        elements=elements,
+        step=step,
+        mode="compiled" if compiled else "interpreted",
+        build_time=build,
+        compile_time=report.compile_time if report else 0.0,
+        reload_time=reload,
+        cache_hit=bool(report and report.cache_hit),
+        simulated=duration,
+        microseconds_per_step=1e6 * per_step,
+        wall_per_simulated_second=wall / duration,
+        end_error=error,
+    )
 
 
 def rk4_report(models_dir: Path, quick: bool = False) -> list[StepTiming]:
-    """Print the RK4 benchmark (interpreted and compiled, same run) and return its timings."""
-    cases = [("paper_flat.toml", 15, 2000), ("end_force.toml", 100, 100 if quick else 300)]
+    """Print the RK4 benchmark (interpreted and compiled, same run) and return its timings.
+
+    ``quick`` times the scene steps only (the larger ones are left out).
+    """
     timings = []
-    for name, n, steps in cases:
-        for compiled in (False, True):
-            timings.append(time_rk4(models_dir / name, n, steps, compiled))
+    for name, n, steps in RK4_CASES:
+        for step in steps[:1] if quick else steps:
+            for compiled in (False, True):
+                timings.append(time_simulation(models_dir / name, n, step, compiled))
     paper_per_second = PAPER_WALL_TIME / PAPER_SIMULATED
-    paper_per_step = PAPER_WALL_TIME / (PAPER_SIMULATED / PAPER_STEP)
-    print("RK4 step, best of 3 (build includes compiling when the cache misses)")
-    print(f"{'scene':<12}{'n':>5}{'h [s]':>8}  {'mode':<12}{'build [s]':>10}{'cache':>7}"
-          f"{'us/step':>10}{'ms/sim s':>10}{'vs interp.':>11}{'paper/ours':>11}")  # fmt: skip
+    print("RK4 simulation loop (best of 3); interpreted and compiled in the same run")
+    print(f"{'scene':<11}{'n':>4}{'h [s]':>7}  {'mode':<12}{'build [s]':>10}{'compile':>8}"
+          f"{'reload':>7}{'us/step':>9}{'ms/sim s':>10}{'speed-up':>9}{'paper/ours':>11}"
+          f"{'err vs h/4 [m]':>15}")  # fmt: skip
     for t in timings:
-        base = [b for b in timings if b.elements == t.elements and b.mode == "interpreted"][0]
-        speedup = base.microseconds_per_step / t.microseconds_per_step
-        ratio = paper_per_second / t.wall_per_simulated_second
+        base = [
+            b
+            for b in timings
+            if (b.elements, b.step, b.mode) == (t.elements, t.step, "interpreted")
+        ][0]
+        speedup = base.wall_per_simulated_second / t.wall_per_simulated_second
+        ratio = paper_per_second / t.wall_per_simulated_second if t.elements == 100 else np.nan
         print(
-            f"{t.scene:<12}{t.elements:>5}{t.step:>8.3g}  {t.mode:<12}{t.build_time:>10.1f}"
-            f"{'hit' if t.cache_hit else '-':>7}{t.microseconds_per_step:>10.1f}"
-            f"{1e3 * t.wall_per_simulated_second:>10.3f}{speedup:>10.1f}x"
-            f"{ratio if t.elements == 100 else float('nan'):>11.0f}"
+            f"{t.scene:<11}{t.elements:>4}{t.step:>7.3g}  {t.mode:<12}{t.build_time:>10.1f}"
+            f"{t.compile_time:>8.1f}{t.reload_time:>7.2f}{t.microseconds_per_step:>9.1f}"
+            f"{1e3 * t.wall_per_simulated_second:>10.3f}{speedup:>8.1f}x{ratio:>11.0f}"
+            f"{t.end_error:>15.2e}"
         )
     print(
         f"paper (n = 100, h = {PAPER_STEP:g} s, torsion): {paper_per_second:.1f} s per simulated "
-        f"second, {1e6 * paper_per_step:.0f} us per step; our n = 100 runs without torsion at "
-        "h = 0.01 s, stable and within 1e-3 m of h = 1e-3 s (studies/end_force_table)"
+        "second. Interpreted runs simulate "
+        + ", ".join(f"{v:g} s at n = {k}" for k, v in INTERPRETED_DURATION.items())
+        + "; compiled runs the whole scene. 'reload' builds a fresh model whose compiled step "
+        "comes from the disk cache."
     )
     return timings
+
+
+@dataclass(frozen=True)
+class OptimiserTiming:
+    """Cost of one winch optimisation.
+
+    Attributes
+    ----------
+    label : str
+    omega : float, m
+        Verified on the scene's model.
+    success : bool
+    status : str
+    iterations : int
+        IPOPT iterations, or Nelder-Mead iterations.
+    evaluations : int
+        Objective evaluations (one simulation each for Nelder-Mead).
+    solve_time : float, s
+    wall_time : float, s
+        Everything: building, solving and verifying.
+    """
+
+    label: str
+    omega: float
+    success: bool
+    status: str
+    iterations: int
+    evaluations: int
+    solve_time: float
+    wall_time: float
+
+
+def ocp_report(models_dir: Path, quick: bool = False) -> list[OptimiserTiming]:
+    """Print IPOPT against Nelder-Mead on ``paper_flat`` (``small_tow`` when ``quick``)."""
+    from cable_ocp.nelder_mead import NelderMeadSettings
+    from cable_ocp.ocp import IpoptSettings
+    from cable_ocp.optimization import optimize
+
+    if quick:
+        scene = load_scene(models_dir / "small_tow.toml")
+        cases = [
+            ("ipopt", "IPOPT, Hermite", IpoptSettings(step=0.25, intervals=8)),
+            ("nelder-mead", "Nelder-Mead, knots", NelderMeadSettings(step=0.25)),
+        ]
+    else:
+        scene = load_scene(models_dir / "paper_flat.toml")
+        spline = IpoptSettings(elements=3, step=0.5, control="spline")
+        cases = [
+            ("ipopt", "IPOPT, Hermite", None),
+            ("ipopt", "IPOPT, 14-knot spline", spline),
+            ("nelder-mead", "Nelder-Mead, 14 knots", None),
+        ]
+    rows = []
+    for method, label, settings in cases:
+        r = optimize(scene, method, settings, quiet=True)
+        rows.append(
+            OptimiserTiming(
+                label, r.omega, r.success, r.status, r.iterations, r.evaluations,
+                r.solve_time, r.wall_time,
+            )
+        )  # fmt: skip
+    print(f"Winch optimisation on {scene.name} (Omega verified on the scene's n = "
+          f"{scene.model.elements} model), same run")  # fmt: skip
+    print(f"{'method':<24}{'Omega [m]':>11}{'success':>9}{'iter.':>7}{'evals':>7}{'solve [s]':>11}"
+          f"{'s/iter.':>9}{'s/eval':>8}{'total [s]':>11}{'vs IPOPT':>10}")  # fmt: skip
+    for row in rows:
+        print(
+            f"{row.label:<24}{row.omega:>11.3e}{str(row.success):>9}{row.iterations:>7}"
+            f"{row.evaluations:>7}{row.solve_time:>11.1f}"
+            f"{row.solve_time / max(row.iterations, 1):>9.2f}"
+            f"{row.solve_time / max(row.evaluations, 1):>8.3f}{row.wall_time:>11.1f}"
+            f"{row.wall_time / rows[0].wall_time:>9.2f}x"
+        )
+    for row in rows:
+        if not row.success:
+            print(f"{row.label}: not converged: {row.status}")
+    return rows
 
 
 def hessian_report(models_dir: Path) -> None:

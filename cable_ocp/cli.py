@@ -209,12 +209,20 @@ def _validate(args) -> int:
 
 
 def _bench(args) -> int:
-    from cable_ocp.bench import hessian_report, rk4_report
+    from cable_ocp import bench
+    from cable_ocp.moordyn_compare import moordyn_report
 
     if args.hessian:
-        hessian_report(MODELS_DIR)
-    else:
-        rk4_report(MODELS_DIR, quick=args.quick)
+        bench.hessian_report(MODELS_DIR)
+        return 0
+    parts = {
+        "rk4": bench.rk4_report,
+        "moordyn": moordyn_report,
+        "ocp": bench.ocp_report,
+    }
+    for name in args.only or list(parts):
+        parts[name](MODELS_DIR, quick=args.quick)
+        print()
     return 0
 
 
@@ -284,7 +292,12 @@ def build_parser() -> argparse.ArgumentParser:
     study.set_defaults(run=_study)
 
     bench = commands.add_parser("bench", help="speed benchmarks against baselines")
-    bench.add_argument("--quick", action="store_true", help="fewer steps at n = 100")
+    bench.add_argument(
+        "--quick", action="store_true", help="scene steps only, short MoorDyn runs, small OCP"
+    )
+    bench.add_argument(
+        "--only", nargs="+", choices=["rk4", "moordyn", "ocp"], help="run only these parts"
+    )
     bench.add_argument(
         "--hessian", action="store_true", help="IPOPT exact vs limited-memory Hessian instead"
     )

@@ -3,8 +3,9 @@
 A Function is written as C, optionally with its first forward and reverse derivatives (one
 direction each, so the code stays small; CasADi calls them once per direction), compiled with
 the system C compiler into a shared library and loaded back as an external Function. The library
-is cached under a key that hashes the caller's description of the Function, the CasADi version and
-the package's source, so a second run loads it without compiling.
+is cached under a key that hashes the Function itself (its serialised expression graph), the
+caller's description, the CasADi version and the compiler flags, so a second run loads it without
+compiling, and a change to the model (and nothing else) compiles anew.
 """
 
 from __future__ import annotations
@@ -20,9 +21,6 @@ from pathlib import Path
 
 import casadi as ca
 
-PACKAGE_DIR = Path(__file__).resolve().parent
-# The modules whose code ends up in a compiled model: a change to any of them invalidates the cache.
-MODEL_SOURCES = ("kinematics.py", "rfe.py", "hydro.py", "kkt.py", "model.py", "integrate.py")
 COMPILER_FLAGS = ("-O1", "-fPIC", "-shared")
 
 
@@ -39,19 +37,14 @@ def find_compiler() -> str | None:
     return None
 
 
-def _source_digest() -> str:
-    digest = hashlib.sha256()
-    for name in MODEL_SOURCES:
-        digest.update((PACKAGE_DIR / name).read_bytes())
-    return digest.hexdigest()
-
-
 def cache_key(function: ca.Function, description: str) -> str:
-    """Key of a compiled Function: its name, what built it, CasADi and the model sources."""
-    text = "|".join(
-        [function.name(), description, ca.__version__, _source_digest(), *COMPILER_FLAGS]
-    )
-    return hashlib.sha256(text.encode()).hexdigest()[:20]
+    """Key of a compiled Function: its expression graph, what built it, CasADi and the flags.
+
+    Serialising the graph takes about 0.7 s at n = 100, against minutes of compiling.
+    """
+    digest = hashlib.sha256(function.serialize().encode())
+    digest.update("|".join([description, ca.__version__, *COMPILER_FLAGS]).encode())
+    return digest.hexdigest()[:20]
 
 
 class CompileReport:

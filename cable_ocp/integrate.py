@@ -15,6 +15,8 @@ import casadi as ca
 import numpy as np
 from scipy.integrate import solve_ivp
 
+from cable_ocp.compile import CompileReport
+from cable_ocp.compile import compiled as compile_function
 from cable_ocp.drive import Drive
 from cable_ocp.model import INPUT_SIZE, CableModel
 from cable_ocp.progress import Progress
@@ -59,26 +61,30 @@ def step_function(
     faster than around a compiled right-hand side); a large one's right-hand side only, since
     the step's four copies made gcc run out of memory at n = 100. ``derivatives`` compiles the
     first derivatives too (for optimisation). The Function is kept on the model, so repeated
-    runs (Nelder-Mead, studies) build and load it once.
+    runs (Nelder-Mead, studies) build and load it once; :func:`step_compile_report` tells
+    whether it came from the disk cache.
     """
-    return model.memo(
-        ("rk4_step", step, compiled, derivatives),
-        lambda: _build_step_function(model, step, compiled, derivatives),
-    )
+    return _step_and_report(model, step, compiled, derivatives)[0]
 
 
-def _build_step_function(
+def step_compile_report(model: CableModel, step: float, derivatives: bool = False) -> CompileReport:
+    """How the compiled step of :func:`step_function` was obtained (cache hit, compile time)."""
+    return _step_and_report(model, step, True, derivatives)[1]
+
+
+def _step_and_report(
     model: CableModel, step: float, compiled: bool, derivatives: bool
-) -> ca.Function:
-    sx_step = rk4_step(model, step)
-    if not compiled:
-        return sx_step
-    from cable_ocp.compile import compiled as compile_function
+) -> tuple[ca.Function, CompileReport | None]:
+    def build() -> tuple[ca.Function, CompileReport | None]:
+        sx_step = rk4_step(model, step)
+        if not compiled:
+            return sx_step, None
+        if sx_step.n_instructions() <= WHOLE_STEP_LIMIT:
+            return compile_function(sx_step, f"{model.spec!r}|step={step!r}", derivatives)
+        rhs, report = compile_function(model.rhs, repr(model.spec), derivatives)
+        return rk4_step(model, step, rhs), report
 
-    if sx_step.n_instructions() <= WHOLE_STEP_LIMIT:
-        return compile_function(sx_step, f"{model.spec!r}|step={step!r}", derivatives)[0]
-    rhs, _ = compile_function(model.rhs, repr(model.spec), derivatives)
-    return rk4_step(model, step, rhs)
+    return model.memo(("rk4_step", step, compiled, derivatives), build)
 
 
 def step_count(duration: float, step: float) -> int:
@@ -205,8 +211,6 @@ def _residual_norms(model: CableModel, count: int, compiled: bool) -> ca.Functio
         residual = model.outputs(x, u)[2]
         norm = ca.Function("bond_norm", [x, u], [ca.mmax(ca.fabs(residual))])
         if compiled:
-            from cable_ocp.compile import compiled as compile_function
-
             norm = compile_function(norm, repr(model.spec), derivatives=False)[0]
         return norm
 

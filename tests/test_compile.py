@@ -51,3 +51,33 @@ def test_without_a_compiler_falls_back_to_interpreted(tiny_step, monkeypatch):
     with pytest.warns(RuntimeWarning, match="no C compiler"):
         function, report = compile_module.compiled(step, "x")
     assert function is step and not report.cache_hit
+
+
+SECOND_PROCESS = """
+from cable_ocp.compile import compiled
+from cable_ocp.integrate import rk4_step
+from cable_ocp.model import CableModel
+from cable_ocp.scene import load_scene
+scene = load_scene({scene!r}, {{"model.elements": 2, "hydrodynamics.drag_normal": {drag}}})
+model = CableModel.from_scene(scene)
+print(compiled(rk4_step(model, 0.05), "step", derivatives=False)[1].cache_hit)
+"""
+
+
+def test_a_second_process_loads_from_the_cache_and_a_changed_model_compiles(models_dir, tmp_path):
+    """The key hashes the expression graph: the same model rebuilt elsewhere hits the cache."""
+    import os
+    import subprocess
+    import sys
+
+    def hit(drag: float) -> bool:
+        code = SECOND_PROCESS.format(scene=str(models_dir / "small_tow.toml"), drag=drag)
+        env = {**os.environ, "CABLE_OCP_CACHE": str(tmp_path)}
+        out = subprocess.run(
+            [sys.executable, "-c", code], env=env, capture_output=True, text=True, check=True
+        )
+        return out.stdout.strip() == "True"
+
+    assert not hit(1.0)  # first build compiles
+    assert hit(1.0)  # a new process, the same model: loaded from the cache
+    assert not hit(1.2)  # other physics, other code: compiled anew
