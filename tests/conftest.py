@@ -61,6 +61,7 @@ def tilted():
 # The validation record: tests that check the physics against an independent reference call the
 # ``validation`` fixture with what they measured; ``pytest --validation-report VALIDATION.md``
 # writes one row per case with the test's outcome, so the record is regenerated, not typed.
+CELLS = ("level", "case", "reference", "metric", "result", "acceptance")
 LEVELS = ("analytic", "second formulation", "converged reference", "peer code", "conservation")
 
 
@@ -130,8 +131,6 @@ def pytest_sessionfinish(session, exitstatus):
     ]
     for r in rows:
         outcome = config.validation_outcomes.get(r["test"], "not run")
-        lines.append(
-            f"| {r['level']} | {r['case']} | {r['reference']} | {r['metric']} | {r['result']} "
-            f"| {r['acceptance']} | `{r['test']}` | {outcome} |"
-        )
+        cells = [r[k].replace("|", "\\|") for k in CELLS]
+        lines.append("| " + " | ".join([*cells, f"`{r['test']}`", outcome]) + " |")
     Path(path).write_text("\n".join(lines) + "\n")

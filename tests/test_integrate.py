@@ -33,7 +33,7 @@ def in_water(models_dir):
 
 
 # ----------------------------------------------------------------------------------------------
-def test_energy_conserved_in_air(models_dir, tilted):
+def test_energy_conserved_in_air(models_dir, tilted, validation):
     """No dissipation (in air, so no drag; bending_damping = 0): energy stays constant.
 
     Straight line tilted by psi = pi/2 + 0.3, theta = 0.1, released from rest, n = 10, h = 0.01 s,
@@ -51,8 +51,12 @@ def test_energy_conserved_in_air(models_dir, tilted):
     energy = np.array(model.energy.map(count)(run.states.T, run.inputs.T)).ravel()
     released = energy[0] - float(model.energy(x_eq, u))
     assert released > 1e5  # J: the tilt releases a real amount of energy
-    assert np.abs(energy - energy[0]).max() / released <= 1e-6
+    drift = np.abs(energy - energy[0]).max() / released
     residual = np.array(model.outputs.map(count)(run.states.T, run.inputs.T)[2])
+    validation("energy in air, no dissipation, n = 10, 20 s, h = 0.01 s", "conservation",
+               "E(t) = E(0)", "max |E - E0| / released energy; bond residual",
+               f"{drift:.1e}; {np.abs(residual).max():.1e} m", "<= 1e-6; <= 1e-8 m")  # fmt: skip
+    assert drift <= 1e-6
     assert np.abs(residual).max() <= 1e-8  # m
     # The cable really swings: the end moves by metres.
     assert (
@@ -60,7 +64,7 @@ def test_energy_conserved_in_air(models_dir, tilted):
     )
 
 
-def test_hanging_at_rest_stays_at_rest(in_water):
+def test_hanging_at_rest_stays_at_rest(in_water, validation):
     """From the equilibrium in water (n = 10, h = 0.05 s, 100 s): max |r(t) - r(0)| <= 1e-9 m.
 
     Measured 6e-13 m.
@@ -68,7 +72,10 @@ def test_hanging_at_rest_stays_at_rest(in_water):
     _, model, drive, _, x_eq = in_water
     run = integrate(model, x_eq, drive, 100.0, 0.05)
     assert len(run.time) == 2001
-    assert np.abs(positions(model, run.states) - positions(model, x_eq[None, :])).max() <= 1e-9
+    drift = np.abs(positions(model, run.states) - positions(model, x_eq[None, :])).max()
+    validation("hanging at rest in water, n = 10, 100 s, h = 0.05 s", "conservation",
+               "exact rest", "max |r(t) - r(0)|", f"{drift:.1e} m", "<= 1e-9 m")  # fmt: skip
+    assert drift <= 1e-9
 
 
 def perturbed(model, u, chained, seed: int = 0) -> np.ndarray:
@@ -123,7 +130,7 @@ def test_integrate_rejects_non_dividing_step(in_water):
         integrate(model, x_eq, drive, 1.0, 0.3)
 
 
-def test_rk4_fourth_order_against_dop853(models_dir, tilted):
+def test_rk4_fourth_order_against_dop853(models_dir, tilted, validation):
     """RK4 vs DOP853 (rtol = atol = 1e-10): in-water tilted release, n = 5, 2 s.
 
     Error of the final state at h = 0.02 s over h = 0.01 s must exceed 10 (4th order: 16;
@@ -137,11 +144,16 @@ def test_rk4_fourth_order_against_dop853(models_dir, tilted):
         np.abs(integrate(model, x0, drive, 2.0, h).states[-1] - reference).max()
         for h in (0.02, 0.01)
     ]
+    validation("RK4 order, tilted release in water, n = 5, 2 s", "converged reference",
+               "DOP853, rtol = atol = 1e-10",
+               "final-state error at h = 0.01 s; ratio h = 0.02 / 0.01",
+               f"{errors[1]:.1e}; {errors[0] / errors[1]:.1f}",
+               "< 1e-7; > 10 (4th order: 16)")  # fmt: skip
     assert errors[1] < 1e-7
     assert errors[0] / errors[1] > 10, errors
 
 
-def test_energy_conserved_in_water_with_anisotropic_added_mass(models_dir, tilted):
+def test_energy_conserved_in_water_with_anisotropic_added_mass(models_dir, tilted, validation):
     """Drag off in water: added mass (C_a = 1, C_at = 0) and a payload store no energy.
 
     The added-mass terms come from the water's kinetic energy (DESIGN.md §4), so cable plus
@@ -158,4 +170,8 @@ def test_energy_conserved_in_water_with_anisotropic_added_mass(models_dir, tilte
     run = integrate(model, x0, drive, 20.0, 0.01, tolerance=1e-6)
     energy = np.array(model.energy.map(len(run.time))(run.states.T, run.inputs.T)).ravel()
     released = energy[0] - float(model.energy(equilibrium(model, drive), u))
-    assert np.abs(energy - energy[0]).max() / released <= 1e-6
+    drift = np.abs(energy - energy[0]).max() / released
+    validation("energy in water, added mass C_a = 1, C_at = 0, payload, no drag, 20 s",
+               "conservation", "E(t) = E(0) (cable + entrained water)",
+               "max |E - E0| / released energy", f"{drift:.1e}", "<= 1e-6")  # fmt: skip
+    assert drift <= 1e-6

@@ -75,7 +75,7 @@ def test_catenary_scene_is_the_papers(catenary_case):
     assert case.arc[0] == case.length
 
 
-def test_catenary_elastic_error_n15(catenary_case):
+def test_catenary_elastic_error_n15(catenary_case, validation):
     """eps_x, eps_z <= 0.1 % against the elastic catenary, EA = E A (paper: < 0.5 %).
 
     Measured 0.042 % and 0.032 %.
@@ -83,11 +83,14 @@ def test_catenary_elastic_error_n15(catenary_case):
     case = catenary_case(15)
     axial = case.scene.cable.youngs_modulus * case.area
     eps_x, eps_z = case.errors(axial)
+    validation("catenary statics, n = 15 (paper 4.1)", "analytic", "elastic catenary eq. 34",
+               "eps_x, eps_z", f"{eps_x:.3f} %, {eps_z:.3f} %",
+               "<= 0.1 % (paper: < 0.5 %)")  # fmt: skip
     assert eps_x <= 0.1, eps_x
     assert eps_z <= 0.1, eps_z
 
 
-def test_catenary_inextensible_error_converges_second_order(catenary_case):
+def test_catenary_inextensible_error_converges_second_order(catenary_case, validation):
     """max(eps_x, eps_z) against the inextensible catenary falls strictly with n = 5, 15, 30, 60.
 
     Measured 0.061, 0.0077, 0.0020, 0.00052 %: second order, so each doubling of n must cut the
@@ -95,6 +98,10 @@ def test_catenary_inextensible_error_converges_second_order(catenary_case):
     """
     ns = (5, 15, 30, 60)
     error = {n: max(catenary_case(n).errors(np.inf)) for n in ns}
+    validation("catenary convergence in n", "analytic", "inextensible catenary",
+               "max(eps_x, eps_z) at n = 5, 15, 30, 60",
+               ", ".join(f"{error[n]:.2g}" for n in ns) + " %",
+               "falls; ratio > 3 per doubling; < 0.01 % at n = 15")  # fmt: skip
     for coarse, fine in zip(ns, ns[1:], strict=False):
         assert error[fine] < error[coarse], error
     assert error[15] / error[30] > 3, error
@@ -136,12 +143,15 @@ TORSION = pytest.mark.parametrize("torsion", [False, True], ids=["5dof", "6dof"]
 
 
 @TORSION
-def test_hanging_top_tension_is_submerged_weight(hanging_case, torsion):
+def test_hanging_top_tension_is_submerged_weight(hanging_case, torsion, validation):
     """Top tension = (rho - rho_w) A g L to 1e-6 relative; each bond carries the weight below it."""
     scene, model, x, u = hanging_case(torsion)
     cable, env = scene.cable, scene.environment
     per_length = (cable.density - env.water_density) * cable.cross_section_area * env.gravity
     tensions = np.array(model.outputs(x, u)[5]).ravel()
+    validation(f"hanging in water, top tension, {model.dofs} DOF", "analytic",
+               "submerged weight (rho - rho_w) A g L", "relative error",
+               f"{abs(tensions[-1] / (per_length * cable.length) - 1):.1e}", "<= 1e-6")  # fmt: skip
     assert tensions[-1] == pytest.approx(per_length * cable.length, rel=1e-6)
     lengths = np.array([float(v) for v in model.element_lengths(u[9])])
     np.testing.assert_allclose(tensions, per_length * np.cumsum(lengths), rtol=1e-6)
