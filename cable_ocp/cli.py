@@ -230,6 +230,18 @@ def _study(args) -> int:
     from cable_ocp import studies
     from cable_ocp.output import atomic_directory
 
+    if args.name in ("speed-accuracy", "stability"):
+        if args.scene is not None:
+            raise ValueError(f"study {args.name} takes no scene: it runs its own (see --help)")
+        if args.name == "speed-accuracy":
+            from cable_ocp.speed_accuracy import run_speed_accuracy as run
+        else:
+            from cable_ocp.stability import run_stability as run
+        run(args.out, MODELS_DIR, quick=args.quick, quiet=args.quiet)
+        print(f"written to {Path(args.out).resolve()}")
+        return 0
+    if args.scene is None:
+        raise ValueError(f"study {args.name} needs a scene file, e.g. models/paper_flat.toml")
     scene = load_scene(args.scene, parse_overrides(args.set))
     with atomic_directory(args.out) as folder:
         if args.name == "step":
@@ -282,13 +294,24 @@ def build_parser() -> argparse.ArgumentParser:
     _add_optimiser_options(cmp)
     cmp.set_defaults(run=_compare)
 
-    study = commands.add_parser("study", help="convergence and validation studies of a scene")
-    study.add_argument("name", choices=["step", "elements", "end-force"])
-    study.add_argument("scene", type=Path)
+    study = commands.add_parser(
+        "study",
+        help="convergence, validation, speed-accuracy and stability studies",
+        description="step, elements, end-force: studies of SCENE. speed-accuracy: error vs CPU "
+        "time on paper_flat and end_force, and the OCP's Omega vs wall time. stability: largest "
+        "stable step vs n, Baumgarte gains, Nelder-Mead vs IPOPT as the knots grow.",
+    )
+    study.add_argument(
+        "name", choices=["step", "elements", "end-force", "speed-accuracy", "stability"]
+    )
+    study.add_argument("scene", type=Path, nargs="?")
     study.add_argument("--out", type=Path, required=True)
     study.add_argument("--set", action="append", default=[], metavar="KEY=VALUE")
     study.add_argument("--quiet", action="store_true")
     study.add_argument("--compiled", action="store_true", help="end-force: model compiled to C")
+    study.add_argument(
+        "--quick", action="store_true", help="speed-accuracy, stability: a small version"
+    )
     study.set_defaults(run=_study)
 
     bench = commands.add_parser("bench", help="speed benchmarks against baselines")
