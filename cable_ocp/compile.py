@@ -12,6 +12,7 @@ from __future__ import annotations
 
 import hashlib
 import os
+import platform
 import shutil
 import subprocess
 import tempfile
@@ -21,7 +22,30 @@ from pathlib import Path
 
 import casadi as ca
 
-COMPILER_FLAGS = ("-O1", "-fPIC", "-shared")
+COMPILER_FLAGS = ("-fPIC", "-shared")
+
+
+def optimisation_flags(function: ca.Function) -> tuple[str, ...]:
+    """The C compiler's optimisation flags for a Function's code.
+
+    A flat SX Function is one long straight-line C function, for which -O1 compiles in a
+    fraction of -O2's time at the same speed (measured at n = 15: 14.4 vs 14.3 us per call). An
+    MX Function (loops over small Functions, :mod:`cable_ocp.structured`) compiles in seconds, so
+    it gets -O3 for this processor: at n = 100, 56 us against 63 us at -O2 (-ffast-math would
+    gain 10 % more, but lets the compiler assume that no NaN occurs, which blow-up detection
+    relies on).
+    """
+    return ("-O1",) if function.is_a("SXFunction") else ("-O3", "-march=native")
+
+
+def _processor() -> str:
+    """The processor's model name: code built for one processor may not run on another."""
+    cpuinfo = Path("/proc/cpuinfo")
+    if cpuinfo.exists():
+        for line in cpuinfo.read_text().splitlines():
+            if line.startswith("model name"):
+                return line.split(":", 1)[1].strip()
+    return platform.processor() or platform.machine()
 
 
 def cache_dir() -> Path:
@@ -43,7 +67,8 @@ def cache_key(function: ca.Function, description: str) -> str:
     Serialising the graph takes about 0.7 s at n = 100, against minutes of compiling.
     """
     digest = hashlib.sha256(function.serialize().encode())
-    digest.update("|".join([description, ca.__version__, *COMPILER_FLAGS]).encode())
+    flags = [*optimisation_flags(function), *COMPILER_FLAGS]
+    digest.update("|".join([description, ca.__version__, _processor(), *flags]).encode())
     return digest.hexdigest()[:20]
 
 
@@ -113,7 +138,15 @@ def compiled(
         generator.generate(str(Path(scratch)) + os.sep)
         target = Path(scratch) / library.name
         result = subprocess.run(
-            [compiler, *COMPILER_FLAGS, str(source), "-o", str(target), "-lm"],
+            [
+                compiler,
+                *optimisation_flags(function),
+                *COMPILER_FLAGS,
+                str(source),
+                "-o",
+                str(target),
+                "-lm",
+            ],  # fmt: skip
             capture_output=True,
             text=True,
         )

@@ -15,6 +15,7 @@ import casadi as ca
 import numpy as np
 from scipy.integrate import solve_ivp
 
+from cable_ocp import structured
 from cable_ocp.compile import CompileReport
 from cable_ocp.compile import compiled as compile_function
 from cable_ocp.drive import Drive
@@ -25,8 +26,11 @@ SEGMENTS = 40  # progress updates (and blow-up checks) per run
 # Blow-up checks per run without a progress bar: each costs a call and a bond check (about 3 ms at
 # n = 15, as much as 50 RK4 steps), so a quiet run checks less often.
 QUIET_SEGMENTS = 8
-# Largest RK4 step (SX instructions) compiled whole; beyond it only the right-hand side is compiled.
+# Largest RK4 step (SX instructions) compiled as one flat Function. A larger 5-DOF model compiles
+# its step around the structured right-hand side (loops over elements: at n = 100 it compiles in
+# 10 s instead of 150 s and runs 1.8x faster); a larger torsion model its flat right-hand side.
 WHOLE_STEP_LIMIT = 100_000
+RK4_STAGES = 4
 
 
 class SimulationError(RuntimeError):
@@ -76,11 +80,14 @@ def _step_and_report(
     model: CableModel, step: float, compiled: bool, derivatives: bool
 ) -> tuple[ca.Function, CompileReport | None]:
     def build() -> tuple[ca.Function, CompileReport | None]:
-        sx_step = rk4_step(model, step)
+        description = f"{model.spec!r}|step={step!r}"
         if not compiled:
-            return sx_step, None
-        if sx_step.n_instructions() <= WHOLE_STEP_LIMIT:
-            return compile_function(sx_step, f"{model.spec!r}|step={step!r}", derivatives)
+            return rk4_step(model, step), None
+        if RK4_STAGES * model.rhs.n_instructions() <= WHOLE_STEP_LIMIT:
+            return compile_function(rk4_step(model, step), description, derivatives)
+        if structured.supports(model):
+            looped = rk4_step(model, step, structured.structured_rhs(model))
+            return compile_function(looped, description, derivatives)
         rhs, report = compile_function(model.rhs, repr(model.spec), derivatives)
         return rk4_step(model, step, rhs), report
 

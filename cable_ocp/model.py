@@ -246,7 +246,7 @@ class CableModel:
         forces = [
             t[1] + chain_force[i * self.dofs : (i + 1) * self.dofs] for i, t in enumerate(terms)
         ]
-        mass[0], forces[0] = self._end_loads(mass[0], forces[0], qd[0], end_force)
+        mass[0], forces[0] = self.end_loads(mass[0], forces[0], qd[0], end_force)
 
         # Bond positions, rates and the quadratic part of their second derivative.
         upper_points = [qi[POSITION] + li * ei for qi, li, ei in zip(q, lengths, axes, strict=True)]
@@ -344,7 +344,7 @@ class CableModel:
                 dissipation += 0.5 * spec.torsion_damping * torsion * twist_rate**2
         return potential, dissipation
 
-    def _end_loads(self, mass, force, qd_end, end_force) -> tuple[ca.SX, ca.SX]:
+    def end_loads(self, mass, force, qd_end, end_force) -> tuple[ca.SX, ca.SX]:
         """Add the external end force and the payload to element 0."""
         spec, payload = self.spec, self.spec.payload
         translational = ca.vertcat(end_force, ca.SX.zeros(self.dofs - 3))
