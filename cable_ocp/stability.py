@@ -5,7 +5,7 @@ dataclass with a markdown ``table()`` and, where it has one, a ``chart()``:
 
 - :func:`step_limits`: the largest stable RK4 step against ``n``, with and without torsion, by
   bisection in ``log h`` (:func:`largest_stable_step`), cross-checked by the step at which the
-  linearisation at the equilibrium leaves RK4's stability region (:func:`linearised_step`);
+  linearisation at states of the run leaves RK4's stability region (:func:`linearised_step`);
 - :func:`baumgarte_drift`: the bond residual over time for several Baumgarte gains, with the end
   trajectory's error against a fine reference;
 - :func:`knots_comparison`: IPOPT (spline control) against the paper's Nelder-Mead as the number
@@ -49,6 +49,8 @@ PUSH = {"end.force_start": 0.0}
 SHARP_PUSH = {**PUSH, "end.force_ramp": 1.0}
 # A twist angle beyond this (rad) marks a torsional blow-up: the push exerts no torque.
 TWIST_LIMIT = math.pi
+# Random initial twist (rad) of torsion models, so that an unstable torsional mode can grow.
+TWIST_SEED = 1e-6
 # |R(h lambda)| of RK4 may exceed its bound by this much (rounding) and count as stable.
 GROWTH_SLACK = 1e-6
 
@@ -228,8 +230,8 @@ def largest_stable_step(
     min_steps: int = 200,
     resolution: float = 1.1,
     tolerance: float = 1.0,
-    twist_seed: float = 1e-6,
-    linearised_samples: int = 3,
+    twist_seed: float = TWIST_SEED,
+    linearised_samples: int = 5,
     compiled: bool = False,
     quiet: bool = True,
 ) -> StableStep:
@@ -390,6 +392,7 @@ class StepLimits:
     def chart(self, path=None):
         """Log-log chart of ``h_max`` against ``n`` with the fitted power laws."""
         import matplotlib.pyplot as plt
+        from matplotlib.ticker import NullLocator
 
         fig, ax = plt.subplots(figsize=(7, 4.5))
         for torsion, colour in ((False, "tab:blue"), (True, "tab:red")):
@@ -405,7 +408,7 @@ class StepLimits:
                 "x",
                 color=colour,
                 ms=9,
-                label=f"{label}: linearised at equilibrium",
+                label=f"{label}: linearised (smallest over the run)",
             )
             slope, c = self.fit(torsion)
             if math.isfinite(slope):
@@ -413,6 +416,13 @@ class StepLimits:
                 ax.loglog(
                     grid, c * grid**slope, "--", color=colour, label=f"fit: {c:.3g} s n^{slope:.2f}"
                 )
+        free = self.of(False)
+        if free:
+            n = np.array([r.elements for r in free])
+            ax.loglog(n, free[0].step * (n / n[0]) ** -2.0, ":", color="grey", label="1/n^2 guide")
+        all_n = sorted({r.elements for r in self.results})
+        ax.set_xticks(all_n, [str(k) for k in all_n])
+        ax.xaxis.set_minor_locator(NullLocator())
         ax.set_xlabel("elements n")
         ax.set_ylabel("largest stable RK4 step h_max [s]")
         ax.set_title("RK4 stability limit (end_force scene, pushed from t = 0)")
@@ -434,6 +444,7 @@ def step_limits(
     min_steps: int = 200,
     resolution: float = 1.1,
     tolerance: float = 1.0,
+    linearised_samples: int = 5,
     compile_from: int | None = None,
     quiet: bool = True,
 ) -> StepLimits:
@@ -459,6 +470,7 @@ def step_limits(
                 min_steps=min_steps,
                 resolution=resolution,
                 tolerance=tolerance,
+                linearised_samples=linearised_samples,
                 compiled=compile_from is not None and n >= compile_from,
                 quiet=quiet,
             )
@@ -561,7 +573,9 @@ class BaumgarteDrift:
             if r.failure:
                 left.plot([], [], " ", label=f"{r.label}: stopped (see table)")
             else:
-                left.semilogy(r.time[1:], np.maximum(r.residual[1:], 1e-16), label=r.label)
+                default = (r.alpha, r.beta) == self.reference_gains
+                label = f"{r.label}, scene default" if default else r.label
+                left.semilogy(r.time[1:], np.maximum(r.residual[1:], 1e-16), label=label)
         left.set_xlabel("t [s]")
         left.set_ylabel("max bond residual |Phi| [m]")
         left.set_title(f"constraint drift, n = {self.elements}, h = {self.step:g} s")
@@ -709,7 +723,7 @@ class KnotsComparison:
     iteration_cap : int
         IPOPT's ``max_iter``.
     refinements : int
-        IPOPT's model-correction solves after the first.
+        Model-correction solves after the first of the ``"ipopt + correction"`` runs.
     runs : tuple of KnotRun
     progress_fraction : float
         "Within this fraction of the final best Omega" marks where Nelder-Mead stopped gaining.
@@ -732,17 +746,19 @@ class KnotsComparison:
             f"{self.scene_name}, T = {self.duration:g} s; optimisation model n = {self.elements}, "
             f"h = {self.step:g} s; Omega verified on the scene's model. Nelder-Mead capped at "
             f"{self.evaluation_cap} evaluations, IPOPT at {self.iteration_cap} iterations per "
-            f"solve, {self.refinements} model-correction solves (0: both methods minimise the "
-            "same reduced-model objective).",
+            "solve. `ipopt` and `nelder-mead` minimise the same reduced-model objective, so "
+            "'Omega on opt. model' compares the optimisers; their verified Omega also carries "
+            "the reduced model's bias. `ipopt + correction` (the front door's default) adds up "
+            f"to {self.refinements} model-correction solves against the scene's model. IPOPT's "
+            "evaluations are its iterations + 1 per solve.",
             "",
             "| knots | method | Omega verified [m] | Omega on opt. model [m] | success | status "
             f"| iterations | evaluations | evaluations to within {percent} of final | wall [s] |",
             "|---:|---|---:|---:|---|---|---:|---:|---:|---:|",
         ]
         for r in self.runs:
-            within = r.evaluations_to_within(self.progress_fraction) if r.history else "-"
-            if r.method == "ipopt":
-                within = "-"
+            searching = r.method == "nelder-mead" and r.history
+            within = r.evaluations_to_within(self.progress_fraction) if searching else "-"
             lines.append(
                 f"| {r.knots} | {r.method} | {r.omega:.4f} | {r.omega_model:.4f} | {r.success} "
                 f"| {r.status} | {r.iterations} | {r.evaluations} | {within} | {r.wall_time:.1f} |"
@@ -778,7 +794,11 @@ class KnotsComparison:
         history.grid(alpha=0.3, which="both")
         history.legend(fontsize=7)
 
-        styles = (("ipopt", "o", "tab:blue"), ("nelder-mead", "s", "tab:orange"))
+        styles = (
+            ("ipopt", "o", "tab:blue"),
+            ("ipopt + correction", "^", "tab:green"),
+            ("nelder-mead", "s", "tab:orange"),
+        )
         for method, marker, colour in styles:
             chosen = [r for r in self.runs if r.method == method]
             failed = [r for r in chosen if not r.success]
@@ -818,10 +838,10 @@ class KnotsComparison:
         return fig
 
 
-def _knot_run(knots: int, result) -> KnotRun:
+def _knot_run(knots: int, method: str, result) -> KnotRun:
     return KnotRun(
         knots=knots,
-        method=result.method,
+        method=method,
         omega=result.omega,
         omega_model=result.omega_model,
         success=result.success,
@@ -840,17 +860,18 @@ def knots_comparison(
     step: float = 0.5,
     max_evaluations: int = 600,
     max_iter: int = 300,
-    refinements: int = 0,
+    refinements: int = 3,
     compiled: bool = True,
     quiet: bool = True,
 ) -> KnotsComparison:
     """IPOPT with the paper's spline control and Nelder-Mead, for each number of knots.
 
-    Both optimise on a reduced model (``elements``, ``step``) as the front door's defaults do.
-    ``refinements``: IPOPT's model-correction solves (see
-    :func:`cable_ocp.optimization.optimize_ipopt`); with 0, both methods minimise the same
-    reduced-model objective. ``compiled``: both simulate with the RK4 step compiled to C (cached
-    on disk). A failed solve is kept with its status.
+    Both optimise on a reduced model (``elements``, ``step``) as the front door's defaults do,
+    and so minimise the same objective (methods ``"ipopt"``, ``"nelder-mead"``). With
+    ``refinements > 0`` IPOPT is also run with that many model-correction solves against the
+    scene's model (``"ipopt + correction"``, see :func:`cable_ocp.optimization.optimize_ipopt`).
+    ``compiled``: the optimisers simulate with the RK4 step compiled to C (cached on disk). A
+    failed solve is kept with its status.
     """
     runs = []
     for p in knots:
@@ -858,12 +879,15 @@ def knots_comparison(
         ipopt = IpoptSettings(
             elements=elements, step=step, control="spline", max_iter=max_iter, compiled=compiled
         )
-        result = optimize_ipopt(local, ipopt, refinements=refinements, quiet=quiet)
-        runs.append(_knot_run(p, result))
+        plain = optimize_ipopt(local, ipopt, refinements=0, quiet=quiet)
+        runs.append(_knot_run(p, "ipopt", plain))
+        if refinements > 0:
+            corrected = optimize_ipopt(local, ipopt, refinements=refinements, quiet=quiet)
+            runs.append(_knot_run(p, "ipopt + correction", corrected))
         search = NelderMeadSettings(
             elements=elements, step=step, max_evaluations=max_evaluations, compiled=compiled
         )
-        runs.append(_knot_run(p, optimize_nelder_mead(local, search, quiet=quiet)))
+        runs.append(_knot_run(p, "nelder-mead", optimize_nelder_mead(local, search, quiet=quiet)))
     return KnotsComparison(
         scene_name=scene.name,
         duration=scene.numerics.duration,
@@ -934,10 +958,13 @@ class StabilitySettings:
     elements, torsion_elements : tuple of int
         ``n`` of the step limits without and with torsion.
     duration, torsion_duration : float, s
-        Shortest stability run without and with torsion.
+        Shortest stability run without and with torsion. Without torsion it covers the push's
+        ramp (15 s in end_force), since the rising tension raises the frequencies; torsion runs
+        are short for cost (the twist modes do not depend on the push).
     min_steps : int
     resolution : float
     tolerance : float, m
+    linearised_samples : int
     compile_from : int or None
     drift_elements : int
     drift_step, drift_reference_step, drift_duration : float, s
@@ -952,7 +979,7 @@ class StabilitySettings:
     max_iter : int
         IPOPT's cap.
     refinements : int
-        IPOPT's model-correction solves.
+        Model-correction solves of the ``"ipopt + correction"`` runs (0: none).
     compiled : bool
         Optimisers simulate with the RK4 step compiled to C.
     singular_scene : str
@@ -961,11 +988,12 @@ class StabilitySettings:
 
     elements: tuple[int, ...] = (5, 10, 15, 30, 60, 100)
     torsion_elements: tuple[int, ...] = (5, 10, 15, 30, 60)
-    duration: float = 10.0
+    duration: float = 20.0
     torsion_duration: float = 1.0
     min_steps: int = 200
     resolution: float = 1.1
     tolerance: float = 1.0
+    linearised_samples: int = 5
     compile_from: int | None = None
     drift_elements: int = 15
     drift_step: float = 0.05
@@ -985,7 +1013,7 @@ class StabilitySettings:
     optimisation_step: float = 0.5
     max_evaluations: int = 1000
     max_iter: int = 300
-    refinements: int = 0
+    refinements: int = 3
     compiled: bool = True
     singular_scene: str = "hanging.toml"
 
@@ -1008,6 +1036,7 @@ class StabilitySettings:
             knots_duration=21.0,
             max_evaluations=10,
             max_iter=2,
+            refinements=0,
             compiled=False,
         )
 
@@ -1057,10 +1086,12 @@ class StabilityStudy:
                 f"A run lasts at least {s.duration:g} s (torsion: {s.torsion_duration:g} s, "
                 f"for cost) and {s.min_steps} steps. Stable: it completes with the bond residual "
                 f"below {s.tolerance:g} m, finite, and (torsion) every twist angle within "
-                f"{TWIST_LIMIT:.4g} rad; torsion models start with a 1e-6 rad random twist. "
-                f"Bisection in log h to a ratio of {s.resolution:g}. Cross-checks: the end "
-                "trajectory at h_max/4, and the linearised limit (RK4 stability region on the "
-                "eigenvalues of the Jacobian at the equilibrium).",
+                f"{TWIST_LIMIT:.4g} rad; torsion models start with a {TWIST_SEED:g} rad random "
+                f"twist. Bisection in log h to a ratio of {s.resolution:g}. Cross-checks: the end "
+                "trajectory at h_max/4, and the linearised limit: the largest step for which the "
+                "eigenvalues of the Jacobian (forward differences) at "
+                f"{s.linearised_samples} evenly spaced states of the stable run (first and last "
+                "included) lie in RK4's stability region (the smallest over them).",
                 "",
                 self.steps.table(),
                 "",
@@ -1133,6 +1164,7 @@ def run_stability(
             min_steps=settings.min_steps,
             resolution=settings.resolution,
             tolerance=settings.tolerance,
+            linearised_samples=settings.linearised_samples,
             compile_from=settings.compile_from,
             quiet=quiet,
         ),
