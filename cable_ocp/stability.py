@@ -394,7 +394,7 @@ class StepLimits:
         import matplotlib.pyplot as plt
         from matplotlib.ticker import NullLocator
 
-        fig, ax = plt.subplots(figsize=(7, 4.5))
+        fig, ax = plt.subplots(figsize=(10, 4.5))
         for torsion, colour in ((False, "tab:blue"), (True, "tab:red")):
             chosen = self.of(torsion)
             if not chosen:
@@ -427,7 +427,7 @@ class StepLimits:
         ax.set_ylabel("largest stable RK4 step h_max [s]")
         ax.set_title("RK4 stability limit (end_force scene, pushed from t = 0)")
         ax.grid(alpha=0.3, which="both")
-        ax.legend(fontsize=8)
+        ax.legend(fontsize=8, loc="upper left", bbox_to_anchor=(1.02, 1.0))
         fig.tight_layout()
         if path is not None:
             fig.savefig(path, dpi=120)
@@ -760,7 +760,7 @@ class KnotsComparison:
             searching = r.method == "nelder-mead" and r.history
             within = r.evaluations_to_within(self.progress_fraction) if searching else "-"
             lines.append(
-                f"| {r.knots} | {r.method} | {r.omega:.4f} | {r.omega_model:.4f} | {r.success} "
+                f"| {r.knots} | {r.method} | {r.omega:.3g} | {r.omega_model:.3g} | {r.success} "
                 f"| {r.status} | {r.iterations} | {r.evaluations} | {within} | {r.wall_time:.1f} |"
             )
         return "\n".join(lines)
@@ -768,6 +768,7 @@ class KnotsComparison:
     def chart(self, path=None):
         """Nelder-Mead's best Omega per evaluation, and Omega and wall time against knots."""
         import matplotlib.pyplot as plt
+        from matplotlib.ticker import NullLocator
 
         fig, (history, quality, cost) = plt.subplots(1, 3, figsize=(15, 4.5))
         knots = sorted({r.knots for r in self.runs})
@@ -826,6 +827,7 @@ class KnotsComparison:
             axis.set_xscale("log", base=2)
             axis.set_yscale("log")
             axis.set_xticks(knots, [str(k) for k in knots])
+            axis.xaxis.set_minor_locator(NullLocator())
             axis.set_xlabel("knots p")
             axis.set_ylabel(ylabel)
             axis.set_title(title)
