@@ -55,6 +55,11 @@ TWIST_SEED = 1e-6
 GROWTH_SLACK = 1e-6
 
 
+def table_cell(text: str) -> str:
+    """Text safe inside a markdown table cell (``|`` escaped)."""
+    return text.replace("|", "\\|")
+
+
 # ----------------------------------------------------------------------------------------------
 # Largest stable step
 # ----------------------------------------------------------------------------------------------
@@ -556,7 +561,7 @@ class BaumgarteDrift:
         ]
         for r in self.runs:
             if r.failure:
-                lines.append(f"| {r.alpha:g} | {r.beta:g} | - | - | - | {r.failure} |")
+                lines.append(f"| {r.alpha:g} | {r.beta:g} | - | - | - | {table_cell(r.failure)} |")
             else:
                 lines.append(
                     f"| {r.alpha:g} | {r.beta:g} | {r.residual.max():.3g} | {r.residual[-1]:.3g} "
@@ -761,7 +766,8 @@ class KnotsComparison:
             within = r.evaluations_to_within(self.progress_fraction) if searching else "-"
             lines.append(
                 f"| {r.knots} | {r.method} | {r.omega:.3g} | {r.omega_model:.3g} | {r.success} "
-                f"| {r.status} | {r.iterations} | {r.evaluations} | {within} | {r.wall_time:.1f} |"
+                f"| {table_cell(r.status)} | {r.iterations} | {r.evaluations} | {within} "
+                f"| {r.wall_time:.1f} |"
             )
         return "\n".join(lines)
 
@@ -1073,7 +1079,10 @@ class StabilityStudy:
         singular = [
             "| tried | rejected | message |",
             "|---|---|---|",
-            *[f"| {c.tried} | {c.rejected} | {c.message} |" for c in self.singular],
+            *[
+                f"| {table_cell(c.tried)} | {c.rejected} | {table_cell(c.message)} |"
+                for c in self.singular
+            ],
         ]
         return "\n".join(
             [
