@@ -75,7 +75,8 @@ class OcpSetting:
     def label(self) -> str:
         """Short name for tables and legends."""
         cap = "iterations" if self.method == "ipopt" else "evaluations"
-        more = f", {self.refinements} refinements" if self.method == "ipopt" else ""
+        plural = "" if self.refinements == 1 else "s"
+        more = f", {self.refinements} refinement{plural}" if self.method == "ipopt" else ""
         head = f"{self.method}, n = {self.elements}, h = {self.step:g} s"
         return f"{head}, <= {self.limit} {cap}{more}"
 
