@@ -38,9 +38,14 @@ def test_pareto_front_on_synthetic_points():
         assert (k in front) == (not dominated(k, costs, errors))
 
 
-def test_reference_agrees_with_fine_rk4(quick):
+def test_reference_agrees_with_fine_rk4(quick, validation):
     _, result = quick
     for study in result.scenes:
+        validation(f"speed-accuracy reference, {study.scene_name} (quick size)",
+                   "converged reference", "RK4 at a fine step (independent integrator)",
+                   "max end difference of the adaptive DOP853 reference",
+                   f"{study.reference.check_difference:.1e} m",
+                   f"< {REFERENCE_AGREEMENT:g} m")  # fmt: skip
         assert study.reference.check_difference < REFERENCE_AGREEMENT, study.scene_name
 
 

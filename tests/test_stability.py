@@ -78,13 +78,17 @@ def test_limit_falls_with_elements(end_force):
         assert 0.5 < result.step / result.linearised_step < 2
 
 
-def test_no_stabilisation_drifts_more(end_force):
+def test_no_stabilisation_drifts_more(end_force, validation):
     """Sharp push, n = 5, h = 0.1 s: without Baumgarte the bonds drift over 10x further."""
     drift = baumgarte_drift(
         end_force, ((0.0, 0.0), (1.0, 1.0)), elements=5, step=0.1, reference_step=0.01, duration=10
     )
     none, default = drift.runs
     assert not none.failure and not default.failure
+    validation("Baumgarte stabilisation, sharp push, n = 5, h = 0.1 s, 10 s", "conservation",
+               "the bonds Phi = 0", "max |Phi| without / with the default gains (1, 1)",
+               f"{none.residual.max():.1e} / {default.residual.max():.1e} m",
+               "none > 10x default")  # fmt: skip
     assert none.residual.max() > 10 * default.residual.max()
     # Without stabilisation the residual only grows: it ends at its largest.
     assert none.residual[-1] == pytest.approx(none.residual.max(), rel=0.05)
