@@ -31,7 +31,8 @@ from cable_ocp.statics import equilibrium
 PAPER_WALL_TIME = 5242.0  # s, for 100 s simulated at n = 100 (paper §4.2)
 PAPER_SIMULATED = 100.0  # s
 PAPER_STEP = 2e-4  # s
-# (scene file, n, steps): the scene's own step and a larger one inside the stability limit.
+# (scene file, n, steps): a small step and the largest one within 1e-5 m of h/4 (inside the
+# stability limit, studies/stability).
 RK4_CASES = (("paper_flat.toml", 15, (0.05, 0.2)), ("end_force.toml", 100, (0.01, 0.025)))
 # The interpreted baseline runs this much simulated time (s) per case: it is 10-20x slower.
 INTERPRETED_DURATION = {15: 10.0, 100: 2.0}
@@ -163,7 +164,7 @@ def time_simulation(
 def rk4_report(models_dir: Path, quick: bool = False) -> list[StepTiming]:
     """Print the RK4 benchmark (interpreted and compiled, same run) and return its timings.
 
-    ``quick`` times the scene steps only (the larger ones are left out).
+    ``quick`` times the small steps only.
     """
     timings = []
     for name, n, steps in RK4_CASES:
