@@ -113,7 +113,7 @@ def _optimize(args) -> int:
                            path=folder / "cable_shapes.png")  # fmt: skip
     print(
         f"{result.method}: success = {result.success} ({result.status}); Omega = "
-        f"{result.omega:.4f} m verified on n = {scene.model.elements} (locked: {locked.omega:.3f}"
+        f"{result.omega:.3g} m verified on n = {scene.model.elements} (locked: {locked.omega:.3f}"
         f" m); iterations {result.iterations}, evaluations {result.evaluations}, wall "
         f"{result.wall_time:.1f} s (build {result.build_time:.1f} s, solver {result.solve_time:.1f}"
         f" s of which functions {result.function_time:.1f} s)"
