@@ -8,7 +8,7 @@ import pytest
 
 from cable_ocp.model import CableModel
 from cable_ocp.scene import load_scene
-from cable_ocp.structured import structured_rhs, supports
+from cable_ocp.structured import structured_outputs, structured_rhs, supports
 
 # Every force on: drag with a current, anisotropic added mass, bending damping and a payload.
 EVERYTHING = {
@@ -58,6 +58,15 @@ def test_structured_jacobian_equals_the_flat_one(model):
     flat = model.jacobian("x")(x, u)
     scale = np.abs(np.array(flat)).max()
     assert np.abs(np.array(looped) - np.array(flat)).max() / scale < 1e-10
+
+
+def test_structured_joints_and_tensions_equal_the_model_outputs(model):
+    outputs = structured_outputs(model)
+    x, u = random_point(model, np.random.default_rng(6))
+    joints, tensions = (np.array(v) for v in outputs(x, u))
+    reference = model.outputs(x, u)
+    np.testing.assert_allclose(joints, np.array(reference[0]), rtol=0, atol=1e-12)
+    np.testing.assert_allclose(tensions, np.array(reference[5]), rtol=1e-12)
 
 
 def test_torsion_is_not_supported(models_dir):
