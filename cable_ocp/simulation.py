@@ -112,7 +112,7 @@ def simulate(
         0.0, numerics.duration, 1 + int(round(numerics.duration / numerics.step))
     )
     check_top_length(scene, drive, sample_times)
-    x0 = equilibrium(model, drive) if initial_state is None else initial_state
+    x0 = equilibrium(model, drive, compiled=compiled) if initial_state is None else initial_state
     run = integrate(
         model,
         x0,

@@ -184,3 +184,17 @@ def test_hanging_torsion_variant_same_equilibrium(hanging_case):
     q5, _ = model5.coordinates(x5)
     np.testing.assert_allclose(np.stack(q6)[:, :5], np.stack(q5), rtol=0, atol=1e-9)
     assert np.abs(x6[model6.twist_angle_index()]).max() < 1e-9
+
+
+def test_compiled_equilibrium_matches_the_symbolic_one(models_dir, validation):
+    """Newton on the compiled structured rhs (FD Jacobian) vs CasADi's Newton on the SX rhs."""
+    scene = load_scene(models_dir / "hanging.toml", {"environment.current": [0.4, -0.2, 0.05]})
+    model = CableModel.from_scene(scene)
+    drive = Drive.from_scene(scene)
+    compiled = equilibrium(model, drive, compiled=True)
+    symbolic = equilibrium(model, drive)
+    difference = float(np.abs(compiled - symbolic).max())
+    validation("hanging in a current, n = 10, compiled statics", "second formulation",
+               "CasADi Newton on the symbolic equations", "max state difference",
+               f"{difference:.1e} m", "<= 1e-7 m")  # fmt: skip
+    assert difference <= 1e-7
