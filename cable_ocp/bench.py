@@ -25,6 +25,9 @@ import numpy as np
 from cable_ocp.drive import Drive
 from cable_ocp.integrate import integrate, stage_inputs, step_compile_report, step_function
 from cable_ocp.model import CableModel
+from cable_ocp.nelder_mead import NelderMeadSettings
+from cable_ocp.ocp import IpoptSettings
+from cable_ocp.optimization import OcpResult, optimize
 from cable_ocp.scene import load_scene
 from cable_ocp.statics import equilibrium
 
@@ -83,13 +86,14 @@ class StepTiming:
     end_error: float
 
 
-def _best_time(run, repeats: int) -> float:
-    best = np.inf
+def _best_time(run, repeats: int) -> tuple[float, object]:
+    """Best wall time (s) of ``repeats`` calls, and what the last call returned."""
+    best, result = np.inf, None
     for _ in range(repeats):
         started = time.perf_counter()
-        run()
+        result = run()
         best = min(best, time.perf_counter() - started)
-    return best
+    return best, result
 
 
 def _build(scene, compiled: bool, step: float):
@@ -123,17 +127,16 @@ def time_simulation(
     count = round(duration / step)
     kernel = step_function(model, step, compiled).mapaccum(count)
     inputs = stage_inputs(drive, np.arange(count) * step, step)
-    per_step = _best_time(lambda: kernel(x0, inputs), repeats) / count
+    per_step = _best_time(lambda: kernel(x0, inputs), repeats)[0] / count
 
     tolerance = scene.numerics.constraint_tolerance
 
     def loop():
         return integrate(model, x0, drive, duration, step, tolerance=tolerance, compiled=compiled)
 
-    wall = _best_time(loop, repeats)
+    wall, coarse = _best_time(loop, repeats)
     error = float("nan")
     if compiled:
-        coarse = loop()
         fine = integrate(
             model,
             x0,
@@ -200,42 +203,11 @@ def rk4_report(models_dir: Path, quick: bool = False) -> list[StepTiming]:
     return timings
 
 
-@dataclass(frozen=True)
-class OptimiserTiming:
-    """Cost of one winch optimisation.
+def ocp_report(models_dir: Path, quick: bool = False) -> list[tuple[str, OcpResult]]:
+    """Print IPOPT against Nelder-Mead on ``paper_flat`` (``small_tow`` when ``quick``).
 
-    Attributes
-    ----------
-    label : str
-    omega : float, m
-        Verified on the scene's model.
-    success : bool
-    status : str
-    iterations : int
-        IPOPT iterations, or Nelder-Mead iterations.
-    evaluations : int
-        Objective evaluations (one simulation each for Nelder-Mead).
-    solve_time : float, s
-    wall_time : float, s
-        Everything: building, solving and verifying.
+    Returns the rows as ``(label, result)``.
     """
-
-    label: str
-    omega: float
-    success: bool
-    status: str
-    iterations: int
-    evaluations: int
-    solve_time: float
-    wall_time: float
-
-
-def ocp_report(models_dir: Path, quick: bool = False) -> list[OptimiserTiming]:
-    """Print IPOPT against Nelder-Mead on ``paper_flat`` (``small_tow`` when ``quick``)."""
-    from cable_ocp.nelder_mead import NelderMeadSettings
-    from cable_ocp.ocp import IpoptSettings
-    from cable_ocp.optimization import optimize
-
     if quick:
         scene = load_scene(models_dir / "small_tow.toml")
         cases = [
@@ -250,30 +222,23 @@ def ocp_report(models_dir: Path, quick: bool = False) -> list[OptimiserTiming]:
             ("ipopt", "IPOPT, 14-knot spline", spline),
             ("nelder-mead", "Nelder-Mead, 14 knots", None),
         ]
-    rows = []
-    for method, label, settings in cases:
-        r = optimize(scene, method, settings, quiet=True)
-        rows.append(
-            OptimiserTiming(
-                label, r.omega, r.success, r.status, r.iterations, r.evaluations,
-                r.solve_time, r.wall_time,
-            )
-        )  # fmt: skip
+    rows = [(label, optimize(scene, method, s, quiet=True)) for method, label, s in cases]
     print(f"Winch optimisation on {scene.name} (Omega verified on the scene's n = "
           f"{scene.model.elements} model), same run")  # fmt: skip
     print(f"{'method':<24}{'Omega [m]':>11}{'success':>9}{'iter.':>7}{'evals':>7}{'solve [s]':>11}"
           f"{'s/iter.':>9}{'s/eval':>8}{'total [s]':>11}{'vs IPOPT':>10}")  # fmt: skip
-    for row in rows:
+    baseline = rows[0][1].wall_time
+    for label, r in rows:
         print(
-            f"{row.label:<24}{row.omega:>11.3e}{str(row.success):>9}{row.iterations:>7}"
-            f"{row.evaluations:>7}{row.solve_time:>11.1f}"
-            f"{row.solve_time / max(row.iterations, 1):>9.2f}"
-            f"{row.solve_time / max(row.evaluations, 1):>8.3f}{row.wall_time:>11.1f}"
-            f"{row.wall_time / rows[0].wall_time:>9.2f}x"
+            f"{label:<24}{r.omega:>11.3e}{str(r.success):>9}{r.iterations:>7}"
+            f"{r.evaluations:>7}{r.solve_time:>11.1f}"
+            f"{r.solve_time / max(r.iterations, 1):>9.2f}"
+            f"{r.solve_time / max(r.evaluations, 1):>8.3f}{r.wall_time:>11.1f}"
+            f"{r.wall_time / baseline:>9.2f}x"
         )
-    for row in rows:
-        if not row.success:
-            print(f"{row.label}: not converged: {row.status}")
+    for label, r in rows:
+        if not r.success:
+            print(f"{label}: not converged: {r.status}")
     return rows
 
 
@@ -283,9 +248,6 @@ def hessian_report(models_dir: Path) -> None:
     The exact Hessian needs second derivatives, so it runs on the interpreted model; the
     limited-memory runs are timed interpreted and compiled.
     """
-    from cable_ocp.ocp import IpoptSettings
-    from cable_ocp.optimization import optimize
-
     scene = load_scene(models_dir / "small_tow.toml")
     cases = [("limited-memory", False), ("exact", False), ("limited-memory", True)]
     print("IPOPT Hessian on small_tow (n = 4, h = 0.25 s, 8 intervals), same run")

@@ -28,7 +28,8 @@ SEGMENTS = 40  # progress updates (and blow-up checks) per run
 QUIET_SEGMENTS = 8
 # Largest RK4 step (SX instructions) compiled as one flat Function. A larger 5-DOF model compiles
 # its step around the structured right-hand side (loops over elements: at n = 100 it compiles in
-# 10 s instead of 150 s and runs 1.8x faster); a larger torsion model its flat right-hand side.
+# 2 s instead of 150 s and a call takes 56 us against 69 us); a larger torsion model its flat
+# right-hand side.
 WHOLE_STEP_LIMIT = 100_000
 RK4_STAGES = 4
 # Largest twist (rad) between neighbouring elements before a torsion run counts as blown up.
@@ -63,12 +64,13 @@ def step_function(
 ) -> ca.Function:
     """The RK4 step, interpreted or compiled to C (cached on disk, :mod:`cable_ocp.compile`).
 
-    A small model's whole step is compiled (one call per step: at n = 3 its derivatives are 25 %
-    faster than around a compiled right-hand side); a large one's right-hand side only, since
-    the step's four copies made gcc run out of memory at n = 100. ``derivatives`` compiles the
-    first derivatives too (for optimisation). The Function is kept on the model, so repeated
-    runs (Nelder-Mead, studies) build and load it once; :func:`step_compile_report` tells
-    whether it came from the disk cache.
+    A small model's whole step is compiled as one flat Function (at n = 3 its derivatives are
+    25 % faster than around a compiled right-hand side). A large one's four copies of the
+    right-hand side made gcc run out of memory at n = 100, so its step is compiled around the
+    structured right-hand side (5 DOF) or its flat right-hand side alone (torsion).
+    ``derivatives`` compiles the first derivatives too (for optimisation). The Function is kept
+    on the model, so repeated runs (Nelder-Mead, studies) build and load it once;
+    :func:`step_compile_report` tells whether it came from the disk cache.
     """
     return _step_and_report(model, step, compiled, derivatives)[0]
 

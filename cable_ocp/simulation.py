@@ -8,7 +8,6 @@ import numpy as np
 
 from cable_ocp import structured
 from cable_ocp import winch as winch_angles
-from cable_ocp.compile import compiled as compile_function
 from cable_ocp.drive import Drive
 from cable_ocp.integrate import integrate
 from cable_ocp.model import CableModel
@@ -64,12 +63,7 @@ def joints_and_tensions(
     """
     count = len(states)
     if compiled and structured.supports(model):
-        function = model.memo(
-            ("joints_tensions", "compiled"),
-            lambda: compile_function(
-                structured.structured_outputs(model), repr(model.spec), derivatives=False
-            )[0],
-        )
+        function = structured.compiled_structured(model, "outputs")
         joints, tensions = function.map(count)(states.T, inputs.T)
     else:
         joints, _, _, _, _, tensions, _ = model.outputs.map(count)(states.T, inputs.T)

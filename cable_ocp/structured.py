@@ -14,6 +14,7 @@ from __future__ import annotations
 
 import casadi as ca
 
+from cable_ocp.compile import compiled as compile_function
 from cable_ocp.kinematics import POSITION
 from cable_ocp.kkt import cholesky_solve, inverse_3x3
 from cable_ocp.model import INPUT_SIZE, CableModel
@@ -141,8 +142,12 @@ def structured_rhs(model: CableModel) -> ca.Function:
     ValueError
         For a model :func:`supports` rejects.
     """
-    x, u, xdot, _, _ = _structured_graph(model)
-    return ca.Function("rhs", [x, u], [xdot], ["x", "u"], ["xdot"])
+
+    def build() -> ca.Function:
+        x, u, xdot, _, _ = _structured_graph(model)
+        return ca.Function("rhs", [x, u], [xdot], ["x", "u"], ["xdot"])
+
+    return model.memo(("structured", "rhs"), build)
 
 
 def structured_outputs(model: CableModel) -> ca.Function:
@@ -151,10 +156,26 @@ def structured_outputs(model: CableModel) -> ca.Function:
     What a :class:`~cable_ocp.trajectory.Trajectory` keeps of every sample, computed by the same
     loops as :func:`structured_rhs` so that it compiles in seconds at any ``n``.
     """
-    x, u, _, forces, joints = _structured_graph(model)
-    tensions = ca.sqrt(ca.sum1(forces**2)).T
-    return ca.Function(
-        "joints_tensions", [x, u], [joints, tensions], ["x", "u"], ["joints", "tensions"]
+
+    def build() -> ca.Function:
+        x, u, _, forces, joints = _structured_graph(model)
+        tensions = ca.sqrt(ca.sum1(forces**2)).T
+        return ca.Function(
+            "joints_tensions", [x, u], [joints, tensions], ["x", "u"], ["joints", "tensions"]
+        )
+
+    return model.memo(("structured", "outputs"), build)
+
+
+def compiled_structured(model: CableModel, which: str) -> ca.Function:
+    """A structured Function compiled to C without derivatives (cached), once per model.
+
+    ``which`` is ``"rhs"`` (:func:`structured_rhs`) or ``"outputs"`` (:func:`structured_outputs`).
+    """
+    build = {"rhs": structured_rhs, "outputs": structured_outputs}[which]
+    return model.memo(
+        ("structured", which, "compiled"),
+        lambda: compile_function(build(model), repr(model.spec), derivatives=False)[0],
     )
 
 
