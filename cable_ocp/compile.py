@@ -6,11 +6,17 @@ the system C compiler into a shared library and loaded back as an external Funct
 is cached under a key that hashes the Function itself (its serialised expression graph), the
 caller's description, the CasADi version and the compiler flags, so a second run loads it without
 compiling, and a change to the model (and nothing else) compiles anew.
+
+A library is loaded only if its size and SHA-256 match the record written beside it (a truncated
+library makes the loader crash the process with SIGBUS; hashing a 2 MB library takes 1.3 ms,
+against 7 ms to load it); a damaged or unloadable one is rebuilt. A compiler that fails, or a
+cache that cannot be written, leaves the interpreted Function with a warning, not an exception.
 """
 
 from __future__ import annotations
 
 import hashlib
+import json
 import os
 import platform
 import shutil
@@ -54,10 +60,22 @@ def cache_dir() -> Path:
 
 
 def find_compiler() -> str | None:
-    """Path of the C compiler (``$CC``, ``cc`` or ``gcc``), or None."""
-    for name in (os.environ.get("CC"), "cc", "gcc"):
-        if name and shutil.which(name):
-            return shutil.which(name)
+    """Path of the C compiler (``$CC``, a name or a full path; else ``cc`` or ``gcc``), or None.
+
+    A ``$CC`` that is not an executable is reported by a warning and ``cc``/``gcc`` are tried.
+    """
+    wanted = os.environ.get("CC")
+    if wanted:
+        found = shutil.which(wanted)
+        if found:
+            return found
+        warnings.warn(
+            f"$CC={wanted!r} is not an executable: trying cc and gcc", RuntimeWarning, stacklevel=3
+        )
+    for name in ("cc", "gcc"):
+        found = shutil.which(name)
+        if found:
+            return found
     return None
 
 
@@ -72,8 +90,47 @@ def cache_key(function: ca.Function, description: str) -> str:
     return digest.hexdigest()[:20]
 
 
+def fingerprint_path(library: Path) -> Path:
+    """The record of a library's size and SHA-256 (``NAME.so.json``), written after the library."""
+    return library.with_name(library.name + ".json")
+
+
+def fingerprint(path: Path) -> dict[str, int | str]:
+    """Size (bytes) and SHA-256 (hex) of a file."""
+    digest, size = hashlib.sha256(), 0
+    with path.open("rb") as stream:
+        for block in iter(lambda: stream.read(1 << 20), b""):
+            digest.update(block)
+            size += len(block)
+    return {"size": size, "sha256": digest.hexdigest()}
+
+
+def damage(library: Path) -> str | None:
+    """Why a cached library must not be loaded, or None when it matches its recorded fingerprint.
+
+    A library without a record is damaged too: the record is written last, so it is either a
+    write that was cut short or one that another process is finishing (rebuilding is safe then).
+    """
+    try:
+        recorded = json.loads(fingerprint_path(library).read_text())
+    except FileNotFoundError:
+        return "size/hash record missing: an interrupted write or an older cable_ocp"
+    except (OSError, ValueError):
+        return "size/hash record unreadable"
+    try:
+        actual = fingerprint(library)
+    except OSError as error:
+        return f"unreadable: {error}"
+    if recorded != actual:
+        return f"size/hash mismatch: {actual['size']} bytes on disk"
+    return None
+
+
 class CompileReport:
-    """What :func:`compiled` did: ``cache_hit`` (bool) and ``compile_time`` (s)."""
+    """What :func:`compiled` did: ``cache_hit`` (bool) and ``compile_time`` (s).
+
+    ``library`` is the shared library loaded, or None when the interpreted Function is returned.
+    """
 
     def __init__(self, cache_hit: bool, compile_time: float, library: Path | None):
         self.cache_hit, self.compile_time, self.library = cache_hit, compile_time, library
@@ -85,10 +142,70 @@ class CompileReport:
         )
 
 
+class _CompilerFailed(Exception):
+    """The C compiler could not be run or exited with an error (the message has its stderr)."""
+
+
+def _remove(library: Path) -> None:
+    """Delete a library and its record if present.
+
+    A read-only cache keeps them: the rebuild then fails to write and falls back to the
+    interpreted Function.
+    """
+    for path in (library, fingerprint_path(library)):
+        try:
+            path.unlink(missing_ok=True)
+        except OSError:
+            pass
+
+
+def _build(
+    function: ca.Function, compiler: str, library: Path, derivatives: bool, quiet: bool
+) -> None:
+    """Generate C, compile it, and install the library and its record atomically.
+
+    Raises _CompilerFailed when the compiler fails, OSError when the cache cannot be written.
+    """
+    folder = library.parent
+    folder.mkdir(parents=True, exist_ok=True)
+    name = function.name()
+    if not quiet:
+        print(f"compiling {name} to C (cached in {folder}) ...", flush=True)
+    with tempfile.TemporaryDirectory(dir=folder) as scratch:
+        source = Path(scratch) / f"{name}.c"
+        generator = ca.CodeGenerator(source.name, {"with_header": False})
+        generator.add(function)
+        if derivatives:
+            generator.add(function.forward(1))
+            generator.add(function.reverse(1))
+        generator.generate(str(Path(scratch)) + os.sep)
+        target = Path(scratch) / library.name
+        flags = [*optimisation_flags(function), *COMPILER_FLAGS]
+        command = [compiler, *flags, str(source), "-o", str(target), "-lm"]
+        try:
+            result = subprocess.run(command, capture_output=True, text=True)
+        except OSError as error:
+            raise _CompilerFailed(f"cannot run {compiler}: {error}") from error
+        if result.returncode != 0 or not target.is_file():
+            output = (result.stderr or result.stdout).strip()[-2000:] or "no output"
+            raise _CompilerFailed(f"{compiler} exited with status {result.returncode}:\n{output}")
+        record = Path(scratch) / "fingerprint.json"
+        record.write_text(json.dumps(fingerprint(target)))
+        # Atomic renames, the record last: a reader never sees a half-written file, and a
+        # library whose record is not there yet counts as damaged (rebuilt, never loaded).
+        os.replace(target, library)
+        os.replace(record, fingerprint_path(library))
+
+
 def compiled(
     function: ca.Function, description: str, derivatives: bool = True, quiet: bool = True
 ) -> tuple[ca.Function, CompileReport]:
     """The Function compiled to C (with first derivatives), from the cache when possible.
+
+    A cached library is loaded only if its size and SHA-256 match its record; a damaged one, or
+    one CasADi cannot load, is deleted and rebuilt once (with a warning). When no compiler is
+    found, the compiler fails, the cache cannot be written or the rebuilt library does not load,
+    a RuntimeWarning says why and ``function`` itself (interpreted) is returned.
 
     Parameters
     ----------
@@ -106,10 +223,10 @@ def compiled(
     Returns
     -------
     function : casadi.Function
-        The external (compiled) Function, or ``function`` itself when no C compiler is found (a
-        warning says so).
+        The external (compiled) Function, or ``function`` itself (interpreted) after a warning.
     report : CompileReport
     """
+    interpreted = function, CompileReport(False, 0.0, None)
     compiler = find_compiler()
     if compiler is None:
         warnings.warn(
@@ -117,41 +234,57 @@ def compiled(
             RuntimeWarning,
             stacklevel=2,
         )
-        return function, CompileReport(False, 0.0, None)
-    folder = cache_dir()
-    folder.mkdir(parents=True, exist_ok=True)
+        return interpreted
     name = function.name()
     key = cache_key(function, f"{description}|derivatives={derivatives}")
-    library = folder / f"{name}_{key}.so"
-    if library.exists():
-        return ca.external(name, str(library)), CompileReport(True, 0.0, library)
-    started = time.perf_counter()
-    if not quiet:
-        print(f"compiling {name} to C (cached in {folder}) ...", flush=True)
-    with tempfile.TemporaryDirectory(dir=folder) as scratch:
-        source = Path(scratch) / f"{name}.c"
-        generator = ca.CodeGenerator(source.name, {"with_header": False})
-        generator.add(function)
-        if derivatives:
-            generator.add(function.forward(1))
-            generator.add(function.reverse(1))
-        generator.generate(str(Path(scratch)) + os.sep)
-        target = Path(scratch) / library.name
-        result = subprocess.run(
-            [
-                compiler,
-                *optimisation_flags(function),
-                *COMPILER_FLAGS,
-                str(source),
-                "-o",
-                str(target),
-                "-lm",
-            ],  # fmt: skip
-            capture_output=True,
-            text=True,
+    library = cache_dir() / f"{name}_{key}.so"
+    if library.is_file():
+        problem = damage(library)
+        if problem is None:
+            try:
+                return ca.external(name, str(library)), CompileReport(True, 0.0, library)
+            except RuntimeError as error:
+                problem = f"CasADi cannot load it: {_first_line(error)}"
+        warnings.warn(
+            f"cached library {library} is damaged ({problem}): rebuilding",
+            RuntimeWarning,
+            stacklevel=2,
         )
-        if result.returncode != 0:
-            raise RuntimeError(f"compiling {name} failed:\n{result.stderr[-2000:]}")
-        os.replace(target, library)  # atomic: a half-written library is never seen
+        _remove(library)
+    started = time.perf_counter()
+    try:
+        _build(function, compiler, library, derivatives, quiet)
+    except _CompilerFailed as error:
+        warnings.warn(
+            f"compiling {name} into {library} failed: {error}\nusing the interpreted model "
+            "(fix the compiler or point $CC at a working one)",
+            RuntimeWarning,
+            stacklevel=2,
+        )
+        return interpreted
+    except OSError as error:
+        warnings.warn(
+            f"cannot write the compiled-model cache {library.parent} ({error}): using the "
+            "interpreted model (point $CABLE_OCP_CACHE at a writable folder)",
+            RuntimeWarning,
+            stacklevel=2,
+        )
+        return interpreted
     elapsed = time.perf_counter() - started
-    return ca.external(name, str(library)), CompileReport(False, elapsed, library)
+    try:
+        return ca.external(name, str(library)), CompileReport(False, elapsed, library)
+    except RuntimeError as error:
+        _remove(library)
+        warnings.warn(
+            f"the freshly compiled library {library} cannot be loaded ({_first_line(error)}): "
+            "using the interpreted model (check the compiler and the CasADi installation)",
+            RuntimeWarning,
+            stacklevel=2,
+        )
+        return interpreted
+
+
+def _first_line(error: Exception) -> str:
+    """The informative line of a CasADi error (its first line is a source location)."""
+    lines = [line.strip() for line in str(error).splitlines() if line.strip()]
+    return " ".join(lines[:2])

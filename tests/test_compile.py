@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+from pathlib import Path
+
 import numpy as np
 import pytest
 
@@ -81,3 +83,188 @@ def test_a_second_process_loads_from_the_cache_and_a_changed_model_compiles(mode
     assert not hit(1.0)  # first build compiles
     assert hit(1.0)  # a new process, the same model: loaded from the cache
     assert not hit(1.2)  # other physics, other code: compiled anew
+
+
+# --- A damaged cache, a failing compiler, an unwritable cache (a tiny Function: ~1 s compiles) ---
+
+TINY_POINT = [0.3, -1.2, 2.0]
+TINY_VALUE = np.sin(TINY_POINT) * np.square(TINY_POINT)
+
+TINY_PROCESS = """
+import json, warnings
+import casadi as ca
+from cable_ocp.compile import compiled
+x = ca.SX.sym("x", 3)
+tiny = ca.Function("tiny", [x], [ca.sin(x) * x**2])
+with warnings.catch_warnings(record=True) as caught:
+    warnings.simplefilter("always")
+    function, report = compiled(tiny, "tiny")
+print(json.dumps({
+    "warnings": [str(w.message) for w in caught],
+    "hit": report.cache_hit,
+    "library": str(report.library),
+    "value": [float(v) for v in ca.DM(function([0.3, -1.2, 2.0])).full().ravel()],
+}))
+"""
+
+
+def tiny_function():
+    import casadi as ca
+
+    x = ca.SX.sym("x", 3)
+    return ca.Function("tiny", [x], [ca.sin(x) * x**2])
+
+
+def run_tiny(cache):
+    """Compile or load the tiny Function in a new process: a loader crash fails the test only."""
+    import json
+    import os
+    import subprocess
+    import sys
+
+    env = {**os.environ, "CABLE_OCP_CACHE": str(cache)}
+    out = subprocess.run(
+        [sys.executable, "-c", TINY_PROCESS], env=env, capture_output=True, text=True
+    )
+    assert out.returncode == 0, (
+        f"exit status {out.returncode} (-7 is SIGBUS):\n{out.stderr[-2000:]}"
+    )
+    return json.loads(out.stdout)
+
+
+def truncate(library):
+    data = library.read_bytes()
+    library.write_bytes(data[: len(data) // 2])
+
+
+def garbage(library):
+    library.write_bytes(np.random.default_rng(1).bytes(len(library.read_bytes())))
+
+
+def garbage_with_its_record(library):
+    """Bytes that pass the hash but do not load (as a library built by another CasADi would)."""
+    import json
+
+    garbage(library)
+    record = compile_module.fingerprint_path(library)
+    record.write_text(json.dumps(compile_module.fingerprint(library)))
+
+
+def record_missing(library):
+    compile_module.fingerprint_path(library).unlink()
+
+
+@pytest.mark.parametrize(
+    ("damage", "reason"),
+    [
+        (truncate, "size/hash mismatch"),
+        (garbage, "size/hash mismatch"),
+        (garbage_with_its_record, "CasADi cannot load it"),
+        (record_missing, "record missing"),
+    ],
+)
+def test_a_damaged_cached_library_is_rebuilt_not_loaded(tmp_path, damage, reason):
+    first = run_tiny(tmp_path)
+    assert not first["hit"] and first["warnings"] == []
+    library = Path(first["library"])
+    intact = library.read_bytes()
+    damage(library)
+    second = run_tiny(tmp_path)
+    assert len(second["warnings"]) == 1
+    message = second["warnings"][0]
+    assert f"cached library {library} is damaged" in message and reason in message
+    assert "rebuilding" in message
+    assert not second["hit"] and second["library"] == str(library)
+    assert np.allclose(second["value"], TINY_VALUE, rtol=1e-14, atol=0)
+    # The rebuilt library has its record again, so the next process loads it quietly.
+    assert library.read_bytes() == intact
+    assert compile_module.damage(library) is None
+    third = run_tiny(tmp_path)
+    assert third["hit"] and third["warnings"] == []
+
+
+def test_a_second_call_hits_the_cache_after_a_cheap_hash_check(tmp_path, monkeypatch):
+    import time
+    import warnings
+
+    monkeypatch.setenv("CABLE_OCP_CACHE", str(tmp_path))
+    tiny = tiny_function()
+    _, first = compile_module.compiled(tiny, "tiny")
+    record = compile_module.fingerprint_path(first.library)
+    assert record.is_file() and compile_module.damage(first.library) is None
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        function, second = compile_module.compiled(tiny, "tiny")
+    assert second.cache_hit and second.library == first.library
+    assert np.allclose(np.array(function(TINY_POINT)).ravel(), TINY_VALUE, rtol=1e-14, atol=0)
+    started = time.perf_counter()
+    compile_module.damage(first.library)
+    elapsed = time.perf_counter() - started
+    size = first.library.stat().st_size
+    print(f"hash check of a {size} byte library: {elapsed * 1e3:.3f} ms")
+
+
+def test_a_failing_compiler_warns_with_its_stderr_and_falls_back(tmp_path, monkeypatch):
+    monkeypatch.setenv("CABLE_OCP_CACHE", str(tmp_path / "cache"))
+    compiler = tmp_path / "broken-cc"
+    compiler.write_text("#!/bin/sh\necho 'broken-cc: licence expired' >&2\nexit 3\n")
+    compiler.chmod(0o755)
+    monkeypatch.setenv("CC", str(compiler))
+    tiny = tiny_function()
+    with pytest.warns(RuntimeWarning, match="exited with status 3") as caught:
+        function, report = compile_module.compiled(tiny, "tiny")
+    assert "broken-cc: licence expired" in str(caught[0].message)
+    assert "using the interpreted model" in str(caught[0].message)
+    assert function is tiny and report.library is None and not report.cache_hit
+    assert list((tmp_path / "cache").glob("*.so*")) == []  # nothing half-built is left behind
+
+
+def test_cc_bin_false_is_honoured_and_falls_back(tmp_path, monkeypatch):
+    monkeypatch.setenv("CABLE_OCP_CACHE", str(tmp_path))
+    monkeypatch.setenv("CC", "/bin/false")
+    assert compile_module.find_compiler() == "/bin/false"
+    tiny = tiny_function()
+    with pytest.warns(RuntimeWarning, match=r"/bin/false exited with status 1:\nno output"):
+        function, report = compile_module.compiled(tiny, "tiny")
+    assert function is tiny and report.library is None
+    assert np.allclose(np.array(function(TINY_POINT)).ravel(), TINY_VALUE, rtol=1e-14, atol=0)
+
+
+def test_a_cc_that_does_not_exist_warns_and_uses_cc(monkeypatch):
+    monkeypatch.setenv("CC", "no-such-compiler-xyz")
+    with pytest.warns(RuntimeWarning, match="no-such-compiler-xyz.*not an executable"):
+        found = compile_module.find_compiler()
+    assert found is not None and Path(found).name in ("cc", "gcc")
+
+
+def test_an_unwritable_cache_warns_and_falls_back(tmp_path, monkeypatch):
+    # A folder below a regular file cannot be created, not even by root (chmod would not stop root).
+    blocker = tmp_path / "file.txt"
+    blocker.write_text("not a folder")
+    monkeypatch.setenv("CABLE_OCP_CACHE", str(blocker / "cache"))
+    tiny = tiny_function()
+    with pytest.warns(RuntimeWarning, match="cannot write the compiled-model cache") as caught:
+        function, report = compile_module.compiled(tiny, "tiny")
+    assert "CABLE_OCP_CACHE" in str(caught[0].message)
+    assert function is tiny and report.library is None and not report.cache_hit
+    assert np.allclose(np.array(function(TINY_POINT)).ravel(), TINY_VALUE, rtol=1e-14, atol=0)
+
+
+def test_two_processes_compiling_the_same_library_at_once_both_succeed(tmp_path):
+    import json
+    import os
+    import subprocess
+    import sys
+
+    env = {**os.environ, "CABLE_OCP_CACHE": str(tmp_path)}
+    runs = [
+        subprocess.Popen([sys.executable, "-c", TINY_PROCESS], env=env, stdout=subprocess.PIPE)
+        for _ in range(2)
+    ]
+    results = [json.loads(run.communicate()[0]) for run in runs]
+    assert [run.returncode for run in runs] == [0, 0]
+    for result in results:
+        assert np.allclose(result["value"], TINY_VALUE, rtol=1e-14, atol=0)
+    (library,) = tmp_path.glob("tiny_*.so")
+    assert compile_module.damage(library) is None
+    assert run_tiny(tmp_path)["hit"]
