@@ -212,8 +212,8 @@ def compiled(
     function : casadi.Function
         An SX Function.
     description : str
-        Everything that determines the Function (e.g. the model spec and the step), hashed into
-        the cache key together with the package's sources.
+        Everything that built the Function (e.g. the model spec and the step), hashed into the
+        cache key together with the Function's expression graph.
     derivatives : bool
         Also generate the first forward and reverse derivatives (needed by optimisation, not by
         simulation; they roughly triple the code).
@@ -285,6 +285,6 @@ def compiled(
 
 
 def _first_line(error: Exception) -> str:
-    """The informative line of a CasADi error (its first line is a source location)."""
+    """The first two lines of a CasADi error: a source location, then the reason."""
     lines = [line.strip() for line in str(error).splitlines() if line.strip()]
     return " ".join(lines[:2])

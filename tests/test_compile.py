@@ -268,3 +268,22 @@ def test_two_processes_compiling_the_same_library_at_once_both_succeed(tmp_path)
     (library,) = tmp_path.glob("tiny_*.so")
     assert compile_module.damage(library) is None
     assert run_tiny(tmp_path)["hit"]
+
+
+def test_a_library_that_never_loads_is_rebuilt_once_then_interpreted(tmp_path, monkeypatch):
+    monkeypatch.setenv("CABLE_OCP_CACHE", str(tmp_path))
+    tiny = tiny_function()
+    _, first = compile_module.compiled(tiny, "tiny")  # intact library and record
+
+    def refuse(name, path):
+        raise RuntimeError(".../casadi_os.cpp:335: Assertion failed:\nCannot load shared library")
+
+    monkeypatch.setattr(compile_module.ca, "external", refuse)
+    with pytest.warns(RuntimeWarning) as caught:
+        function, report = compile_module.compiled(tiny, "tiny")
+    messages = [str(w.message) for w in caught]
+    assert len(messages) == 2
+    assert "is damaged (CasADi cannot load it" in messages[0] and "rebuilding" in messages[0]
+    assert "freshly compiled library" in messages[1] and "Cannot load shared library" in messages[1]
+    assert function is tiny and report.library is None
+    assert not first.library.exists()  # the unloadable rebuild is not left to fail again
