@@ -32,6 +32,11 @@ class KnotSpline:
         """Number of parameters."""
         return self.knots
 
+    @property
+    def breakpoints(self) -> np.ndarray:
+        """Times (s) between which the angle is one cubic polynomial: the knots."""
+        return knot_times(self.duration, self.knots)
+
     def basis(self, t: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """``B0, B1, B2`` at the times ``t``: arrays (len(t), size)."""
         t = np.clip(np.atleast_1d(np.asarray(t, dtype=float)), 0.0, self.duration)
@@ -61,6 +66,11 @@ class HermiteIntervals:
     def size(self) -> int:
         """Number of parameters."""
         return 2 * self.intervals
+
+    @property
+    def breakpoints(self) -> np.ndarray:
+        """Times (s) between which the angle is one cubic polynomial: the nodes."""
+        return np.linspace(0.0, self.duration, self.intervals + 1)
 
     def basis(self, t: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """``B0, B1, B2`` at the times ``t``: arrays (len(t), size).

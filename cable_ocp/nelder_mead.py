@@ -1,4 +1,11 @@
-"""The paper's method: Nelder-Mead over the spline knots, one RK4 run per evaluation."""
+"""The paper's method: Nelder-Mead over the spline knots, one RK4 run per evaluation.
+
+The winch bounds (angle, and ``winch.rate_max`` / ``winch.acceleration_max`` when set) are held on
+the whole spline, between the knots too, by the linear constraints of :mod:`cable_ocp.bounds`: a
+profile that breaks them is not simulated but scored worse than any run (an extreme barrier that
+grows with the violation, so the simplex is pushed back), and the search starts from a profile
+that keeps them. The returned profile is checked again; a violation makes the search a failure.
+"""
 
 from __future__ import annotations
 
@@ -9,17 +16,21 @@ import numpy as np
 from scipy.optimize import minimize
 
 from cable_ocp import winch
+from cable_ocp.bounds import LinearBounds, angle_bounds, violation
 from cable_ocp.controls import KnotSpline
 from cable_ocp.drive import Drive
-from cable_ocp.integrate import SimulationError, integrate
+from cable_ocp.integrate import SimulationError, integrate, step_count
 from cable_ocp.model import CableModel
-from cable_ocp.ocp import GUESS_TOLERANCE, angle_bounds, initial_parameters
+from cable_ocp.ocp import GUESS_TOLERANCE, initial_parameters
 from cable_ocp.progress import Progress
 from cable_ocp.seabed import clearance_error, rms_objective
 from cable_ocp.statics import equilibrium
 
 # Objective given to Nelder-Mead for a winch whose simulation fails (m): worse than any real run.
 FAILED_RUN_OBJECTIVE = 1e3
+# Objective for a winch that breaks its bounds (m): this plus FAILED_RUN_OBJECTIVE per unit of the
+# largest violation (rad, rad/s or rad/s^2), worse than a failed run.
+INFEASIBLE_OBJECTIVE = 2 * FAILED_RUN_OBJECTIVE
 
 
 @dataclass(frozen=True)
@@ -88,7 +99,12 @@ class NelderMeadOutcome:
 def solve_nelder_mead(
     scene, settings: NelderMeadSettings, quiet: bool = False
 ) -> NelderMeadOutcome:
-    """Minimise Omega over the spline knots with SciPy's bounded Nelder-Mead."""
+    """Minimise Omega over the spline knots with SciPy's bounded Nelder-Mead.
+
+    ``success`` is False, with the reason in ``message``, when SciPy reports a failure (e.g. the
+    evaluation limit), when no evaluated profile both kept the winch bounds and simulated, or when
+    the returned profile breaks a bound by more than :data:`cable_ocp.bounds.BOUND_TOLERANCE`.
+    """
     started = time.perf_counter()
     duration = scene.numerics.duration
     step = settings.step or scene.numerics.step
@@ -101,7 +117,13 @@ def solve_nelder_mead(
     hills = scene.seabed.hills
     compiled = settings.compiled
 
+    grid = np.arange(step_count(duration, step) + 1) * step
+    constraints = LinearBounds.build(scene, control, grid)
+
     def omega(parameters: np.ndarray) -> float:
+        excess = constraints.excess(parameters)
+        if excess > 0:
+            return INFEASIBLE_OBJECTIVE + FAILED_RUN_OBJECTIVE * excess
         drive = Drive.from_scene(scene, control.angle_function(parameters), elements=n)
         try:
             run = integrate(
@@ -116,6 +138,7 @@ def solve_nelder_mead(
     )
     rise = clearance_error(hills, locked_run.states[:, :3])
     guess = np.clip(initial_parameters(scene, control, locked_run.time, rise, low, high), low, high)
+    guess = constraints.scale_into(guess)
 
     history: list[float] = []
     progress = Progress("nelder-mead", settings.max_evaluations, quiet)
@@ -139,11 +162,18 @@ def solve_nelder_mead(
         },
     )
     progress.close()
+    parameters = np.asarray(result.x)
+    success, message = bool(result.success), str(result.message)
+    reason = violation(scene, control, parameters)
+    if reason is not None:
+        success, message = False, f"no profile within the winch bounds found: {reason}"
+    elif result.fun >= FAILED_RUN_OBJECTIVE:
+        success, message = False, "no winch profile with a successful simulation found"
     return NelderMeadOutcome(
-        parameters=np.asarray(result.x),
+        parameters=parameters,
         control=control,
-        success=bool(result.success),
-        message=str(result.message),
+        success=success,
+        message=message,
         evaluations=int(result.nfev),
         iterations=int(result.nit),
         objective=float(result.fun),

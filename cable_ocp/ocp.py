@@ -4,7 +4,8 @@ The horizon ``[0, T]`` is cut into shooting intervals; the state at every node i
 variable, each interval is a fold of RK4 steps of the (possibly reduced) model, and continuity
 constraints join the intervals. The winch angle is linear in its parameters
 (:mod:`cable_ocp.controls`), so the angle, rate, acceleration and top-element length bounds are
-linear constraints imposed at every RK4 step. The objective is ``Omega^2`` of eq. 39 by the
+linear constraints; they hold between the RK4 samples too (:mod:`cable_ocp.bounds`), within
+:data:`cable_ocp.bounds.BOUND_TOLERANCE`. The objective is ``Omega^2`` of eq. 39 by the
 trapezoidal rule over the RK4 steps.
 """
 
@@ -17,6 +18,7 @@ import casadi as ca
 import numpy as np
 
 from cable_ocp import winch
+from cable_ocp.bounds import LinearBounds, angle_bounds
 from cable_ocp.controls import HermiteIntervals, KnotSpline
 from cable_ocp.drive import Drive
 from cable_ocp.integrate import (
@@ -27,6 +29,7 @@ from cable_ocp.integrate import (
     step_function,
 )
 from cable_ocp.model import CableModel
+from cable_ocp.progress import IterationLog, check_verbosity
 from cable_ocp.seabed import clearance_error, seabed_height
 from cable_ocp.statics import equilibrium
 
@@ -140,19 +143,6 @@ def make_control(scene, settings: IpoptSettings) -> KnotSpline | HermiteInterval
     return HermiteIntervals(duration, settings.control_intervals or settings.intervals)
 
 
-def angle_bounds(scene, full_segment: float) -> tuple[float, float]:
-    """Winch-angle range (rad) from the angle bounds and the top-element length bounds."""
-    w = scene.winch
-    low = max(w.angle_min, (w.top_length_min - full_segment / 2) / w.drum_radius)
-    high = min(w.angle_max, (w.top_length_max - full_segment / 2) / w.drum_radius)
-    if low > 0 or high < 0:
-        raise ValueError(
-            f"winch bounds leave no room around phi(0) = 0: the angle range is [{low}, {high}] rad "
-            "(winch.angle_min/max with winch.top_length_min/max)"
-        )
-    return low, high
-
-
 def _interval_function(model, step, steps, hills, end_height0, compiled) -> ca.Function:
     """``(x, stage inputs, bias) -> (x_end, integral of (e + bias)^2)`` over one interval.
 
@@ -196,10 +186,13 @@ class MultipleShooting:
     scene : Scene
     settings : IpoptSettings
     quiet : bool
-        No IPOPT log when true.
+        Print nothing.
+    verbose : bool
+        Print IPOPT's own log and timing table instead of one progress line per iteration.
     """
 
-    def __init__(self, scene, settings: IpoptSettings, quiet: bool = False):
+    def __init__(self, scene, settings: IpoptSettings, quiet: bool = False, verbose: bool = False):
+        check_verbosity(quiet, verbose)
         started = time.perf_counter()
         self.scene, self.settings = scene, settings
         numerics = scene.numerics
@@ -247,27 +240,23 @@ class MultipleShooting:
         objective = ca.sum2(costs) / duration
         continuity = ca.vec(ends - nodes)
 
-        heave = self.drive.winch_angle(self.grid)[0]
-        bases = control.basis(self.grid)
-        rows = [ca.sparsify(ca.DM(bases[0])) @ parameters]
-        lower, upper = [self.low - heave], [self.high - heave]
-        for index, limit in ((1, scene.winch.rate_max), (2, scene.winch.acceleration_max)):
-            if limit is not None:
-                rows.append(ca.sparsify(ca.DM(bases[index])) @ parameters)
-                lower.append(np.full(self.grid.size, -limit))
-                upper.append(np.full(self.grid.size, limit))
+        bounds = LinearBounds.build(scene, control, self.grid)
         variables = ca.vertcat(ca.vec(nodes), parameters)
-        constraints = ca.densify(ca.vertcat(continuity, *rows))
-        self.lbg = np.concatenate([np.zeros(continuity.numel()), *lower])
-        self.ubg = np.concatenate([np.zeros(continuity.numel()), *upper])
+        constraints = ca.densify(
+            ca.vertcat(continuity, ca.sparsify(ca.DM(bounds.matrix)) @ parameters)
+        )
+        self.lbg = np.concatenate([np.zeros(continuity.numel()), bounds.lower])
+        self.ubg = np.concatenate([np.zeros(continuity.numel()), bounds.upper])
         self.history: list[float] = []
-        self._callback = _History(self.history, variables.numel(), constraints.numel())
+        self.log = IterationLog("ipopt", quiet=quiet or verbose)
+        self._callback = _History(self.history, self.log, self.lbg, self.ubg)
         options = {
             "ipopt": {
                 "hessian_approximation": settings.hessian,
                 "max_iter": settings.max_iter,
                 "tol": settings.tolerance,
-                "print_level": 0 if quiet else 5,
+                "print_level": 5 if verbose else 0,
+                "sb": "no" if verbose else "yes",
                 # Omega^2 in units of (1 cm)^2, so IPOPT's tolerances mean something in metres.
                 "obj_scaling_factor": 1e4,
                 # Stop once Omega^2 changes by less than 0.1 % over 5 acceptable iterations.
@@ -276,7 +265,7 @@ class MultipleShooting:
                 "acceptable_obj_change_tol": 1e-3,
                 **settings.ipopt_options,
             },
-            "print_time": not quiet,
+            "print_time": verbose,
             "iteration_callback": self._callback,
         }
         self.solver = ca.nlpsol(
@@ -323,6 +312,7 @@ class MultipleShooting:
         nodes = states[self.per_interval :: self.per_interval].T
         bias = np.zeros(self.grid.size) if bias is None else bias
         self.history.clear()
+        self.log.restart()
         started = time.perf_counter()
         solution = self.solver(
             x0=np.concatenate([nodes.ravel(order="F"), parameters]),
@@ -347,11 +337,15 @@ class MultipleShooting:
 
 
 class _History(ca.Callback):
-    """Records the objective at every IPOPT iteration."""
+    """Records the objective at every IPOPT iteration and reports it to an :class:`IterationLog`.
 
-    def __init__(self, history: list[float], nx: int, ng: int):
+    The constraint violation reported is the largest of the continuity residual and the excess
+    over the winch bounds (in the constraint's own unit: m, rad, rad/s or rad/s^2).
+    """
+
+    def __init__(self, history: list[float], log: IterationLog, lbg, ubg):
         ca.Callback.__init__(self)
-        self.history, self.nx, self.ng = history, nx, ng
+        self.history, self.log, self.lbg, self.ubg = history, log, lbg, ubg
         self.construct("history", {})
 
     def get_n_in(self):
@@ -370,12 +364,14 @@ class _History(ca.Callback):
         name = ca.nlpsol_out(i)
         if name == "f":
             return ca.Sparsity.scalar()
-        if name in ("x", "lam_x"):
-            return ca.Sparsity.dense(self.nx)
         if name in ("g", "lam_g"):
-            return ca.Sparsity.dense(self.ng)
+            return ca.Sparsity.dense(self.lbg.size)
         return ca.Sparsity(0, 0)
 
     def eval(self, arg):
-        self.history.append(float(arg[ca.nlpsol_out().index("f")]))
+        objective = float(arg[ca.nlpsol_out().index("f")])
+        g = np.array(arg[ca.nlpsol_out().index("g")]).ravel()
+        violation = float(max(np.max(self.lbg - g), np.max(g - self.ubg), 0.0))
+        self.history.append(objective)
+        self.log.line(len(self.history) - 1, np.sqrt(max(objective, 0.0)), violation)
         return [0]

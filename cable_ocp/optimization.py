@@ -11,14 +11,16 @@ from __future__ import annotations
 
 import json
 import time
-from dataclasses import asdict, dataclass, field
+import zipfile
+from dataclasses import asdict, dataclass, field, fields
 from pathlib import Path
 
 import numpy as np
 
-from cable_ocp.integrate import SimulationError
+from cable_ocp.bounds import violation
 from cable_ocp.nelder_mead import NelderMeadSettings, solve_nelder_mead
-from cable_ocp.ocp import IpoptSettings, MultipleShooting
+from cable_ocp.ocp import IpoptOutcome, IpoptSettings, MultipleShooting
+from cable_ocp.progress import check_verbosity
 from cable_ocp.simulation import simulate
 from cable_ocp.trajectory import Trajectory
 
@@ -39,16 +41,18 @@ class OcpResult:
     control : str
         ``"spline"`` or ``"hermite"`` with its size, e.g. ``"spline(14)"``.
     trajectory : Trajectory or None
-        The scene's full model driven by the optimised winch; None only for a failed solve whose
-        last iterate cannot even be simulated.
+        The scene's full model driven by the optimised winch; None when no profile passed
+        verification.
     omega : float, m
         Omega (eq. 39) of ``trajectory`` (NaN without one).
     omega_model : float, m
         Omega on the optimisation model, as the optimiser saw it.
     success : bool
-        False when the solver did not converge (or ran out of evaluations).
+        False when the solver did not converge (or ran out of evaluations), or when its profile
+        failed verification: a winch bound broken by more than
+        :data:`cable_ocp.bounds.BOUND_TOLERANCE`, or the full-model simulation raised.
     status : str
-        The solver's own status message.
+        The solver's own status message, or ``"verification failed: <reason>"``.
     iterations : int
     evaluations : int
         Objective evaluations (Nelder-Mead) or NLP objective evaluations (IPOPT).
@@ -85,39 +89,96 @@ class OcpResult:
     refinements: list[float] = field(default_factory=list)
 
     def save(self, folder: str | Path) -> None:
-        """Write ``result.json``, ``result.npz`` and the trajectory into ``folder``."""
+        """Write ``result.json``, ``result.npz`` and the trajectory into ``folder``.
+
+        NaN (Omega of a profile that could not be verified) is written as JSON ``null``.
+        """
         folder = Path(folder)
         folder.mkdir(parents=True, exist_ok=True)
         if self.trajectory is not None:
             self.trajectory.save(folder / "trajectory")
-        meta = {k: v for k, v in asdict(self).items() if k not in ("parameters", "trajectory")}
-        (folder / "result.json").write_text(json.dumps(meta, indent=1))
+        meta = {
+            k: _json_value(v)
+            for k, v in asdict(self).items()
+            if k not in ("parameters", "trajectory")
+        }
+        (folder / "result.json").write_text(json.dumps(meta, indent=1, allow_nan=False))
         np.savez(folder / "result.npz", parameters=self.parameters)
 
     @classmethod
     def load(cls, folder: str | Path) -> OcpResult:
-        """Read a result written by :meth:`save`."""
+        """Read a result written by :meth:`save`.
+
+        Raises
+        ------
+        ValueError
+            Naming the file, if a file of the result is missing, truncated or garbled.
+        """
         folder = Path(folder)
-        meta = json.loads((folder / "result.json").read_text())
-        with np.load(folder / "result.npz") as data:
-            parameters = data["parameters"]
-        has_trajectory = (folder / "trajectory.npz").exists()
-        trajectory = Trajectory.load(folder / "trajectory") if has_trajectory else None
+        path = folder / "result.json"
+        try:
+            meta = json.loads(path.read_text())
+            names = {f.name for f in fields(cls)} - {"parameters", "trajectory"}
+            if not isinstance(meta, dict) or set(meta) != names:
+                raise ValueError(f"fields {sorted(meta) if isinstance(meta, dict) else meta!r}")
+            meta = {k: _from_json(k, v) for k, v in meta.items()}
+            path = folder / "result.npz"
+            with np.load(path) as data:
+                parameters = np.asarray(data["parameters"], dtype=float)
+            path = folder / "trajectory.npz"
+            trajectory = Trajectory.load(folder / "trajectory") if path.exists() else None
+        except (OSError, ValueError, KeyError, TypeError, zipfile.BadZipFile, EOFError) as error:
+            raise ValueError(
+                f"{path}: not a readable optimisation result ({type(error).__name__}: {error})"
+            ) from error
         return cls(parameters=parameters, trajectory=trajectory, **meta)
 
 
-def _verify(scene, control, parameters, quiet, solved: bool = True):
-    """Simulate the scene's model with the winch; None if a failed solve's iterate cannot run."""
-    try:
-        return simulate(scene, winch=control.angle_function(parameters), quiet=quiet)
-    except (SimulationError, ValueError):
-        if solved:
-            raise
+# Fields of OcpResult that hold floats which may be NaN.
+_FLOAT_FIELDS = ("omega", "omega_model", "history", "refinements")
+
+
+def _json_value(value):
+    """A value for JSON: NaN and infinities as None, inside lists too."""
+    if isinstance(value, list):
+        return [_json_value(v) for v in value]
+    if isinstance(value, float) and not np.isfinite(value):
         return None
+    return value
+
+
+def _from_json(name: str, value):
+    """Undo :func:`_json_value` for the field ``name`` (None back to NaN)."""
+    if name not in _FLOAT_FIELDS:
+        return value
+    if isinstance(value, list):
+        return [float("nan") if v is None else float(v) for v in value]
+    return float("nan") if value is None else float(value)
+
+
+def _verify(scene, control, parameters, quiet) -> tuple[Trajectory | None, str | None]:
+    """Check the winch bounds and simulate the scene's model with the winch.
+
+    Returns
+    -------
+    (trajectory, None), or (None, reason) when the profile breaks a winch bound beyond
+    :data:`cable_ocp.bounds.BOUND_TOLERANCE` or the simulation raises (any exception).
+    """
+    reason = violation(scene, control, parameters)
+    if reason is not None:
+        return None, reason
+    try:
+        return simulate(scene, winch=control.angle_function(parameters), quiet=quiet), None
+    except Exception as error:  # noqa: BLE001 - any failure of the check is a failed result
+        return None, f"the full-model simulation raised {type(error).__name__}: {error}"
 
 
 def optimize_ipopt(
-    scene, settings: IpoptSettings | None = None, refinements: int = 3, quiet: bool = False
+    scene,
+    settings: IpoptSettings | None = None,
+    refinements: int = 3,
+    quiet: bool = False,
+    verbose: bool = False,
 ) -> OcpResult:
     """Direct multiple shooting + IPOPT, verified (and refined) on the scene's model.
 
@@ -130,45 +191,59 @@ def optimize_ipopt(
         Model-correction solves after the first (0 disables them); they stop early when the
         verified Omega stops improving. Ignored when the optimisation model is the scene's own.
     quiet : bool
+        Print nothing.
+    verbose : bool
+        IPOPT's full log instead of one progress line per iteration.
+
+    Returns
+    -------
+    OcpResult
+        ``success`` is False, with the reason in ``status``, when a solve fails (IPOPT's status)
+        or its profile fails verification (``"verification failed: ..."``); the result then holds
+        the best verified profile, if any.
     """
     started = time.perf_counter()
     settings = settings or IpoptSettings(elements=3, step=0.5)
-    problem = MultipleShooting(scene, settings, quiet=quiet)
-    outcome = problem.solve(problem.first_guess())
-    best_outcome = outcome
-    best = _verify(scene, problem.control, outcome.parameters, quiet, outcome.success)
-    verified = [best.omega if best is not None else float("nan")]
-    outcomes = [outcome]
+    problem = MultipleShooting(scene, settings, quiet=quiet, verbose=verbose)
     reduced = (
         problem.model.spec.elements != scene.model.elements or problem.step != scene.numerics.step
     )
-    for _ in range(refinements if reduced else 0):
-        if not outcome.success:
-            break
-        full_error = np.interp(problem.grid, best.time, best.clearance_error)
-        model_error = problem.clearance(problem.simulate(best_outcome.parameters))
-        outcome = problem.solve(best_outcome.parameters, full_error - model_error)
+    outcomes: list[IpoptOutcome] = []
+    verified: list[float] = []
+    best_outcome, best, failure = None, None, None
+    parameters, bias = problem.first_guess(), None
+    for _ in range(1 + (refinements if reduced else 0)):
+        if best is not None:
+            full_error = np.interp(problem.grid, best.time, best.clearance_error)
+            model_error = problem.clearance(problem.simulate(best_outcome.parameters))
+            parameters, bias = best_outcome.parameters, full_error - model_error
+        outcome = problem.solve(parameters, bias)
         outcomes.append(outcome)
-        trial = _verify(scene, problem.control, outcome.parameters, quiet, outcome.success)
-        if trial is None or not outcome.success or trial.omega >= best.omega:
-            verified.append(float("nan") if trial is None else trial.omega)
+        if not outcome.success:
+            failure = outcome.status
+            break
+        trial, reason = _verify(scene, problem.control, outcome.parameters, quiet)
+        if trial is None:
+            verified.append(float("nan"))
+            failure = f"verification failed: {reason}"
             break
         verified.append(trial.omega)
-        gain = trial.omega / best.omega
+        if best is not None and trial.omega >= best.omega:
+            break
+        gain = trial.omega / best.omega if best is not None else 0.0
         best_outcome, best = outcome, trial
         if gain > SMALL_GAIN:
             break
-    failed = [o for o in outcomes if not o.success]
-    status = failed[0].status if failed else best_outcome.status
+    shown = best_outcome or outcomes[-1]
     return OcpResult(
         method="ipopt",
-        parameters=best_outcome.parameters,
+        parameters=shown.parameters,
         control=f"{settings.control}({problem.control.size})",
         trajectory=best,
         omega=best.omega if best is not None else float("nan"),
-        omega_model=float(np.sqrt(max(best_outcome.objective, 0.0))),
-        success=not failed,
-        status=status,
+        omega_model=float(np.sqrt(max(shown.objective, 0.0))),
+        success=failure is None,
+        status=shown.status if failure is None else failure,
         iterations=sum(o.iterations for o in outcomes),
         evaluations=sum(o.iterations for o in outcomes) + len(outcomes),
         wall_time=time.perf_counter() - started,
@@ -181,22 +256,40 @@ def optimize_ipopt(
 
 
 def optimize_nelder_mead(
-    scene, settings: NelderMeadSettings | None = None, quiet: bool = False
+    scene,
+    settings: NelderMeadSettings | None = None,
+    quiet: bool = False,
+    verbose: bool = False,
 ) -> OcpResult:
-    """The paper's Nelder-Mead over the spline knots, verified on the scene's model."""
+    """The paper's Nelder-Mead over the spline knots, verified on the scene's model.
+
+    Parameters
+    ----------
+    scene : Scene
+    settings : NelderMeadSettings, optional
+        Defaults: a reduced model of 3 elements at h = 0.5 s.
+    quiet : bool
+        No progress bar.
+    verbose : bool
+        Accepted for a uniform interface: Nelder-Mead has no log beyond its progress bar.
+    """
+    check_verbosity(quiet, verbose)
     started = time.perf_counter()
     settings = settings or NelderMeadSettings(elements=3, step=0.5)
     outcome = solve_nelder_mead(scene, settings, quiet=quiet)
-    trajectory = _verify(scene, outcome.control, outcome.parameters, quiet, outcome.success)
+    trajectory, reason = None, None
+    if outcome.success:
+        trajectory, reason = _verify(scene, outcome.control, outcome.parameters, quiet)
+    omega = trajectory.omega if trajectory is not None else float("nan")
     return OcpResult(
         method="nelder-mead",
         parameters=outcome.parameters,
         control=f"spline({outcome.control.size})",
         trajectory=trajectory,
-        omega=trajectory.omega if trajectory is not None else float("nan"),
+        omega=omega,
         omega_model=outcome.objective,
-        success=outcome.success,
-        status=outcome.message,
+        success=outcome.success and reason is None,
+        status=outcome.message if reason is None else f"verification failed: {reason}",
         iterations=outcome.iterations,
         evaluations=outcome.evaluations,
         wall_time=time.perf_counter() - started,
@@ -204,12 +297,17 @@ def optimize_nelder_mead(
         solve_time=outcome.solve_time,
         function_time=outcome.solve_time,
         history=outcome.history,
-        refinements=[trajectory.omega if trajectory is not None else float("nan")],
+        refinements=[omega],
     )
 
 
 def optimize(
-    scene, method: str = "ipopt", settings=None, quiet: bool = False, **kwargs
+    scene,
+    method: str = "ipopt",
+    settings=None,
+    quiet: bool = False,
+    verbose: bool = False,
+    **kwargs,
 ) -> OcpResult:
     """Optimise the winch angle of a scene.
 
@@ -220,7 +318,9 @@ def optimize(
         ``"ipopt"`` (multiple shooting) or ``"nelder-mead"`` (the paper's method).
     settings : IpoptSettings or NelderMeadSettings, optional
     quiet : bool
-        No solver log or progress bar.
+        Print nothing at all.
+    verbose : bool
+        IPOPT's full log (by default, one progress line per iteration); not with ``quiet``.
     **kwargs
         Passed on (``refinements`` for IPOPT).
 
@@ -231,7 +331,7 @@ def optimize(
         status, never as an answer.
     """
     if method == "ipopt":
-        return optimize_ipopt(scene, settings, quiet=quiet, **kwargs)
+        return optimize_ipopt(scene, settings, quiet=quiet, verbose=verbose, **kwargs)
     if method == "nelder-mead":
-        return optimize_nelder_mead(scene, settings, quiet=quiet)
+        return optimize_nelder_mead(scene, settings, quiet=quiet, verbose=verbose)
     raise ValueError(f"method = {method!r}: must be 'ipopt' or 'nelder-mead'")

@@ -8,6 +8,7 @@ import numpy as np
 
 from cable_ocp import structured
 from cable_ocp import winch as winch_angles
+from cable_ocp.bounds import BOUND_TOLERANCE
 from cable_ocp.drive import Drive
 from cable_ocp.integrate import integrate
 from cable_ocp.model import CableModel
@@ -41,15 +42,21 @@ def winch_function(scene, winch: WinchSpec) -> winch_angles.WinchAngleFunction:
 
 
 def check_top_length(scene, drive: Drive, times: np.ndarray) -> None:
-    """Raise before integrating if the winch takes the top element out of its length range."""
+    """Raise before integrating if the winch takes the top element out of its length range.
+
+    A length outside by at most ``winch.drum_radius * BOUND_TOLERANCE`` (the angle tolerance of
+    :mod:`cable_ocp.bounds` as a length, m) counts as within it.
+    """
     length = drive.inputs(times)[9]
     low, high = scene.winch.top_length_min, scene.winch.top_length_max
-    outside = (length < low) | (length > high)
+    tolerance = scene.winch.drum_radius * BOUND_TOLERANCE
+    outside = (length < low - tolerance) | (length > high + tolerance)
     if outside.any():
         k = int(np.argmax(outside))
         raise ValueError(
             f"the winch sets the top-element length to {length[k]:.4g} m at t = {times[k]:.6g} s, "
-            f"outside [winch.top_length_min, winch.top_length_max] = [{low}, {high}] m"
+            f"outside [winch.top_length_min, winch.top_length_max] = [{low}, {high}] m by more "
+            f"than the tolerance {tolerance:.3g} m"
         )
 
 
