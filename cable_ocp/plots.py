@@ -1,7 +1,17 @@
-"""Figures of results (matplotlib), saved to files: the paper's Fig. 14, 17 and 18 and more.
+"""Figures of results (matplotlib): the paper's Fig. 14, 17 and 18 and more.
 
-Every function takes one or more :class:`~cable_ocp.trajectory.Trajectory` objects, returns the
-figure and, when ``path`` is given, saves it there (png, pdf or svg by the suffix).
+Every function takes one or more :class:`~cable_ocp.trajectory.Trajectory` objects and returns the
+figure. Importing this module never selects a matplotlib backend: matplotlib chooses one (Agg
+without a display, so the command line and the tests run headless; inline in a notebook).
+
+Who closes a figure:
+
+- with ``path`` (png, pdf or svg by the suffix) the figure is saved there and closed, so that batch
+  runs (the command line, the studies) leave no figures open; the returned figure can still be
+  shown, e.g. by ``IPython.display.display(fig)``;
+- without ``path`` the figure stays open in pyplot like any ``plt.subplots`` figure: a notebook
+  shows it when the cell ends (or at ``plt.show()``), a script shows it at ``plt.show()``. End a
+  notebook cell with ``plt.show()`` rather than with the returned figure, which would show it twice.
 """
 
 from __future__ import annotations
@@ -9,18 +19,16 @@ from __future__ import annotations
 from collections.abc import Sequence
 from pathlib import Path
 
-import matplotlib
+import matplotlib.pyplot as plt
+import numpy as np
+from matplotlib.figure import Figure
 
-matplotlib.use("Agg")
-import matplotlib.pyplot as plt  # noqa: E402
-import numpy as np  # noqa: E402
-from matplotlib.figure import Figure  # noqa: E402
-
-from cable_ocp.seabed import seabed_height  # noqa: E402
-from cable_ocp.trajectory import Trajectory  # noqa: E402
+from cable_ocp.seabed import seabed_height
+from cable_ocp.trajectory import Trajectory
 
 
 def _finish(fig: Figure, path: str | Path | None) -> Figure:
+    """Lay out ``fig``; with a ``path``, save it there and close it (the module's rule)."""
     fig.tight_layout()
     if path is not None:
         fig.savefig(path, dpi=120)

@@ -1,0 +1,50 @@
+"""The scene files shipped with the package, found the same way in a checkout and in an install.
+
+The repository's top-level ``models/`` folder is installed as the data package ``cable_ocp.models``
+(``pyproject.toml``: ``package-dir`` maps it, ``package-data`` ships its ``*.toml``), so
+:func:`models_dir` is ``models/`` of the checkout in an editable install and
+``site-packages/cable_ocp/models`` in an installed wheel.
+"""
+
+from __future__ import annotations
+
+from importlib import resources
+from pathlib import Path
+
+
+def models_dir() -> Path:
+    """Folder of the bundled scene files (``*.toml``), a real path on the file system.
+
+    Raises
+    ------
+    RuntimeError
+        If the package is imported from a zip archive, where the scenes are not files.
+    """
+    folder = resources.files("cable_ocp.models")
+    if not isinstance(folder, Path):
+        raise RuntimeError(
+            f"the bundled scenes are not on the file system ({folder!r}): "
+            "install cable_ocp unzipped (pip install) to use them"
+        )
+    return folder
+
+
+def scene_names() -> list[str]:
+    """Names of the bundled scenes (file names without ``.toml``), sorted."""
+    return sorted(path.stem for path in models_dir().glob("*.toml"))
+
+
+def scene_path(name: str) -> Path:
+    """Path of the bundled scene ``name`` (``"paper_hill"`` or ``"paper_hill.toml"``).
+
+    Raises
+    ------
+    ValueError
+        If no bundled scene has that name; the message lists the names there are.
+    """
+    path = models_dir() / f"{name.removesuffix('.toml')}.toml"
+    if not path.is_file():
+        raise ValueError(
+            f"scene name {name!r} is not a bundled scene; choose one of: {', '.join(scene_names())}"
+        )
+    return path
