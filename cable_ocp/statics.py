@@ -3,7 +3,11 @@
 The unknowns are the element angles only; positions follow by chaining the bonds down from the top
 point, so the bonds hold exactly. The equations are ``q'' = 0`` for the angles at rest, from the
 same right-hand side as the dynamics (so drag from a current is included), solved by Newton's method
-from the string solution (the chain with its weight lumped per element) as a first guess.
+from the string solution (the chain with its weight, the end force and the current's drag lumped per
+element) as a first guess. The equations also hold for a chain standing up in compression (in a
+strong current the straight cable mirrored through the top balances as well), so every solution is
+checked to be physical: all bonds pull, and a cable heavier than water hangs with its end below the
+top.
 """
 
 from __future__ import annotations
@@ -13,16 +17,20 @@ import numpy as np
 
 from cable_ocp import structured
 from cable_ocp.drive import Drive
+from cable_ocp.hydro import HydroCoefficients
 from cable_ocp.kinematics import axis_direction
-from cable_ocp.model import CableModel
+from cable_ocp.model import CableModel, Payload
 
 RESIDUAL_TOLERANCE = 1e-10  # rad/s^2, largest angular acceleration left at the equilibrium
 NEWTON_ITERATIONS = 50  # of the compiled Newton's method
 DIFFERENCE_STEP = 1e-7  # rad, forward-difference step of its Jacobian
+# A bond pushes if its tension is below -1e-6 of the larger of the largest bond force and the weight
+# in air (the equilibria's tensions are exact to ~1e-10 of that, so noise never trips it).
+COMPRESSION_TOLERANCE = 1e-6
 
 
 class EquilibriumError(RuntimeError):
-    """Newton's method found no static equilibrium."""
+    """Newton's method found no static equilibrium, or one that no cable can hang in."""
 
 
 def rest_inputs(drive: Drive) -> np.ndarray:
@@ -34,9 +42,17 @@ def rest_inputs(drive: Drive) -> np.ndarray:
 
 
 def string_guess(model: CableModel, u: np.ndarray) -> np.ndarray:
-    """Angles of the chain that carries its own weight and the end force as a string.
+    """Angles of the chain that carries its weight, end force and the current's drag as a string.
 
-    Element ``i`` points along the force that holds everything below its middle.
+    Element ``i`` points along the force that holds everything below its middle: the pull ``P``
+    at its lower joint plus half its own load. That is the moment balance of a straight element
+    about its upper joint, so without bending stiffness this is the equilibrium itself. In a
+    current the element's own normal drag ``1/2 rho_w d C_dn |v_n| v_n`` (``v_n`` the current's
+    part across the element) depends on its direction ``e``; the balance
+    ``e || P + l/2 (w e_z - f(e))`` puts ``e`` along ``R - k v`` (``R`` all loads but the
+    element's own drag, ``v`` the current) with ``k >= 0`` the smallest root of
+    ``k |R - k v| = l/2 * 1/2 rho_w d C_dn |v x R|``, found per element from the free end up.
+    Axial drag acts along ``e`` and only adds to the pull on the elements above.
 
     Returns
     -------
@@ -48,10 +64,53 @@ def string_guess(model: CableModel, u: np.ndarray) -> np.ndarray:
     weight = spec.element.submerged_weight_per_length
     payload = (spec.payload.mass - spec.water_density * spec.payload.volume) * spec.gravity
     pull = np.outer(weight * below + payload, [0.0, 0.0, 1.0]) - u[12:15]
+    hydro = spec.element.hydro
+    if hydro is not None and hydro.has_drag and np.any(hydro.current):
+        pull = _trailing_pulls(pull, lengths, hydro, spec.payload)
     norms = np.linalg.norm(pull, axis=1)
     pull[norms < 1e-9] = [0.0, 0.0, 1.0]
     pull /= np.linalg.norm(pull, axis=1, keepdims=True)
     return np.column_stack([np.arctan2(pull[:, 2], pull[:, 0]), np.arcsin(pull[:, 1])])
+
+
+def _trailing_pulls(
+    still: np.ndarray, lengths: np.ndarray, hydro: HydroCoefficients, payload: Payload
+) -> np.ndarray:
+    """Directions (n+1, 3) that hold each element in the current, from the still-water pulls.
+
+    ``still[i]`` holds the weight below the middle of element ``i`` and the end force; the drag of
+    the payload and of the elements below ``i`` is subtracted, then element ``i`` turns by its own
+    normal drag (see :func:`string_guess`).
+    """
+    current = np.asarray(hydro.current, float)
+    half_rho_d = 0.5 * hydro.water_density * hydro.diameter
+    payload_drag = 0.5 * hydro.water_density * payload.drag_coefficient * payload.drag_area
+    drag_below = payload_drag * np.linalg.norm(current) * current
+    pulls = np.empty_like(still)
+    for i, length in enumerate(lengths):
+        loads = still[i] - drag_below
+        turn = (
+            length / 2 * half_rho_d * hydro.drag_normal * np.linalg.norm(np.cross(current, loads))
+        )
+        k = _smallest_root(current, loads, turn)
+        pulls[i] = loads - k * current
+        axis = pulls[i] / np.linalg.norm(pulls[i])
+        axial = (current @ axis) * axis
+        normal = current - axial
+        drag_below = drag_below + length * half_rho_d * (
+            hydro.drag_normal * np.linalg.norm(normal) * normal
+            + np.pi * hydro.drag_axial * np.linalg.norm(axial) * axial
+        )
+    return pulls
+
+
+def _smallest_root(current: np.ndarray, loads: np.ndarray, turn: float) -> float:
+    """Smallest ``k >= 0`` with ``k |loads - k current| = turn`` (a quartic in ``k``)."""
+    if turn == 0.0:
+        return 0.0
+    roots = np.roots([current @ current, -2 * (current @ loads), loads @ loads, 0.0, -(turn**2)])
+    real = roots.real[(np.abs(roots.imag) <= 1e-6 * np.abs(roots)) & (roots.real >= 0)]
+    return float(real.min())
 
 
 def _state_from_angles(model: CableModel, angles: ca.SX, u: np.ndarray) -> ca.SX:
@@ -77,7 +136,7 @@ def equilibrium(
     model : CableModel
     drive : Drive
     guess : array (state_size,), optional
-        A starting state; the string solution by default.
+        A starting state; the string solution with the current's drag by default.
     compiled : bool
         For a 5-DOF model, Newton's method on the structured right-hand side compiled to C, with
         a finite-difference Jacobian (one mapped call): at n = 100, 0.05 s instead of the 5 s it
@@ -91,7 +150,9 @@ def equilibrium(
     Raises
     ------
     EquilibriumError
-        If Newton's method does not converge.
+        If Newton's method does not converge, or converges to an equilibrium that is not physical
+        (:func:`check_physical`: a bond in compression, or a cable heavier than water whose end
+        stands above the top).
     """
     u = rest_inputs(drive)
     count, dofs = model.element_count, model.dofs
@@ -124,7 +185,74 @@ def equilibrium(
         )
     state = np.array(state_of(solution)).ravel()
     model.check_regular(state)
+    check_physical(model, state, u)
     return state
+
+
+def bond_tensions(model: CableModel, state: np.ndarray, u: np.ndarray) -> np.ndarray:
+    """Signed bond tensions (n+1,), N: positive pulls, negative pushes.
+
+    Bond ``j`` joins the upper end of element ``j`` to the element above (``j = n``: the top);
+    its tension is the bond force along the axis of element ``j`` (``model.outputs`` gives only
+    the norm).
+    """
+    joints, _, _, _, forces, _, _ = model.outputs(state, u)
+    return _signed_tensions(np.array(joints), np.array(forces))
+
+
+def _signed_tensions(joints: np.ndarray, forces: np.ndarray) -> np.ndarray:
+    """Bond forces (3, n+1) along the element axes from the joints (3, n+2), as tensions."""
+    axes = np.diff(joints, axis=1)
+    axes /= np.linalg.norm(axes, axis=0)
+    return -np.sum(forces * axes, axis=0)
+
+
+def check_physical(model: CableModel, state: np.ndarray, u: np.ndarray) -> None:
+    """Raise :class:`EquilibriumError` unless an equilibrium is one a cable can hang in.
+
+    Every bond must pull (a chain of rods can also balance standing up in compression, a root
+    that Newton's method reaches from a poor guess), and a cable heavier than water with no upward
+    load (end force, payload, current all without an upward part) must hang with its free end below
+    the top.
+
+    Parameters
+    ----------
+    model : CableModel
+    state : array (state_size,)
+    u : array (15,)
+        The inputs the equilibrium holds under.
+    """
+    spec = model.spec
+    joints, _, _, _, forces, _, _ = model.outputs(state, u)
+    joints = np.array(joints)
+    tensions = _signed_tensions(joints, np.array(forces))
+    weight_in_air = spec.element.mass_per_length * spec.gravity * spec.cable_length
+    scale = max(float(np.abs(tensions).max()), weight_in_air)
+    pushing = np.flatnonzero(tensions < -COMPRESSION_TOLERANCE * scale)
+    remedy = (
+        "Give a guess state near the hanging shape (guess=..., e.g. the equilibrium of the same "
+        "scene in a weaker current) or reduce the current."
+    )
+    if pushing.size:
+        worst = pushing[np.argmin(tensions[pushing])]
+        raise EquilibriumError(
+            f"bond {worst} in compression ({tensions[worst]:.3g} N; {pushing.size} of "
+            f"{tensions.size} bonds push): the equilibrium is not physical. {remedy}"
+        )
+    hydro = spec.element.hydro
+    payload = spec.payload.mass - spec.water_density * spec.payload.volume
+    hangs = (
+        spec.element.submerged_weight_per_length > 0
+        and payload >= 0
+        and u[14] <= 0
+        and (hydro is None or hydro.current[2] <= 0)
+    )
+    if hangs and joints[2, 0] >= joints[2, -1]:
+        raise EquilibriumError(
+            f"the free end is {joints[2, 0] - joints[2, -1]:.3g} m above the top although the "
+            "cable is heavier than water and nothing lifts it: the equilibrium is not physical. "
+            f"{remedy}"
+        )
 
 
 def _newton_symbolic(model, state_of, u, rotational_index, unknowns, start):
