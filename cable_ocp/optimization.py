@@ -125,8 +125,13 @@ class OcpResult:
             path = folder / "result.npz"
             with np.load(path) as data:
                 parameters = np.asarray(data["parameters"], dtype=float)
-            path = folder / "trajectory.npz"
-            trajectory = Trajectory.load(folder / "trajectory") if path.exists() else None
+            path, trajectory = folder / "trajectory.npz", None
+            if path.exists():
+                try:
+                    trajectory = Trajectory.load(folder / "trajectory")
+                except json.JSONDecodeError:
+                    path = folder / "trajectory.json"
+                    raise
         except (OSError, ValueError, KeyError, TypeError, zipfile.BadZipFile, EOFError) as error:
             raise ValueError(
                 f"{path}: not a readable optimisation result ({type(error).__name__}: {error})"

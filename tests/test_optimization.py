@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+from dataclasses import replace
+
 import numpy as np
 import pytest
 
@@ -110,3 +112,85 @@ def test_hermite_basis_interpolates_its_nodes():
     assert np.allclose(b0 @ p, p[:10]) and np.allclose(b1 @ p, p[10:])
     start = control.basis(np.zeros(1))
     assert np.allclose(start[0] @ p, 0.0) and np.allclose(start[1] @ p, 0.0)
+
+
+# Output modes: small_tow over 20 s at h = 0.5 s, two Hermite intervals (a solve takes about 1 s).
+SHORT = {"numerics.duration": 20.0, "numerics.step": 0.5}
+TINY = IpoptSettings(intervals=2)
+# IPOPT's banner ("This program contains Ipopt") prints once per process at most, so the tests
+# look for the log's header line.
+BANNER = "This is Ipopt version"
+
+
+@pytest.fixture(scope="module")
+def short(small):
+    return small.updated(SHORT)
+
+
+def test_quiet_prints_nothing_at_all(short, capfd):
+    optimize(short, "ipopt", TINY, quiet=True)  # a first run may compile the model
+    capfd.readouterr()
+    result = optimize(short, "ipopt", TINY, quiet=True)
+    out, err = capfd.readouterr()
+    assert result.success, result.status
+    assert out == "" and err == ""
+
+
+def test_default_prints_one_line_per_iteration_and_no_ipopt_log(short, capfd):
+    result = optimize(short, "ipopt", TINY)
+    out, err = capfd.readouterr()
+    assert BANNER not in out + err and "EXIT:" not in out + err
+    lines = [line for line in err.splitlines() if line.startswith("ipopt iter")]
+    assert len(lines) == result.iterations + 1  # iteration 0 is the starting point
+    assert "Omega = " in lines[-1] and " m  violation = " in lines[-1]
+    omega = float(lines[-1].split("Omega = ")[1].split()[0])
+    assert omega == pytest.approx(result.omega_model, rel=1e-3)
+
+
+def test_verbose_prints_the_ipopt_log(short, capfd):
+    optimize(short, "ipopt", TINY, verbose=True)
+    out, err = capfd.readouterr()
+    assert BANNER in out and "EXIT:" in out
+    assert "ipopt iter" not in err
+
+
+def test_quiet_and_verbose_together_are_rejected(short):
+    for method in ("ipopt", "nelder-mead"):
+        with pytest.raises(ValueError, match="quiet.*verbose"):
+            optimize(short, method, quiet=True, verbose=True)
+
+
+def test_nelder_mead_quiet_prints_nothing(short, capfd):
+    optimize(short, "nelder-mead", NelderMeadSettings(max_evaluations=5), quiet=True)
+    out, err = capfd.readouterr()
+    assert out == "" and err == ""
+
+
+def test_failed_result_saves_nan_as_null_and_loads_back(short, tmp_path):
+    result = optimize(short, "ipopt", IpoptSettings(intervals=2, max_iter=2), quiet=True)
+    assert not result.success and result.trajectory is None
+    result = replace(result, omega=float("nan"), history=[1.0, float("nan")])
+    result.save(tmp_path / "r")
+    text = (tmp_path / "r" / "result.json").read_text()
+    assert "NaN" not in text and '"omega": null' in text
+    back = OcpResult.load(tmp_path / "r")
+    assert np.isnan(back.omega) and back.history[0] == 1.0 and np.isnan(back.history[1])
+    assert back.trajectory is None and back.status == result.status
+
+
+@pytest.mark.parametrize("name", ["result.json", "result.npz", "trajectory.npz", "trajectory.json"])
+def test_load_names_a_truncated_file(solved, tmp_path, name):
+    result, _ = solved
+    result.save(tmp_path / "r")
+    path = tmp_path / "r" / name
+    path.write_bytes(path.read_bytes()[: path.stat().st_size // 2])
+    with pytest.raises(ValueError, match=name.replace(".", r"\.")):
+        OcpResult.load(tmp_path / "r")
+
+
+def test_load_names_a_missing_file(solved, tmp_path):
+    result, _ = solved
+    result.save(tmp_path / "r")
+    (tmp_path / "r" / "result.npz").unlink()
+    with pytest.raises(ValueError, match=r"result\.npz"):
+        OcpResult.load(tmp_path / "r")

@@ -1,0 +1,148 @@
+"""Winch bounds hold everywhere in time, within BOUND_TOLERANCE; a broken bound or a failed
+verification is a failed result, never an exception or a success."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from cable_ocp import optimization
+from cable_ocp.bounds import (
+    BOUND_TOLERANCE,
+    LinearBounds,
+    bernstein_rows,
+    subintervals,
+    violation,
+)
+from cable_ocp.controls import HermiteIntervals, KnotSpline
+from cable_ocp.drive import Drive
+from cable_ocp.integrate import SimulationError
+from cable_ocp.nelder_mead import NelderMeadSettings
+from cable_ocp.ocp import IpoptSettings
+from cable_ocp.optimization import optimize
+from cable_ocp.scene import load_scene
+from cable_ocp.simulation import check_top_length
+
+# small_tow over 20 s at h = 0.5 s (locked: Omega = 0.23 m); an IPOPT solve takes 1-3 s.
+SHORT = {"numerics.duration": 20.0, "numerics.step": 0.5}
+FINE = np.linspace(0.0, 20.0, 200_001)  # 0.1 ms apart
+
+
+@pytest.fixture(scope="module")
+def short(models_dir):
+    return load_scene(models_dir / "small_tow.toml").updated(SHORT)
+
+
+def test_bernstein_constraints_bound_the_control_everywhere():
+    """Random controls: the constraint rows bound angle, rate and acceleration on a fine grid."""
+    rng = np.random.default_rng(5)
+    t = np.linspace(0.0, 40.0, 400_001)
+    grid = np.arange(81) * 0.5
+    for control in (HermiteIntervals(40.0, 8), KnotSpline(40.0, 4)):
+        p = rng.normal(size=control.size)
+        for derivative in range(3):
+            rows = bernstein_rows(control, *subintervals(control, grid), derivative) @ p
+            values = control.basis(t)[derivative] @ p
+            assert rows.min() <= values.min() + 1e-12 and values.max() <= rows.max() + 1e-12
+            # ... and tightly: conservative by far less than the range on 0.5 s sub-intervals.
+            assert rows.max() - values.max() < 0.01 * np.ptp(values)
+
+
+def test_a_dip_between_samples_is_caught(short):
+    """A Hermite profile within the bound at every 0.5 s sample but 3e-4 rad above it between."""
+    scene = short.updated({"winch.angle_max": 0.5168})
+    control = HermiteIntervals(20.0, 2)
+    p = np.array([0.49, 0.0, 0.05, 0.0])
+    grid = np.arange(41) * 0.5
+    phi = control.angle_function(p)
+    assert phi(grid)[0].max() <= 0.5168  # the samples keep the bound ...
+    assert phi(FINE)[0].max() > 0.5168 + 2e-4  # ... the profile does not
+    reason = violation(scene, control, p)
+    assert reason is not None and "winch angle" in reason and "winch.angle_min/max" in reason
+    assert LinearBounds.build(scene, control, grid).excess(p) > 2e-4
+
+
+def test_top_length_check_accepts_the_tolerance(short):
+    """simulate's length check: r_D * BOUND_TOLERANCE outside passes, ten times that raises."""
+    times = np.array([0.0, 1.0])
+    radius = short.winch.drum_radius
+    edge = (short.winch.top_length_max - short.segment_length / 2) / radius  # 35 rad
+
+    def drive(angle):
+        return Drive.from_scene(short, lambda t: (np.full(t.shape, angle), 0 * t, 0 * t))
+
+    check_top_length(short, drive(edge + 0.5 * BOUND_TOLERANCE), times)
+    with pytest.raises(ValueError, match="top_length_max.*tolerance"):
+        check_top_length(short, drive(edge + 10 * BOUND_TOLERANCE), times)
+
+
+@pytest.fixture(scope="module")
+def on_the_bound(short):
+    """IPOPT on a scene whose angle bound (0.5 rad) is too tight for the winch it wants (~1 rad)."""
+    scene = short.updated({"winch.angle_max": 0.5, "winch.rate_max": 0.05})
+    settings = IpoptSettings(intervals=4)
+    return scene, settings, optimize(scene, "ipopt", settings, quiet=True)
+
+
+def test_ipopt_on_the_angle_bound_returns_a_result_within_tolerance(on_the_bound):
+    """Measured: phi reaches 0.5 - 4.9e-7 rad (the half-tolerance margin); Omega = 0.077 m."""
+    scene, settings, result = on_the_bound
+    assert result.success, result.status
+    control = HermiteIntervals(20.0, settings.intervals)
+    phi, rate, _ = control.angle_function(result.parameters)(FINE)
+    assert phi.max() > 0.5 - 1e-4  # the bound is active
+    assert phi.max() <= 0.5 + BOUND_TOLERANCE
+    assert np.abs(rate).max() <= 0.05 + BOUND_TOLERANCE
+    assert result.trajectory.top_length.max() <= scene.winch.top_length_max
+    assert violation(scene, control, result.parameters) is None
+
+
+def test_nelder_mead_respects_the_rate_bound(models_dir):
+    """small_tow with rate_max = 0.05 rad/s: |phi'| on a fine grid stays within it.
+
+    Measured: 421 evaluations, success, max |phi'| = 0.049999 rad/s, Omega = 0.186 m (locked 0.58).
+    """
+    scene = load_scene(models_dir / "small_tow.toml").updated({"winch.rate_max": 0.05})
+    result = optimize(
+        scene, "nelder-mead", NelderMeadSettings(step=0.5, max_evaluations=600), quiet=True
+    )
+    rate = KnotSpline(40.0, scene.winch.knots).angle_function(result.parameters)(
+        np.linspace(0.0, 40.0, 400_001)
+    )[1]
+    assert np.abs(rate).max() <= 0.05 + BOUND_TOLERANCE
+    assert result.success, result.status
+    assert result.omega < 0.5 * 0.58
+
+
+def test_nelder_mead_starts_within_a_tight_rate_bound(short):
+    """The first guess is scaled into the bounds: even 20 evaluations return a feasible profile."""
+    scene = short.updated({"winch.rate_max": 0.001})
+    result = optimize(scene, "nelder-mead", NelderMeadSettings(max_evaluations=20), quiet=True)
+    rate = KnotSpline(20.0, scene.winch.knots).angle_function(result.parameters)(FINE)[1]
+    assert np.abs(rate).max() <= 0.001 + BOUND_TOLERANCE
+    assert not result.success and "evaluations" in result.status
+
+
+def test_verification_failure_is_a_failed_result(short, monkeypatch):
+    def broken(*args, **kwargs):
+        raise SimulationError("the bonds tore at t = 3 s")
+
+    monkeypatch.setattr(optimization, "simulate", broken)
+    result = optimize(short, "ipopt", IpoptSettings(intervals=2), quiet=True)
+    assert not result.success
+    assert result.status.startswith("verification failed:")
+    assert "SimulationError" in result.status and "bonds tore" in result.status
+    assert result.trajectory is None and np.isnan(result.omega)
+    assert result.parameters.size == 4
+
+
+def test_nelder_mead_verification_failure_is_a_failed_result(short, monkeypatch):
+    def broken(*args, **kwargs):
+        raise ValueError("top element too long")
+
+    monkeypatch.setattr(optimization, "simulate", broken)
+    result = optimize(short, "nelder-mead", NelderMeadSettings(max_evaluations=400), quiet=True)
+    assert not result.success
+    assert result.status == (
+        "verification failed: the full-model simulation raised ValueError: top element too long"
+    )
