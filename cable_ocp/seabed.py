@@ -2,6 +2,12 @@
 
 The height is measured from the flat seabed (m, up). The same function serves numpy arrays and
 CasADi expressions, so the optimiser differentiates the very formula the simulation reports.
+
+The clearance ``delta`` (``seabed.clearance``) is the paper's: the flat seabed lies ``delta`` below
+the end's starting position, ``z_sb = -(z_E(0) - delta)`` (eq. 39), so ``delta`` is the end's
+starting clearance and the clearance the objective asks it to keep over the seabed. In eq. 39,
+``z_E + z_sb - z(x, y) - delta = z_E(t) - z_E(0) - z(x_E, y_E)``: ``delta`` cancels, so it places
+the seabed (in plots) but does not change ``e(t)``, Omega or the optimal winch.
 """
 
 from __future__ import annotations
@@ -36,10 +42,12 @@ def seabed_height(hills, x, y):
 
 
 def clearance_error(hills, end_positions: np.ndarray) -> np.ndarray:
-    """Deviation of the end from its initial clearance over the seabed, ``e(t)`` (eq. 39), m.
+    """Deviation of the end from the clearance ``delta`` over the seabed, ``e(t)`` (eq. 39), m.
 
-    ``e = z_E(t) - z_E(0) - z_sb(x_E(t), y_E(t))``: the end keeps its initial height above the flat
-    seabed level plus whatever the seabed rises under it.
+    ``e = z_E + z_sb - z(x_E, y_E) - delta = z_E(t) - z_E(0) - z(x_E(t), y_E(t))`` with the seabed
+    depth ``z_sb = -(z_E(0) - delta)`` of eq. 39: the end starts ``delta`` above the flat seabed and
+    should stay ``delta`` above the seabed, which may rise under it. ``delta`` cancels, so it is not
+    an argument.
 
     Parameters
     ----------
