@@ -1,5 +1,6 @@
-"""Execute the notebooks: a broken example fails the suite."""
+"""Execute the notebooks: a broken example fails the suite, so does one that shows no figure."""
 
+import re
 from pathlib import Path
 
 import nbformat
@@ -7,10 +8,41 @@ import pytest
 from nbclient import NotebookClient
 
 NOTEBOOKS = sorted((Path(__file__).resolve().parent.parent / "notebooks").glob("*.ipynb"))
+# Code that draws or displays a figure: pyplot, cable_ocp.plots, an image file shown by IPython.
+PLOTTING = re.compile(r"\bplt\.\w+\(|\bplots\.\w+\(|\bImage\(")
+
+
+def images(cell) -> int:
+    return sum("image/png" in out.get("data", {}) for out in cell.get("outputs", []))
 
 
 @pytest.mark.parametrize("path", NOTEBOOKS, ids=lambda p: p.name)
-def test_notebook_runs(path, monkeypatch):
+def test_notebook_runs_and_shows_its_figures(path, monkeypatch):
     monkeypatch.setenv("CABLE_OCP_QUICK", "1")
+    # As in a user's Jupyter: the kernel picks the inline backend only if no backend is forced.
+    monkeypatch.delenv("MPLBACKEND", raising=False)
     notebook = nbformat.read(path, as_version=4)
     NotebookClient(notebook, timeout=600, kernel_name="python3").execute(cwd=str(path.parent))
+
+    code = [(i, cell) for i, cell in enumerate(notebook.cells) if cell.cell_type == "code"]
+    if any(PLOTTING.search(cell.source) for _, cell in code):
+        assert sum(images(cell) for _, cell in code) > 0, f"{path.name} plots but shows no image"
+    blank = [i for i, cell in code if "plt.show()" in cell.source and images(cell) == 0]
+    assert not blank, f"{path.name}: cells {blank} call plt.show() but show no image"
+
+
+def test_the_image_check_catches_a_notebook_that_shows_nothing(tmp_path, monkeypatch):
+    """A notebook that plots under a forced non-interactive backend has no image outputs."""
+    monkeypatch.setenv("MPLBACKEND", "Agg")
+    notebook = nbformat.v4.new_notebook(
+        cells=[
+            nbformat.v4.new_code_cell(
+                "import matplotlib.pyplot as plt\nplt.plot([0, 1], [1, 0])\nplt.show()"
+            )
+        ]
+    )
+    NotebookClient(notebook, timeout=120, kernel_name="python3").execute(cwd=str(tmp_path))
+    assert images(notebook.cells[0]) == 0
+    monkeypatch.delenv("MPLBACKEND")
+    NotebookClient(notebook, timeout=120, kernel_name="python3").execute(cwd=str(tmp_path))
+    assert images(notebook.cells[0]) == 1
