@@ -1,20 +1,27 @@
-"""The command line: ``cable-ocp simulate|optimize|compare|validate|study|bench``."""
+"""The command line: ``cable-ocp simulate|optimize|compare|validate|study|bench``.
+
+Every expected failure is one line ``cable-ocp COMMAND: error: ...`` on stderr and a non-zero exit
+code: 2 for bad input (arguments, scene files, a results folder that must not be replaced), 1 for
+a failing file system, 3 when the optimiser fails, 130 when interrupted. Bad input is refused
+before any simulation.
+"""
 
 from __future__ import annotations
 
 import argparse
-import json
+import math
 import sys
+from collections.abc import Callable
 from pathlib import Path
 
+from cable_ocp.bundled import models_dir
+from cable_ocp.output import atomic_directory, check_target, json_text
 from cable_ocp.scene import load_scene
 
 try:
     import tomllib
 except ModuleNotFoundError:  # Python 3.10
     import tomli as tomllib
-
-MODELS_DIR = Path(__file__).resolve().parent.parent / "models"
 
 
 def parse_overrides(pairs: list[str]) -> dict:
@@ -30,7 +37,7 @@ def parse_overrides(pairs: list[str]) -> dict:
             raise ValueError(f"--set {pair!r}: expected KEY=VALUE, e.g. model.elements=30")
         try:
             value = tomllib.loads(f"v = {text}")["v"]
-        except tomllib.TOMLDecodeError:
+        except (ValueError, RecursionError):  # not TOML: taken as a string
             value = text
         overrides[key.strip()] = value
     return overrides
@@ -38,11 +45,15 @@ def parse_overrides(pairs: list[str]) -> dict:
 
 def _simulate(args) -> int:
     from cable_ocp import plots
-    from cable_ocp.output import atomic_directory
     from cable_ocp.simulation import simulate
 
     scene = load_scene(args.scene, parse_overrides(args.set))
-    knots = [float(v) for v in args.knots.split(",")] if args.knots else None
+    knots = args.knots
+    if knots is not None and len(knots) != scene.winch.knots:
+        raise ValueError(
+            f"--knots: {len(knots)} angles given; the scene has winch.knots = "
+            f"{scene.winch.knots} (one angle phi_1..phi_p per knot, rad)"
+        )
     trajectory = simulate(scene, winch=knots, quiet=args.quiet)
     hills = scene.seabed.hills
     with atomic_directory(args.out) as folder:
@@ -60,15 +71,23 @@ def _simulate(args) -> int:
             "final_end_position_m": trajectory.end[-1].tolist(),
             "max_top_tension_N": float(trajectory.top_tension.max()),
         }
-        (folder / "summary.json").write_text(json.dumps(summary, indent=1))
-    print(json.dumps(summary, indent=1))
+        (folder / "summary.json").write_text(json_text(summary))
+    print(json_text(summary))
     print(f"results and figures written to {Path(args.out).resolve()}")
     return 0
 
 
 def _ipopt_settings(args):
+    """IPOPT settings from the options; ``--hessian exact`` needs the interpreted model."""
     from cable_ocp.ocp import IpoptSettings
 
+    exact = args.hessian == "exact"
+    if exact and not args.quiet:
+        print(
+            f"cable-ocp {args.command}: note: --hessian exact runs the interpreted model "
+            "(compiled = False): the compiled step carries no second derivatives",
+            file=sys.stderr,
+        )
     return IpoptSettings(
         elements=args.elements,
         step=args.step,
@@ -76,6 +95,7 @@ def _ipopt_settings(args):
         control=args.control,
         hessian=args.hessian,
         max_iter=args.max_iter,
+        compiled=not exact,
     )
 
 
@@ -90,15 +110,15 @@ def _nelder_mead_settings(args):
 def _optimize(args) -> int:
     from cable_ocp import plots
     from cable_ocp.optimization import optimize
-    from cable_ocp.output import atomic_directory
     from cable_ocp.simulation import simulate
 
     scene = load_scene(args.scene, parse_overrides(args.set))
+    output = {"quiet": args.quiet, "verbose": args.verbose}
     if args.method == "ipopt":
-        result = optimize(scene, "ipopt", _ipopt_settings(args), quiet=args.quiet,
-                          refinements=args.refinements)  # fmt: skip
+        settings = _ipopt_settings(args)
+        result = optimize(scene, "ipopt", settings, refinements=args.refinements, **output)
     else:
-        result = optimize(scene, "nelder-mead", _nelder_mead_settings(args), quiet=args.quiet)
+        result = optimize(scene, "nelder-mead", _nelder_mead_settings(args), **output)
     locked = simulate(scene, quiet=True)
     hills, bounds = scene.seabed.hills, (scene.winch.angle_min, scene.winch.angle_max)
     labels = ["locked winch", f"optimised ({result.method})"]
@@ -129,19 +149,18 @@ def _compare(args) -> int:
     from dataclasses import replace
 
     from cable_ocp.optimization import optimize
-    from cable_ocp.output import atomic_directory
 
+    overrides = parse_overrides(args.set)
+    scenes = [load_scene(path, overrides) for path in args.scenes]  # all checked before solving
+    base, simplex = _ipopt_settings(args), _nelder_mead_settings(args)
+    output = {"quiet": args.quiet, "verbose": args.verbose}
     rows = []
-    for path in args.scenes:
-        scene = load_scene(path, parse_overrides(args.set))
-        base = _ipopt_settings(args)
+    for scene in scenes:
         runs = [
-            ("ipopt, hermite", optimize(scene, "ipopt", base, quiet=True)),
-            ("ipopt, spline",
-             optimize(scene, "ipopt", replace(base, control="spline"), quiet=True)),
-            ("nelder-mead, spline",
-             optimize(scene, "nelder-mead", _nelder_mead_settings(args), quiet=args.quiet)),
-        ]  # fmt: skip
+            ("ipopt, hermite", optimize(scene, "ipopt", base, **output)),
+            ("ipopt, spline", optimize(scene, "ipopt", replace(base, control="spline"), **output)),
+            ("nelder-mead, spline", optimize(scene, "nelder-mead", simplex, **output)),
+        ]
         rows += [(scene.name, label, r) for label, r in runs]
     lines = [
         "| scene | method | control | Omega verified [m] | success | iterations | evaluations "
@@ -160,21 +179,81 @@ def _compare(args) -> int:
     return 0
 
 
+def _integer(low: int, high: int) -> Callable[[str], int]:
+    """An argparse type: an integer from ``low`` to ``high``."""
+
+    def convert(text: str) -> int:
+        try:
+            value = int(text)
+        except ValueError:
+            raise argparse.ArgumentTypeError(f"expected an integer, got {text!r:.40}") from None
+        if not low <= value <= high:
+            raise argparse.ArgumentTypeError(f"{text:.40} is out of range: must be {low} to {high}")
+        return value
+
+    return convert
+
+
+def _positive(text: str) -> float:
+    """An argparse type: a finite number > 0."""
+    try:
+        value = float(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected a number, got {text!r:.40}") from None
+    if not (math.isfinite(value) and value > 0):
+        raise argparse.ArgumentTypeError(f"{text!r:.40} is out of range: must be finite and > 0")
+    return value
+
+
+def _knots(text: str) -> list[float]:
+    """An argparse type: comma-separated finite knot angles, rad."""
+    if not text.strip():
+        raise argparse.ArgumentTypeError(
+            "empty: give the angles phi_1..phi_p in rad, comma-separated, or leave --knots out "
+            "for a locked winch"
+        )
+    values = []
+    for k, item in enumerate(text.split(","), start=1):
+        try:
+            value = float(item)
+        except ValueError:
+            raise argparse.ArgumentTypeError(
+                f"knot {k} = {item.strip()!r:.40} is not a number; give the angles phi_1..phi_p "
+                "in rad, comma-separated, e.g. 0,0.5,1"
+            ) from None
+        if not math.isfinite(value):
+            raise argparse.ArgumentTypeError(f"knot {k} = {item.strip()!r}: must be finite")
+        values.append(value)
+    return values
+
+
 def _add_optimiser_options(parser) -> None:
     parser.add_argument(
         "--elements",
-        type=int,
+        type=_integer(1, 1000),
         default=3,
         help="elements of the optimisation model (verification uses the scene's)",
     )
-    parser.add_argument("--step", type=float, default=0.5, help="RK4 step of the optimisation [s]")
-    parser.add_argument("--intervals", type=int, default=42, help="shooting intervals (IPOPT)")
+    parser.add_argument(
+        "--step", type=_positive, default=0.5, help="RK4 step of the optimisation [s]"
+    )
+    parser.add_argument("--intervals", type=_integer(1, 100_000), default=42,
+                        help="shooting intervals (IPOPT)")  # fmt: skip
     parser.add_argument("--control", choices=["hermite", "spline"], default="hermite")
-    parser.add_argument("--hessian", choices=["limited-memory", "exact"], default="limited-memory")
-    parser.add_argument("--max-iter", type=int, default=300, help="IPOPT iterations")
-    parser.add_argument("--max-evaluations", type=int, default=3000, help="Nelder-Mead runs")
+    parser.add_argument(
+        "--hessian",
+        choices=["limited-memory", "exact"],
+        default="limited-memory",
+        help="exact: second derivatives, on the interpreted (not compiled) model",
+    )
+    parser.add_argument("--max-iter", type=_integer(1, 10**6), default=300, help="IPOPT iterations")
+    parser.add_argument("--max-evaluations", type=_integer(1, 10**8), default=3000,
+                        help="Nelder-Mead runs")  # fmt: skip
     parser.add_argument("--set", action="append", default=[], metavar="KEY=VALUE")
-    parser.add_argument("--quiet", action="store_true")  # fmt: skip
+    talk = parser.add_mutually_exclusive_group()
+    talk.add_argument("--quiet", action="store_true", help="print nothing while solving")
+    talk.add_argument("--verbose", action="store_true",
+                      help="IPOPT's full log instead of one line per iteration")  # fmt: skip
 
 
 def _validate(args) -> int:
@@ -184,7 +263,7 @@ def _validate(args) -> int:
     from cable_ocp.catenary import catenary_shape
     from cable_ocp.validation import catenary_check
 
-    scene = load_scene(args.scene)
+    scene = load_scene(args.scene or models_dir() / "catenary.toml")
     print("catenary (paper 4.1): max relative errors eq. 35-36, in %")
     print(f"{'n':>5}{'eps_x':>10}{'eps_z':>10}{'inextensible':>14}{'top tension':>13}")
     checks = [catenary_check(scene, n) for n in args.elements]
@@ -194,8 +273,6 @@ def _validate(args) -> int:
             f"{100 * c.max_error_inextensible:>14.5f}{100 * c.top_tension_error:>13.2e}"
         )
     if args.out:
-        from cable_ocp.output import atomic_directory
-
         check = checks[0]
         s = np.linspace(0, scene.cable.length, 300)
         c, e = scene.cable, scene.end
@@ -213,7 +290,7 @@ def _bench(args) -> int:
     from cable_ocp.moordyn_compare import moordyn_report
 
     if args.hessian:
-        bench.hessian_report(MODELS_DIR)
+        bench.hessian_report(models_dir())
         return 0
     parts = {
         "rk4": bench.rk4_report,
@@ -221,14 +298,13 @@ def _bench(args) -> int:
         "ocp": bench.ocp_report,
     }
     for name in args.only or list(parts):
-        parts[name](MODELS_DIR, quick=args.quick)
+        parts[name](models_dir(), quick=args.quick)
         print()
     return 0
 
 
 def _study(args) -> int:
     from cable_ocp import studies
-    from cable_ocp.output import atomic_directory
 
     if args.name in ("speed-accuracy", "stability"):
         if args.scene is not None:
@@ -237,7 +313,7 @@ def _study(args) -> int:
             from cable_ocp.speed_accuracy import run_speed_accuracy as run
         else:
             from cable_ocp.stability import run_stability as run
-        run(args.out, MODELS_DIR, quick=args.quick, quiet=args.quiet)
+        run(args.out, models_dir(), quick=args.quick, quiet=args.quiet)
         print(f"written to {Path(args.out).resolve()}")
         return 0
     if args.scene is None:
@@ -260,6 +336,12 @@ def _study(args) -> int:
     return 0
 
 
+OUT_HELP = (
+    "results folder, written atomically: a new or empty folder, or a previous results folder "
+    "(marked by .cable_ocp-results), which is replaced"
+)
+
+
 def build_parser() -> argparse.ArgumentParser:
     """The argument parser of ``cable-ocp``."""
     parser = argparse.ArgumentParser(prog="cable-ocp", description=__doc__)
@@ -267,30 +349,33 @@ def build_parser() -> argparse.ArgumentParser:
 
     sim = commands.add_parser("simulate", help="simulate a scene and write results and figures")
     sim.add_argument("scene", type=Path)
-    sim.add_argument("--out", type=Path, required=True, help="results folder (written atomically)")
-    sim.add_argument("--knots", help="winch knot angles phi_1..phi_p in rad, comma-separated")
+    sim.add_argument("--out", type=Path, required=True, help=OUT_HELP)
+    sim.add_argument("--knots", type=_knots,
+                     help="winch knot angles phi_1..phi_p in rad, comma-separated (write "
+                     "--knots=-1,0.5 when the first is negative)")  # fmt: skip
     sim.add_argument("--set", action="append", default=[], metavar="KEY=VALUE",
                      help="override a scene field, e.g. --set model.elements=30")  # fmt: skip
     sim.add_argument("--quiet", action="store_true", help="no progress bar")
     sim.set_defaults(run=_simulate)
 
     val = commands.add_parser("validate", help="statics check against the analytic catenary")
-    val.add_argument("scene", type=Path, nargs="?", default=MODELS_DIR / "catenary.toml")
-    val.add_argument("--elements", type=int, nargs="+", default=[15, 5, 30, 60])
-    val.add_argument("--out", type=Path, help="folder for the comparison figure")
+    val.add_argument("scene", type=Path, nargs="?", help="default: the bundled catenary.toml")
+    val.add_argument("--elements", type=_integer(1, 1000), nargs="+", default=[15, 5, 30, 60])
+    val.add_argument("--out", type=Path, help="folder for the comparison figure; " + OUT_HELP)
     val.set_defaults(run=_validate)
 
     opt = commands.add_parser("optimize", help="optimise the winch angle of a scene")
     opt.add_argument("scene", type=Path)
     opt.add_argument("--method", choices=["ipopt", "nelder-mead"], default="ipopt")
-    opt.add_argument("--out", type=Path, required=True)
-    opt.add_argument("--refinements", type=int, default=3, help="model-correction solves")
+    opt.add_argument("--out", type=Path, required=True, help=OUT_HELP)
+    opt.add_argument("--refinements", type=_integer(0, 100), default=3,
+                     help="model-correction solves")  # fmt: skip
     _add_optimiser_options(opt)
     opt.set_defaults(run=_optimize)
 
     cmp = commands.add_parser("compare", help="IPOPT against Nelder-Mead in one table")
     cmp.add_argument("scenes", type=Path, nargs="+")
-    cmp.add_argument("--out", type=Path, required=True)
+    cmp.add_argument("--out", type=Path, required=True, help=OUT_HELP)
     _add_optimiser_options(cmp)
     cmp.set_defaults(run=_compare)
 
@@ -305,7 +390,7 @@ def build_parser() -> argparse.ArgumentParser:
         "name", choices=["step", "elements", "end-force", "speed-accuracy", "stability"]
     )
     study.add_argument("scene", type=Path, nargs="?")
-    study.add_argument("--out", type=Path, required=True)
+    study.add_argument("--out", type=Path, required=True, help=OUT_HELP)
     study.add_argument("--set", action="append", default=[], metavar="KEY=VALUE")
     study.add_argument("--quiet", action="store_true")
     study.add_argument("--compiled", action="store_true", help="end-force: model compiled to C")
@@ -329,13 +414,29 @@ def build_parser() -> argparse.ArgumentParser:
 
 
 def main(argv: list[str] | None = None) -> int:
-    """Entry point of ``cable-ocp``; returns the exit code."""
-    args = build_parser().parse_args(argv)
+    """Entry point of ``cable-ocp``; returns the exit code (see the module docstring)."""
     try:
+        args = build_parser().parse_args(argv)
+    except SystemExit as exit_:  # argparse: --help (0) or a usage error (2), already printed
+        return exit_.code if isinstance(exit_.code, int) else 0
+    prefix = f"cable-ocp {args.command}"
+    try:
+        if getattr(args, "out", None) is not None:
+            check_target(args.out)  # before any work, so a bad --out costs nothing
         return args.run(args)
-    except (ValueError, RuntimeError) as error:
-        print(f"cable-ocp {args.command}: error: {error}", file=sys.stderr)
+    except KeyboardInterrupt:
+        print(f"{prefix}: interrupted", file=sys.stderr)
+        return 130
+    except (ValueError, OverflowError, RuntimeError) as error:  # SceneError, UnicodeDecodeError
+        print(f"{prefix}: error: {_one_line(error)}", file=sys.stderr)
         return 2
+    except OSError as error:
+        print(f"{prefix}: error: {_one_line(error)}", file=sys.stderr)
+        return 1
+
+
+def _one_line(error: BaseException) -> str:
+    return " ".join(str(error).split()) or type(error).__name__
 
 
 if __name__ == "__main__":

@@ -43,6 +43,9 @@ __all__ = [
 
 Vector3 = tuple[float, float, float]
 
+MAX_STEPS = 10**8  # RK4 steps of a simulation: numerics.duration / numerics.step
+REQUIRED_TABLES = ("model", "top", "numerics")  # tables every scene file must have
+
 
 class SceneError(ValueError):
     """Invalid scene data; ``path`` is the dotted field path the message starts with."""
@@ -93,8 +96,14 @@ def _param(default: Any = MISSING, kind: str = "float", doc: str = "", **spec: A
     return field(default=default, metadata=meta)
 
 
+def _short(value: Any) -> str:
+    """``repr(value)``, shortened in the middle if long (a 400-digit integer, a long string)."""
+    text = repr(value)
+    return text if len(text) <= 40 else f"{text[:20]}...{text[-8:]} ({len(text)} characters)"
+
+
 def _describe(value: Any) -> str:
-    return f"{type(value).__name__} {value!r}"
+    return f"{type(value).__name__} {_short(value)}"
 
 
 def _number(value: Any, path: str, spec: _Spec, integer: bool = False) -> float | int:
@@ -103,11 +112,14 @@ def _number(value: Any, path: str, spec: _Spec, integer: bool = False) -> float 
     if isinstance(value, bool) or not isinstance(value, want):
         expected = "an integer" if integer else "a number"
         raise SceneError(path, f": expected {expected}, got {_describe(value)}")
-    value = int(value) if integer else float(value)
-    if not math.isfinite(value):
+    try:
+        value = int(value) if integer else float(value)
+    except OverflowError:  # an integer too large for a float
+        raise SceneError(path, f" = {_short(value)} is out of range: must be finite") from None
+    if not integer and not math.isfinite(value):
         raise SceneError(path, f" = {value!r} is out of range: must be finite")
     if not spec.accepts(value):
-        raise SceneError(path, f" = {value!r} is out of range: must be {spec.rule()}")
+        raise SceneError(path, f" = {_short(value)} is out of range: must be {spec.rule()}")
     return value
 
 
@@ -124,13 +136,13 @@ def _check(spec: _Spec, value: Any, path: str) -> Any:
         raise SceneError(path, f": expected a string, got {_describe(value)}")
     if kind == "choice" and value not in spec.choices:
         allowed = ", ".join(repr(c) for c in spec.choices)
-        raise SceneError(path, f" = {value!r} is not allowed: must be one of {allowed}")
+        raise SceneError(path, f" = {_short(value)} is not allowed: must be one of {allowed}")
     if kind == "path":
-        if not isinstance(value, str | os.PathLike):
+        if not isinstance(value, str | os.PathLike) or "\0" in str(value):
             raise SceneError(path, f": expected a file path string, got {_describe(value)}")
         value = str(Path(value).resolve())
         if not Path(value).is_file():
-            raise SceneError(path, f" = {value!r}: file not found")
+            raise SceneError(path, f" = {_short(value)}: file not found")
     if kind in ("vec3", "tuple"):
         if isinstance(value, str | bytes | Mapping | Set) or not isinstance(value, Collection):
             expected = "3 numbers" if kind == "vec3" else "a list"
@@ -228,6 +240,21 @@ class Cable(_Validated):
         0.0, doc="Rayleigh time constant: damping = bending_damping x stiffness.", ge=0, unit="s"
     )
     torsion_damping: float = _param(0.0, doc="Rayleigh time constant for torsion.", ge=0, unit="s")
+
+    def _check_relations(self) -> None:
+        derived = ("cross_section_area", "mass_per_length", "bending_stiffness")
+        for name in (*derived, "torsional_stiffness"):
+            try:
+                finite = math.isfinite(getattr(self, name))
+            except OverflowError:
+                finite = False
+            if not finite:
+                raise SceneError(
+                    "cable",
+                    f": {name} overflows (diameter = {self.diameter!r} m, density = "
+                    f"{self.density!r} kg/m^3, youngs_modulus = {self.youngs_modulus!r} Pa, "
+                    f"shear_modulus = {self.shear_modulus!r} Pa): use physical values",
+                )
 
     @property
     def cross_section_area(self) -> float:
@@ -400,6 +427,12 @@ class Numerics(_Validated):
     def _check_relations(self) -> None:
         if self.step > self.duration:
             raise self._fail("step", f"<= numerics.duration = {self.duration!r}")
+        if self.duration / self.step > MAX_STEPS:
+            raise SceneError(
+                "numerics.step",
+                f" = {self.step!r} is out of range: must be >= numerics.duration / {MAX_STEPS:.0e}"
+                f" = {self.duration / MAX_STEPS!r} s (at most {MAX_STEPS:.0e} RK4 steps)",
+            )
 
 
 @_section("")
@@ -430,6 +463,14 @@ class Scene(_Validated):
         return self.cable.length / self.model.elements
 
     def _check_relations(self) -> None:
+        water = self.environment.water_density
+        if self.environment.submerged and self.cable.density <= water:
+            raise SceneError(
+                "cable.density",
+                f" = {self.cable.density!r} is out of range: must be > environment.water_density "
+                f"= {water!r} kg/m^3 when environment.submerged is true (a cable lighter than "
+                "water floats)",
+            )
         half = self.segment_length / 2
         rule = f"Delta/2 = cable.length / model.elements / 2 = {half!r}"
         if self.winch.top_length_min > half:
@@ -536,13 +577,41 @@ def load_scene(path: str | os.PathLike, overrides: Mapping[str, Any] | None = No
     Raises
     ------
     SceneError
-        A ``ValueError`` naming the offending field path (also for invalid TOML, naming the file).
+        A ``ValueError`` naming the offending field path, or the file if it cannot be read (not
+        found, a folder, not UTF-8), is not valid TOML, is empty or lacks one of the tables every
+        scene file needs (:data:`REQUIRED_TABLES`: ``[model]``, ``[top]``, ``[numerics]``).
     """
     path = Path(path)
-    with path.open("rb") as fh:
-        try:
-            data = tomllib.load(fh)
-        except tomllib.TOMLDecodeError as err:
-            raise SceneError(str(path), f": invalid TOML: {err}") from err
+    data = _read_toml(path)
+    if not data:
+        raise SceneError(str(path), f": empty scene file; {_NEEDS}")
+    for table in REQUIRED_TABLES:
+        if table not in data:
+            raise SceneError(table, f": missing table [{table}] in {path}; {_NEEDS}")
     data = {"name": path.stem, **_apply_overrides(data, overrides)}
     return _build(Scene, data, "", path.parent, source=str(path.resolve()))
+
+
+_NEEDS = "a scene file needs at least the tables " + ", ".join(f"[{t}]" for t in REQUIRED_TABLES)
+
+
+def _read_toml(path: Path) -> dict[str, Any]:
+    """Parse the TOML file ``path``; every failure is a SceneError naming the file."""
+    try:
+        text = path.read_bytes().decode("utf-8")
+    except FileNotFoundError:
+        raise SceneError(str(path), ": scene file not found") from None
+    except IsADirectoryError:
+        raise SceneError(str(path), ": is a folder, not a scene file") from None
+    except OSError as err:
+        raise SceneError(str(path), f": cannot read the scene file ({err.strerror})") from None
+    except UnicodeDecodeError as err:
+        raise SceneError(
+            str(path), f": not a UTF-8 text file (byte {err.start}); a scene file is TOML text"
+        ) from None
+    try:
+        return tomllib.loads(text)
+    except tomllib.TOMLDecodeError as err:
+        raise SceneError(str(path), f": invalid TOML: {err}") from err
+    except (ValueError, RecursionError) as err:  # a 5000-digit integer, arrays nested too deep
+        raise SceneError(str(path), f": invalid TOML: {str(err)[:80]}") from None

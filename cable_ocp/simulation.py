@@ -32,12 +32,18 @@ def winch_function(scene, winch: WinchSpec) -> winch_angles.WinchAngleFunction:
         return winch_angles.locked
     if callable(winch):
         return winch
-    values = np.asarray(winch, dtype=float).ravel()
+    try:
+        values = np.asarray(winch, dtype=float).ravel()
+    except (TypeError, ValueError):
+        raise ValueError(f"winch: expected {scene.winch.knots} knot angles in rad") from None
     if values.size != scene.winch.knots:
         raise ValueError(
             f"winch: {values.size} knot values given; the scene has winch.knots = "
             f"{scene.winch.knots}"
         )
+    if not np.isfinite(values).all():
+        k = int(np.argmin(np.isfinite(values)))
+        raise ValueError(f"winch: knot value {k + 1} is {values[k]}: must be finite (rad)")
     return winch_angles.spline_angle(scene.numerics.duration, values)
 
 
@@ -58,6 +64,24 @@ def check_top_length(scene, drive: Drive, times: np.ndarray) -> None:
             f"outside [winch.top_length_min, winch.top_length_max] = [{low}, {high}] m by more "
             f"than the tolerance {tolerance:.3g} m"
         )
+
+
+def checked_state(state, size: int) -> np.ndarray:
+    """``state`` as a float vector of ``size`` finite values, or ValueError naming what is wrong."""
+    try:
+        values = np.asarray(state, dtype=float)
+    except (TypeError, ValueError):
+        raise ValueError(
+            f"initial_state: expected {size} numbers, got {type(state).__name__}"
+        ) from None
+    if values.shape != (size,):
+        raise ValueError(
+            f"initial_state: expected shape ({size},) (the model's state_size), got {values.shape}"
+        )
+    if not np.isfinite(values).all():
+        k = int(np.argmin(np.isfinite(values)))
+        raise ValueError(f"initial_state[{k}] = {values[k]}: must be finite")
+    return values
 
 
 def joints_and_tensions(
@@ -95,8 +119,8 @@ def simulate(
     model : CableModel, optional
         A model built for the scene (built here if not given); it may have another number of
         elements than the scene.
-    initial_state : array, optional
-        Defaults to the static equilibrium under the inputs at t = 0.
+    initial_state : array (model.state_size,), optional
+        Defaults to the static equilibrium under the inputs at t = 0; must be finite.
     quiet : bool
         No progress bar when true.
     compiled : bool
@@ -105,14 +129,23 @@ def simulate(
     Returns
     -------
     Trajectory
+
+    Raises
+    ------
+    ValueError
+        Before integrating: a winch of the wrong length or not finite, a winch that takes the top
+        element out of its length range, an ``initial_state`` of the wrong shape or not finite.
     """
     numerics = scene.numerics
+    angle = winch_function(scene, winch)
     model = model or CableModel.from_scene(scene)
-    drive = Drive.from_scene(scene, winch_function(scene, winch), elements=model.spec.elements)
+    drive = Drive.from_scene(scene, angle, elements=model.spec.elements)
     sample_times = np.linspace(
         0.0, numerics.duration, 1 + int(round(numerics.duration / numerics.step))
     )
     check_top_length(scene, drive, sample_times)
+    if initial_state is not None:
+        initial_state = checked_state(initial_state, model.state_size)
     x0 = equilibrium(model, drive, compiled=compiled) if initial_state is None else initial_state
     run = integrate(
         model,

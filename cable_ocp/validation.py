@@ -2,14 +2,20 @@
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+import numbers
+from dataclasses import dataclass, fields
 
 import numpy as np
 
 from cable_ocp.catenary import catenary_shape, relative_errors
 from cable_ocp.drive import Drive
 from cable_ocp.model import CableModel
+from cable_ocp.scene import ModelOptions
 from cable_ocp.statics import equilibrium
+
+MAX_ELEMENTS = next(
+    f.metadata["spec"].le for f in fields(ModelOptions) if f.name == "elements"
+)  # the scene's bound on model.elements
 
 
 @dataclass(frozen=True)
@@ -45,7 +51,23 @@ def catenary_check(scene, elements: int | None = None) -> CatenaryCheck:
 
     The top is pinned at the origin and the end carries ``(H, 0, V)``; joints ``A_0 .. A_{n-1}``
     are compared (the paper's ``i = 1..n``, which leaves out the joint next to the pin).
+
+    Parameters
+    ----------
+    scene : Scene
+    elements : int, optional
+        Number of elements n, 1 to 1000 (None: the scene's ``model.elements``).
+
+    Raises
+    ------
+    ValueError
+        If ``elements`` is not an integer from 1 to 1000.
     """
+    if elements is not None and (
+        isinstance(elements, bool) or not isinstance(elements, numbers.Integral)
+        or not 1 <= elements <= MAX_ELEMENTS
+    ):  # fmt: skip
+        raise ValueError(f"elements = {elements!r}: must be an integer from 1 to {MAX_ELEMENTS}")
     model = CableModel.from_scene(scene, elements)
     drive = Drive.from_scene(scene, elements=model.spec.elements)
     state = equilibrium(model, drive)

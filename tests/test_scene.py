@@ -94,7 +94,9 @@ def test_table_motion(tmp_path, flat):
     scene = scene_from_dict(data, base_dir=tmp_path)
     assert scene.top.table == str((tmp_path / "vessel.csv").resolve())
     assert scene_from_dict(scene.to_dict()) == scene
-    (tmp_path / "s.toml").write_text('[top]\nmotion = "table"\ntable = "vessel.csv"\n')
+    (tmp_path / "s.toml").write_text(
+        '[model]\n[numerics]\n[top]\nmotion = "table"\ntable = "vessel.csv"\n'
+    )
     assert load_scene(tmp_path / "s.toml").top.table == scene.top.table
 
 
