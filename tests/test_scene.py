@@ -4,7 +4,13 @@ from pathlib import Path
 
 import pytest
 
+try:
+    import tomllib
+except ModuleNotFoundError:  # Python 3.10
+    import tomli as tomllib
+
 from cable_ocp.scene import (
+    REQUIRED_TABLES,
     Cable,
     Hill,
     Numerics,
@@ -144,6 +150,20 @@ BAD = [
     ({"seabed.hills": [{**HILL, "width_x": 0.0}]}, r"^seabed\.hills\[0\]\.width_x = 0\.0 .* > 0"),
     ({"hydrodynamics.quadrature_points": 0}, r"^hydrodynamics\.quadrature_points = 0 .* >= 1"),
     ({"hydrodynamics.quadrature_points": 9}, r"^hydrodynamics\.quadrature_points = 9 .* <= 8"),
+    # huge numbers, a light cable, too many steps, derived values that overflow
+    ({"model.elements": 10**400}, r"^model\.elements = 1000000000.*\(401 characters\) is out of"),
+    ({"cable.length": 10**400}, r"^cable\.length = 1000000000.* is out of range: must be finite"),
+    ({"cable.length": math.inf}, r"^cable\.length = inf is out of range: must be finite"),
+    ({"model.elements": math.inf}, r"^model\.elements: expected an integer, got float inf"),
+    (
+        {"cable.density": 500.0},
+        r"^cable\.density = 500\.0 is out of range: must be > "
+        r"environment\.water_density = 1025\.0 kg/m\^3 when environment\.submerged is true",
+    ),
+    ({"cable.density": 1025.0}, r"^cable\.density = 1025\.0 is out of range"),
+    ({"numerics.step": 1e-300}, r"^numerics\.step = 1e-300 .* >= numerics\.duration / 1e\+08"),
+    ({"cable.diameter": 1e200}, r"^cable: cross_section_area overflows \(diameter = 1e\+200 m"),
+    ({"cable.youngs_modulus": 1e308}, r"^cable: bending_stiffness overflows"),
     # top motion
     ({"top.motion": "towing"}, r"^top\.motion = 'towing' is not allowed: must be one of 'fixed'"),
     ({"top.motion": "table"}, r"^top\.table: required when top\.motion = 'table'"),
@@ -162,3 +182,53 @@ def test_rejected(flat, overrides, message):
 def test_air_needs_no_water_density(flat):
     scene = flat.updated({"environment.submerged": False, "environment.water_density": 0.0})
     assert scene.environment.water_density == 0.0
+
+
+def test_light_cable_is_fine_in_air(flat):
+    scene = flat.updated({"environment.submerged": False, "cable.density": 500.0})
+    assert scene.cable.density == 500.0
+
+
+def test_every_bundled_scene_file_has_the_required_tables():
+    for path in MODELS.glob("*.toml"):
+        data = tomllib.loads(path.read_text())
+        assert set(REQUIRED_TABLES) <= set(data), path.name
+
+
+def _write(path, content):
+    if isinstance(content, bytes):
+        path.write_bytes(content)
+    else:
+        path.write_text(content)
+    return path
+
+
+FILE_ERRORS = [
+    ("", r"s\.toml: empty scene file; a scene file needs at least the tables \[model\], \[top\]"),
+    ("# only a comment\n", r"s\.toml: empty scene file"),
+    ("[model]\n[top]\n", r"^numerics: missing table \[numerics\] in .*s\.toml; a scene file needs"),
+    ("[top]\n[numerics]\n", r"^model: missing table \[model\]"),
+    ("[model]\n[numerics]\n[cable]\nlength = 3", r"^top: missing table \[top\]"),
+    (b"[model]\n[top]\n[numerics]\nname = '\xff'\n", r"s\.toml: not a UTF-8 text file \(byte 33\)"),
+    ("[model]\nelements = 3\nelements = 4\n", r"s\.toml: invalid TOML: Cannot overwrite a value"),
+    ("[model]\nelements = " + "9" * 5000 + "\n", r"s\.toml: invalid TOML: Exceeds the limit"),
+    ("a = " + "[" * 5000 + "]" * 5000, r"s\.toml: invalid TOML"),
+]
+
+
+@pytest.mark.parametrize(("content", "message"), FILE_ERRORS)
+def test_unreadable_or_incomplete_files_are_scene_errors(tmp_path, content, message):
+    with pytest.raises(SceneError, match=message):
+        load_scene(_write(tmp_path / "s.toml", content))
+
+
+def test_missing_file_and_folder_are_scene_errors(tmp_path):
+    with pytest.raises(SceneError, match=r"nothing\.toml: scene file not found$"):
+        load_scene(tmp_path / "nothing.toml")
+    with pytest.raises(SceneError, match=r": is a folder, not a scene file$"):
+        load_scene(tmp_path)
+
+
+def test_the_three_required_tables_are_enough(tmp_path):
+    scene = load_scene(_write(tmp_path / "s.toml", "[model]\n[top]\n[numerics]\n"))
+    assert scene == Scene(name="s", source=str(tmp_path / "s.toml"))

@@ -318,7 +318,8 @@ def test_cli_simulate_writes_results(tmp_path, capsys):
             "--set", "numerics.duration=10.0", "--quiet"]  # fmt: skip
     assert cli.main(args) == 0
     names = {p.name for p in out.iterdir()}
-    assert names == {"trajectory.npz", "trajectory.json", "summary.json"} | FIGURES
+    written = {"trajectory.npz", "trajectory.json", "summary.json", ".cable_ocp-results"}
+    assert names == written | FIGURES
     assert all((out / f).stat().st_size > 1000 for f in FIGURES)
     summary = json.loads((out / "summary.json").read_text())
     assert summary["scene"] == "hanging"
@@ -354,6 +355,7 @@ def test_cli_failure_while_writing_keeps_the_old_folder(tmp_path, monkeypatch, c
 
     kept = tmp_path / "kept"
     kept.mkdir()
+    (kept / ".cable_ocp-results").write_text("")  # a previous results folder
     (kept / "old.txt").write_text("previous results")
     monkeypatch.setattr(plots, "winch_angle", broken)
     args = ["simulate", str(MODELS / "hanging.toml"), "--out", str(kept),
@@ -361,7 +363,7 @@ def test_cli_failure_while_writing_keeps_the_old_folder(tmp_path, monkeypatch, c
     assert cli.main(args) != 0
     assert "figure failed" in capsys.readouterr().err
     assert [p.name for p in tmp_path.iterdir()] == ["kept"]
-    assert [p.name for p in kept.iterdir()] == ["old.txt"]
+    assert sorted(p.name for p in kept.iterdir()) == [".cable_ocp-results", "old.txt"]
 
 
 # --- studies -----------------------------------------------------------------------------------
