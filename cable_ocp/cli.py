@@ -131,12 +131,17 @@ def _optimize(args) -> int:
         plots.winch_angle(pair, labels, bounds, path=folder / "winch_angle.png")
         plots.cable_shapes(pair[-1], hills=hills, clearance_depth=scene.seabed.clearance,
                            path=folder / "cable_shapes.png")  # fmt: skip
+    n = scene.model.elements
+    omega = (
+        f"Omega = {result.omega:.3g} m verified on n = {n}"
+        if math.isfinite(result.omega)
+        else f"Omega not verified on n = {n}"
+    )
     print(
-        f"{result.method}: success = {result.success} ({result.status}); Omega = "
-        f"{result.omega:.3g} m verified on n = {scene.model.elements} (locked: {locked.omega:.3f}"
-        f" m); iterations {result.iterations}, evaluations {result.evaluations}, wall "
-        f"{result.wall_time:.1f} s (build {result.build_time:.1f} s, solver {result.solve_time:.1f}"
-        f" s of which functions {result.function_time:.1f} s)"
+        f"{result.method}: success = {result.success} ({result.status}); {omega} (locked: "
+        f"{locked.omega:.3f} m); iterations {result.iterations}, evaluations "
+        f"{result.evaluations}, wall {result.wall_time:.1f} s (build {result.build_time:.1f} s, "
+        f"solver {result.solve_time:.1f} s of which functions {result.function_time:.1f} s)"
     )
     print(f"results and figures written to {Path(args.out).resolve()}")
     if not result.success:
