@@ -1,0 +1,124 @@
+"""The result of a closed-loop run: :class:`MpcResult`, with saving to json + npz."""
+
+from __future__ import annotations
+
+import json
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import numpy as np
+
+ARRAYS = (
+    "time", "winch_angle", "planned_angle", "end", "top", "clearance_error",
+    "sample_times", "solve_times", "iterations",
+)  # fmt: skip
+
+
+@dataclass(frozen=True, eq=False)
+class MpcResult:
+    """A closed-loop run: the plant under the receding-horizon controller.
+
+    Attributes
+    ----------
+    time : array (k,), s
+        The plant's steps.
+    winch_angle : array (k,), rad
+        The angle applied (heave feedback included, held in the winch range by a soft limiter).
+    planned_angle : array (k,), rad
+        The controller's plan (commanded angle, before heave feedback).
+    end, top : arrays (k, 3), m
+        Positions of the end E and of the top point.
+    clearance_error : array (k,), m
+        ``e(t)`` of eq. 39 on the plant.
+    omega : float, m
+        Omega of eq. 39 over the run.
+    sample_times : array (s,), s
+        When the controller solved.
+    solve_times : array (s,), s
+        Wall time of each solve (IPOPT), without the state estimate.
+    iterations : array (s,)
+        IPOPT iterations of each solve.
+    statuses : list of str
+        IPOPT's status of each solve.
+    failures : list of str
+        One line per failed solve (its time and status); the plant then kept the previous plan.
+    success : bool
+        Every solve succeeded.
+    limited_steps : int
+        Plant steps at which the soft limiter changed the commanded angle (within 0.5 rad of a
+        bound, :mod:`cable_ocp.mpc.plant`).
+    angle_range : (float, float), rad
+        The winch range the applied angle is held in.
+    real_time_factor : float
+        Simulated time over the wall time of the loop (controller and plant; > 1 is faster than
+        real time). The one-off NLP build is not in it (``build_time``).
+    worst_solve_time : float, s
+    wall_time : float, s
+        The loop's wall time.
+    build_time : float, s
+        Building the NLP (and loading the compiled steps).
+    settings : dict
+        horizon, sample, elements, step, heave_feedback, forecast_window, rate_weight.
+    references : dict of str to array (k,)
+        Clearance errors of reference runs on the same plant and time grid (``"locked"``,
+        ``"open-loop"``, ``"open-loop + heave feedback"``), m.
+    reference_omegas : dict of str to float
+        Their Omega, m.
+    """
+
+    time: np.ndarray
+    winch_angle: np.ndarray
+    planned_angle: np.ndarray
+    end: np.ndarray
+    top: np.ndarray
+    clearance_error: np.ndarray
+    omega: float
+    sample_times: np.ndarray
+    solve_times: np.ndarray
+    iterations: np.ndarray
+    statuses: list[str]
+    failures: list[str]
+    success: bool
+    limited_steps: int
+    angle_range: tuple[float, float]
+    real_time_factor: float
+    worst_solve_time: float
+    wall_time: float
+    build_time: float
+    settings: dict
+    references: dict[str, np.ndarray] = field(default_factory=dict)
+    reference_omegas: dict[str, float] = field(default_factory=dict)
+
+    def summary(self) -> dict:
+        """The scalar figures of the run (json-ready)."""
+        return {
+            "omega_m": self.omega,
+            "success": self.success,
+            "failed_solves": len(self.failures),
+            "failures": self.failures,
+            "solves": int(self.sample_times.size),
+            "real_time_factor": self.real_time_factor,
+            "worst_solve_time_s": self.worst_solve_time,
+            "mean_solve_time_s": float(np.mean(self.solve_times)),
+            "mean_iterations": float(np.mean(self.iterations)),
+            "wall_time_s": self.wall_time,
+            "build_time_s": self.build_time,
+            "limited_steps": self.limited_steps,
+            "angle_range_rad": list(self.angle_range),
+            "applied_angle_range_rad": [
+                float(self.winch_angle.min()),
+                float(self.winch_angle.max()),
+            ],
+            "reference_omegas_m": self.reference_omegas,
+            "settings": self.settings,
+        }
+
+    def save(self, folder: str | Path) -> None:
+        """Write ``mpc.json`` (figures, statuses) and ``mpc.npz`` (arrays) into ``folder``."""
+        folder = Path(folder)
+        folder.mkdir(parents=True, exist_ok=True)
+        meta = {**self.summary(), "statuses": self.statuses}
+        (folder / "mpc.json").write_text(json.dumps(meta, indent=1))
+        arrays = {name: getattr(self, name) for name in ARRAYS}
+        arrays.update({f"reference {k}": v for k, v in self.references.items()})
+        np.savez_compressed(folder / "mpc.npz", **arrays)

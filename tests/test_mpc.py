@@ -1,0 +1,183 @@
+"""Closed-loop winch control (cable_ocp.mpc): arguments, projection, forecast and short runs."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from cable_ocp.drive import Drive
+from cable_ocp.model import CableModel
+from cable_ocp.mpc import mpc
+from cable_ocp.mpc.controller import hermite_basis
+from cable_ocp.mpc.forecast import BlendedHeight, HeightFilter, TopForecast
+from cable_ocp.mpc.projection import project_state
+from cable_ocp.scene import load_scene
+from cable_ocp.statics import equilibrium
+
+HEAVE = {"top.heave_amplitude": 1.0, "top.heave_period": 8.0}
+SHORT = dict(horizon=20.0, sample=5.0, elements=2, step=1.0)
+
+
+@pytest.fixture(scope="module")
+def short_hill(models_dir):
+    """paper_hill over its first 40 s with a 1 m heave of 8 s period."""
+    return load_scene(models_dir / "paper_hill.toml", {**HEAVE, "numerics.duration": 40.0})
+
+
+@pytest.fixture(scope="module")
+def closed_loop(short_hill):
+    return mpc(short_hill, references=("locked",), quiet=True, **SHORT)
+
+
+@pytest.mark.parametrize(
+    ("change", "named"),
+    [
+        ({"horizon": 5.0}, "horizon = 5.0 s: must be > sample"),
+        ({"horizon": 50.0}, "horizon = 50.0 s: must be <= numerics.duration"),
+        ({"horizon": 22.0}, "horizon = 22.0 s must be a whole multiple of sample"),
+        ({"sample": 3.0, "horizon": 30.0}, "sample = 3.0 s must divide numerics.duration"),
+        ({"sample": 0.0}, "sample = 0.0 s: must be > 0"),
+        ({"sample": 5.02, "horizon": 10.04}, "sample = 5.02 s must divide"),
+        ({"elements": 16}, "elements = 16: the reduced model needs 1 .. model.elements = 15"),
+        ({"step": 0.3}, "step = 0.3 s: must be > 0 and divide sample"),
+        ({"heave_margin": 2.0}, "heave_margin = 2.0: must be in [0, 1]"),
+        ({"heave_filter": -1.0}, "heave_filter = -1.0 s"),
+        ({"references": ("perfect",)}, "references"),
+    ],
+)
+def test_arguments_are_checked_with_their_range(short_hill, change, named):
+    with pytest.raises(ValueError, match=named.replace("[", r"\[").replace("]", r"\]")):
+        mpc(short_hill, quiet=True, **{**SHORT, **change})
+
+
+def test_heave_compensated_scene_is_refused(models_dir):
+    scene = load_scene(models_dir / "paper_hill.toml", {"top.heave_compensation": True})
+    with pytest.raises(ValueError, match="top.heave_compensation"):
+        mpc(scene, quiet=True, **SHORT)
+
+
+def _full_and_reduced(models_dir, chained, psi, theta, velocity):
+    """A straight chain of the 10-element hanging scene and its 2-element reduced model."""
+    scene = load_scene(models_dir / "hanging.toml")
+    full, reduced = CableModel.from_scene(scene), CableModel.from_scene(scene, 2)
+    u = Drive.from_scene(scene).inputs(np.zeros(1))[:, 0]
+    x = chained(full, u, psi, theta)
+    half = full.state_size // 2
+    for i in range(full.element_count):
+        x[half + 5 * i : half + 5 * i + 3] = velocity
+    u_reduced = Drive.from_scene(scene, elements=2).inputs(np.zeros(1))[:, 0]
+    projected = project_state(full, x, u[9], reduced, u[0:3], velocity, u_reduced[9], 0.0)
+    return scene, full, reduced, u_reduced, projected
+
+
+def test_projection_of_the_hanging_equilibrium_is_the_reduced_equilibrium(models_dir):
+    scene = load_scene(models_dir / "hanging.toml")
+    full, reduced = CableModel.from_scene(scene), CableModel.from_scene(scene, 2)
+    drive, drive_reduced = Drive.from_scene(scene), Drive.from_scene(scene, elements=2)
+    u, u_reduced = drive.inputs(np.zeros(1))[:, 0], drive_reduced.inputs(np.zeros(1))[:, 0]
+    projected = project_state(
+        full, equilibrium(full, drive), u[9], reduced, u[0:3], u[3:6], u_reduced[9], 0.0
+    )
+    expected = equilibrium(reduced, drive_reduced)
+    np.testing.assert_allclose(projected.state, expected, atol=1e-9)
+    np.testing.assert_allclose(projected.end_offset, 0.0, atol=1e-9)
+
+
+def test_projection_of_a_straight_translating_chain_is_exact(models_dir, chained):
+    velocity = np.array([0.3, -0.2, 0.1])
+    _, _, reduced, u_reduced, projected = _full_and_reduced(
+        models_dir, chained, np.pi / 2 + 0.3, 0.1, velocity
+    )
+    expected = chained(reduced, u_reduced, np.pi / 2 + 0.3, 0.1)
+    _, qd = reduced.coordinates(projected.state)
+    np.testing.assert_allclose(projected.state[: reduced.state_size // 2], expected[:15], atol=1e-9)
+    for qdi in qd:
+        np.testing.assert_allclose(qdi[:3], velocity, atol=1e-12)
+        np.testing.assert_allclose(qdi[3:], 0.0, atol=1e-12)
+    np.testing.assert_allclose(projected.end_offset, 0.0, atol=1e-9)
+
+
+def test_projection_keeps_the_reduced_bonds(models_dir):
+    """Projected from a curved, moving plant state, the reduced bonds hold (position and rate)."""
+    scene = load_scene(models_dir / "paper_hill.toml", {"numerics.duration": 20.0})
+    full, reduced = CableModel.from_scene(scene), CableModel.from_scene(scene, 3)
+    from cable_ocp.simulation import simulate
+
+    run = simulate(scene, compiled=True)
+    u = run.inputs[-1]
+    u_reduced = Drive.from_scene(scene, elements=3).inputs(np.array([20.0]))[:, 0]
+    projected = project_state(
+        full, run.states[-1], u[9], reduced, u[0:3], u[3:6], u_reduced[9], u_reduced[10]
+    )
+    outputs = reduced.outputs(projected.state, u_reduced)
+    assert np.max(np.abs(np.array(outputs[2]))) < 1e-12
+    assert np.max(np.abs(np.array(outputs[3]))) < 1e-12
+    # The chords cut the curved cable short by centimetres, not metres.
+    assert 1e-6 < np.linalg.norm(projected.end_offset) < 0.5
+
+
+def test_hermite_basis_rates_are_the_derivatives():
+    t = np.linspace(0.0, 20.0, 2001)
+    parameters = np.random.default_rng(1).normal(size=2 * 5)
+    phi, rate, acc = (b @ parameters for b in hermite_basis(t, 5.0, 4))
+    inner = np.abs((t / 5.0) - np.round(t / 5.0)) > 0.01  # acceleration jumps at the nodes
+    np.testing.assert_allclose(np.gradient(phi, t)[inner], rate[inner], atol=1e-4)
+    np.testing.assert_allclose(np.gradient(rate, t)[inner], acc[inner], atol=5e-3)
+    nodes = hermite_basis(np.arange(5) * 5.0, 5.0, 4)
+    np.testing.assert_allclose(nodes[0] @ parameters, parameters[:5], atol=1e-12)
+    np.testing.assert_allclose(nodes[1] @ parameters, parameters[5:], atol=1e-12)
+
+
+def test_height_filter_passes_a_trend_and_damps_the_heave():
+    step, period, constant = 0.05, 8.0, 15.0
+    t = np.arange(1, 8001) * step
+    waves = HeightFilter(constant, 0.0).update(step, np.sin(2 * np.pi * t / period))
+    ripple = np.ptp(waves[t > 250]) / 2
+    assert ripple == pytest.approx(1 / (1 + (2 * np.pi * constant / period) ** 2), rel=0.05)
+    trend = HeightFilter(constant, 0.0).update(step, 0.01 * t)
+    assert trend[-1] == pytest.approx(0.01 * t[-1] - 0.01 * 2 * constant, abs=1e-3)
+
+
+def test_blended_height_is_continuous_at_both_ends():
+    old = TopForecast(0.0, np.array([0, 0, 0.2]), np.array([0, 0, 0.05]))
+    new = TopForecast(5.0, np.array([0, 0, -0.1]), np.array([0, 0, -0.02]))
+    blend = BlendedHeight(old, new, 5.0, 5.0)
+    for t, line in ((5.0, old), (10.0, new)):
+        height, speed, acc = blend(np.array([t]))
+        expected_height, expected_speed = line.height(np.array([t]))
+        assert height[0] == pytest.approx(expected_height[0], abs=1e-12)
+        assert speed[0] == pytest.approx(expected_speed[0], abs=1e-12)
+        assert acc[0] == pytest.approx(0.0, abs=1e-12)
+    t = np.linspace(5.0, 10.0, 5001)
+    height, speed, acc = blend(t)
+    np.testing.assert_allclose(np.gradient(height, t)[1:-1], speed[1:-1], atol=1e-5)
+    np.testing.assert_allclose(np.gradient(speed, t)[1:-1], acc[1:-1], atol=1e-5)
+
+
+def test_closed_loop_is_finite_holds_the_winch_bounds_and_beats_the_locked_winch(closed_loop):
+    r = closed_loop
+    assert r.success, r.failures
+    assert r.sample_times.size == 8 and len(r.statuses) == 8
+    assert np.all(np.isfinite(r.end)) and np.all(np.isfinite(r.clearance_error))
+    low, high = r.angle_range
+    assert low <= r.winch_angle.min() and r.winch_angle.max() <= high
+    # The heave feedback turns the winch with the 1 m heave: about +-2 rad at r_D = 0.5 m.
+    assert np.ptp(r.winch_angle - r.planned_angle) > 3.0
+    assert r.omega < 0.1 * r.reference_omegas["locked"]
+    assert r.omega < 0.05
+    assert r.real_time_factor > 0 and r.worst_solve_time == pytest.approx(r.solve_times.max())
+
+
+def test_closed_loop_result_saves(closed_loop, tmp_path):
+    closed_loop.save(tmp_path)
+    with np.load(tmp_path / "mpc.npz") as data:
+        np.testing.assert_array_equal(data["clearance_error"], closed_loop.clearance_error)
+    assert '"omega_m"' in (tmp_path / "mpc.json").read_text()
+
+
+def test_quiet_prints_nothing(models_dir, capfd):
+    scene = load_scene(models_dir / "paper_hill.toml", {"numerics.duration": 10.0})
+    result = mpc(scene, horizon=10.0, sample=5.0, elements=2, step=1.0, references=(), quiet=True)
+    out, err = capfd.readouterr()
+    assert out == "" and err == ""
+    assert result.success and result.sample_times.tolist() == [0.0, 5.0]
