@@ -75,7 +75,7 @@ def test_failed_runs_are_recorded_not_ranked(quick):
 
 def test_files_are_written(quick):
     out, result = quick
-    names = {"speed_accuracy.md", "ocp_omega_vs_time.png"}
+    names = {".cable_ocp-results", "speed_accuracy.md", "ocp_omega_vs_time.png"}
     names |= {f"speed_accuracy_{s.scene_name}.png" for s in result.scenes}
     assert {p.name for p in out.iterdir()} == names
     text = (out / "speed_accuracy.md").read_text()

@@ -108,6 +108,7 @@ def test_quick_study_writes_its_folder(models_dir, tmp_path):
     out = tmp_path / "stability"
     study = run_stability(out, models_dir, quick=True)
     assert sorted(p.name for p in out.iterdir()) == [
+        ".cable_ocp-results",
         "baumgarte_drift.png",
         "knots.png",
         "stability.md",
