@@ -1,16 +1,16 @@
-"""Closed-loop winch control (cable_ocp.mpc): arguments, projection, forecast and short runs."""
+"""Closed-loop winch control (cable_ocp.closed_loop): arguments, projection, forecast, runs."""
 
 from __future__ import annotations
 
 import numpy as np
 import pytest
 
+from cable_ocp.closed_loop import mpc
+from cable_ocp.closed_loop.controller import hermite_basis
+from cable_ocp.closed_loop.forecast import BlendedHeight, HeightFilter, TopForecast
+from cable_ocp.closed_loop.projection import project_state
 from cable_ocp.drive import Drive
 from cable_ocp.model import CableModel
-from cable_ocp.mpc import mpc
-from cable_ocp.mpc.controller import hermite_basis
-from cable_ocp.mpc.forecast import BlendedHeight, HeightFilter, TopForecast
-from cable_ocp.mpc.projection import project_state
 from cable_ocp.scene import load_scene
 from cable_ocp.statics import equilibrium
 

@@ -5,7 +5,7 @@ goes on from the low-passed measured height at the low-passed vertical speed
 (:class:`HeightFilter`): the wave motion (heave) is filtered out, so that the controller plans for
 the vessel's mean motion and does not extrapolate a wave's momentary vertical speed over its whole
 horizon; the heave about the filtered height is left to the heave feedback of the plant loop
-(:mod:`cable_ocp.mpc.plant`). A straight line fitted to the heights of the last 20 s instead
+(:mod:`.plant`). A straight line fitted to the heights of the last 20 s instead
 passed on 0.25 m of an 8 s, 1 m heave to the end (Omega 0.23 m on paper_hill).
 """
 

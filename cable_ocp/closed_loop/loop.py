@@ -1,10 +1,10 @@
 """The closed loop: ``mpc(scene, horizon=..., sample=...)`` runs the plant under the controller.
 
 Every ``sample`` seconds the controller measures the plant (its state and the top motion so far),
-projects the state onto its reduced model (:mod:`cable_ocp.mpc.projection`), forecasts the top
-(:mod:`cable_ocp.mpc.forecast`) and solves the receding-horizon OCP warm-started from its previous
-plan moved on by one sample (:mod:`cable_ocp.mpc.controller`); the plant then runs one sample
-under the new plan (:mod:`cable_ocp.mpc.plant`). A failed solve keeps the previous plan, and is
+projects the state onto its reduced model (:mod:`.projection`), forecasts the top
+(:mod:`.forecast`) and solves the receding-horizon OCP warm-started from its previous
+plan moved on by one sample (:mod:`.controller`); the plant then runs one sample
+under the new plan (:mod:`.plant`). A failed solve keeps the previous plan, and is
 counted and reported. The controller never sees the heave except through these measurements.
 """
 
@@ -16,13 +16,13 @@ import time
 import numpy as np
 
 from cable_ocp.bounds import angle_bounds
+from cable_ocp.closed_loop.controller import ControllerSettings, RecedingHorizon, hermite_basis
+from cable_ocp.closed_loop.forecast import BlendedHeight, HeightFilter, forecast_top
+from cable_ocp.closed_loop.plant import LIMITER_BAND, Plant
+from cable_ocp.closed_loop.projection import project_state
+from cable_ocp.closed_loop.result import MpcResult
 from cable_ocp.drive import end_force
 from cable_ocp.model import CableModel
-from cable_ocp.mpc.controller import ControllerSettings, RecedingHorizon, hermite_basis
-from cable_ocp.mpc.forecast import BlendedHeight, HeightFilter, forecast_top
-from cable_ocp.mpc.plant import LIMITER_BAND, Plant
-from cable_ocp.mpc.projection import project_state
-from cable_ocp.mpc.result import MpcResult
 from cable_ocp.progress import Progress
 from cable_ocp.seabed import clearance_error, rms_objective
 
@@ -114,9 +114,9 @@ def _command(plan: _Plan, reference: BlendedHeight | None, top, radius: float):
 def mpc(
     scene,
     horizon: float = 30.0,
-    sample: float = 2.0,
-    elements: int = 3,
-    step: float = 0.5,
+    sample: float = 5.0,
+    elements: int = 2,
+    step: float = 1.0,
     heave_feedback: bool = True,
     heave_filter: float = 15.0,
     heave_margin: float = 1.0,
@@ -141,10 +141,10 @@ def mpc(
         RK4 step of the reduced model.
     heave_feedback : bool
         Add the measured top height's departure from the forecast to the plan (eq. 38 on the
-        measured motion, :mod:`cable_ocp.mpc.plant`).
+        measured motion, :mod:`.plant`).
     heave_filter : float, s
         Time constant of the low-pass of the measured top height that makes the vertical
-        forecast (:class:`cable_ocp.mpc.forecast.HeightFilter`); waves pass it with the gain
+        forecast (:class:`cable_ocp.closed_loop.forecast.HeightFilter`); waves pass it with the gain
         ``1 / (1 + (2 pi heave_filter / period)^2)``.
     heave_margin : float
         Fraction of the measured heave (its largest departure from the filtered height over the
@@ -325,7 +325,7 @@ def _references(scene, plant: Plant, names, time_grid) -> dict[str, np.ndarray]:
         from cable_ocp.optimization import optimize
 
         calm = scene.updated({"top.heave_amplitude": 0.0})
-        settings = IpoptSettings(elements=3, step=0.5)
+        settings = IpoptSettings(elements=3, step=0.5, intervals=_intervals(scene, 0.5))
         result = optimize(calm, "ipopt", settings, quiet=True)
         profile = make_control(calm, settings).angle_function(result.parameters)
         out["open-loop"] = _run_open(plant, profile, time_grid)
@@ -344,3 +344,10 @@ def _references(scene, plant: Plant, names, time_grid) -> dict[str, np.ndarray]:
 
         out["open-loop + heave feedback"] = _run_open(plant, compensated, time_grid)
     return out
+
+
+def _intervals(scene, step: float) -> int:
+    """Shooting intervals of about 5 s that divide the open-loop OCP's RK4 steps (42 at 210 s)."""
+    steps = round(scene.numerics.duration / step)
+    wanted = max(1, round(scene.numerics.duration / 5.0))
+    return max(k for k in range(1, wanted + 1) if steps % k == 0)

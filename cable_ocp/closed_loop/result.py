@@ -46,7 +46,7 @@ class MpcResult:
         Every solve succeeded.
     limited_steps : int
         Plant steps at which the soft limiter changed the commanded angle (within 0.5 rad of a
-        bound, :mod:`cable_ocp.mpc.plant`).
+        bound, :mod:`.plant`).
     angle_range : (float, float), rad
         The winch range the applied angle is held in.
     real_time_factor : float

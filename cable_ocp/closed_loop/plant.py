@@ -14,17 +14,17 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from cable_ocp.closed_loop.projection import chain_state, plant_joints
 from cable_ocp.drive import Drive, end_force
 from cable_ocp.integrate import SimulationError, step_function
 from cable_ocp.model import CableModel
-from cable_ocp.mpc.projection import chain_state, plant_joints
 from cable_ocp.statics import equilibrium
 from cable_ocp.vessel import top_motion
 
 # Relative offset (of the step) that places the end stage of an RK4 step just before the step end.
 LEFT_LIMIT = 1e-6
 # Width of the soft limiter at each end of the winch range (rad).
-LIMITER_BAND = 0.5
+LIMITER_BAND = 0.2
 AngleFunction = Callable[[np.ndarray], tuple[np.ndarray, np.ndarray, np.ndarray]]
 
 
