@@ -1,0 +1,87 @@
+"""``cable-ocp sweep SWEEP.toml --out DIR``: the subcommand and its summary table."""
+
+from __future__ import annotations
+
+import argparse
+import sys
+from pathlib import Path
+
+import numpy as np
+
+from cable_ocp.sweep.runner import SweepReport, run_sweep
+from cable_ocp.sweep.spec import load_sweep
+
+# Exit codes: 0 every case ok, 3 some case failed or did not run (as a failed optimize), 130 Ctrl-C.
+FAILED_EXIT, INTERRUPTED_EXIT = 3, 130
+MAX_ROWS = 50  # beyond this many cases the table lists the cases that are not ok only
+
+
+def add_sweep_command(commands) -> argparse.ArgumentParser:
+    """Add ``sweep`` to the subparsers of ``cable-ocp`` (its ``run`` is `run_sweep_command`)."""
+    sweep = commands.add_parser(
+        "sweep",
+        help="many simulations or OCPs of one scene on Dask, one xarray Dataset out",
+        description="Run the cases of SWEEP (a grid or sample of scene overrides, see "
+        "models/sweeps/) on a Dask LocalCluster or an existing scheduler. Every finished case "
+        "is saved in DIR/cases at once; a rerun skips them. All cases end up in DIR/sweep.nc.",
+    )
+    sweep.add_argument("sweep", type=Path, help="the sweep TOML file")
+    sweep.add_argument("--out", type=Path, required=True, help="sweep folder (resumed if present)")
+    sweep.add_argument("--scheduler", help="address of a running Dask scheduler, e.g. tcp://h:8786")
+    sweep.add_argument("--workers", type=int, help="LocalCluster workers (default: one per core)")
+    sweep.add_argument("--retry-failed", action="store_true", help="rerun cases saved as failed")
+    sweep.add_argument("--quiet", action="store_true", help="no progress bar")
+    sweep.set_defaults(run=run_sweep_command)
+    return sweep
+
+
+def summary(report: SweepReport) -> str:
+    """A markdown table of the cases (only the ones not ok beyond :data:`MAX_ROWS`)."""
+    ds = report.dataset
+    swept = [n for n in ds.coords if n not in ("case", "time")]
+    rows = list(range(ds.sizes["case"]))
+    if len(rows) > MAX_ROWS:
+        rows = [k for k in rows if ds["status"].values[k] != "ok"]
+    lines = [
+        "| case | " + " | ".join(swept) + (" | " if swept else "")
+        + "status | Omega [m] | wall [s] | reason |",
+        "|---:|" + "---:|" * len(swept) + "---|---:|---:|---|",
+    ]  # fmt: skip
+    for k in rows:
+        values = "".join(f"{ds[n].values[k]:.4g} | " if np.issubdtype(ds[n].dtype, np.number)
+                         else f"{ds[n].values[k]} | " for n in swept)  # fmt: skip
+        lines.append(
+            f"| {k} | {values}{ds['status'].values[k]} | {ds['omega'].values[k]:.4g} | "
+            f"{ds['wall_time'].values[k]:.1f} | {ds['reason'].values[k]} |"
+        )
+    counts = {s: int((ds["status"] == s).sum()) for s in ("ok", "failed", "not run")}
+    lines.append(
+        f"\n{len(report.ran)} cases run, {len(report.skipped)} found finished; ok {counts['ok']}, "
+        f"failed {counts['failed']}, not run {counts['not run']}; wall {report.wall_time:.1f} s"
+        + (f" on {report.workers} workers" if report.workers else "")
+    )
+    return "\n".join(lines)
+
+
+def run_sweep_command(args: argparse.Namespace) -> int:
+    """Run ``cable-ocp sweep``; 0 when every case is ok, 3 otherwise, 130 after Ctrl-C."""
+    if args.workers is not None and args.workers < 1:
+        raise ValueError(f"--workers {args.workers}: must be >= 1")
+    spec = load_sweep(args.sweep)
+    report = run_sweep(
+        spec,
+        args.out,
+        scheduler=args.scheduler,
+        workers=args.workers,
+        quiet=args.quiet,
+        retry_failed=args.retry_failed,
+    )
+    print(summary(report))
+    print(f"results written to {report.path}")
+    if report.interrupted:
+        print("cable-ocp sweep: interrupted; rerun the same command to resume", file=sys.stderr)
+        return INTERRUPTED_EXIT
+    if not report.all_ok:
+        print("cable-ocp sweep: some cases failed or did not run (see reason)", file=sys.stderr)
+        return FAILED_EXIT
+    return 0

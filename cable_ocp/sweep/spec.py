@@ -1,0 +1,373 @@
+"""Sweep files: TOML read, validated and expanded into cases, every case's scene built up front.
+
+A sweep file names a scene, a task and the overrides of each case::
+
+    scene = "../paper_flat.toml"   # relative to the sweep file, or a bundled scene name
+    task = "optimize"              # or "simulate"
+    method = "ipopt"               # optimize only: "ipopt" or "nelder-mead"
+    [optimizer]                    # optimize only: IpoptSettings / NelderMeadSettings fields
+    elements = 3
+    [set]                          # dotted-key overrides shared by every case
+    "numerics.duration" = 60.0
+    [grid]                         # full factorial: one list of values per dotted key
+    "environment.current" = [[0, 0, 0], [0.5, 0, 0]]
+    "top.surge_speed" = [0.8, 1.16]
+
+or, instead of ``[grid]``, a random design::
+
+    [sample]
+    n = 16
+    seed = 1
+    design = "latin-hypercube"     # or "uniform"
+    [sample.ranges]
+    "top.surge_speed" = [0.8, 1.4]            # [low, high]
+    "environment.current" = [[0, 0, 0], [1, 0.5, 0]]   # componentwise [low, high] vectors
+
+Every error is a ``ValueError`` naming the sweep file key (and the case), raised before any
+case runs.
+"""
+
+from __future__ import annotations
+
+import hashlib
+import itertools
+import json
+import math
+import numbers
+from dataclasses import asdict, dataclass, fields
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from cable_ocp.integrate import step_count
+from cable_ocp.nelder_mead import NelderMeadSettings
+from cable_ocp.ocp import IpoptSettings
+from cable_ocp.scene import Scene, SceneError, load_scene
+
+try:
+    import tomllib
+except ModuleNotFoundError:  # Python 3.10
+    import tomli as tomllib
+
+MODELS_DIR = Path(__file__).resolve().parent.parent.parent / "models"
+TOP_KEYS = ("scene", "description", "task", "method", "optimizer", "set", "grid", "sample")
+TASKS = ("simulate", "optimize")
+METHODS = ("ipopt", "nelder-mead")
+DESIGNS = ("latin-hypercube", "uniform")
+SAMPLE_KEYS = ("n", "seed", "design", "ranges")
+MAX_CASES = 100_000
+
+
+@dataclass(frozen=True)
+class Case:
+    """One case of a sweep.
+
+    Attributes
+    ----------
+    index : int
+        Position in the sweep (0-based), the ``case`` coordinate of the results.
+    overrides : dict
+        The swept dotted keys and their values in this case (the ``[set]`` keys are not repeated).
+    scene : Scene
+        The validated scene of the case (``[set]`` and ``overrides`` applied).
+    fingerprint : str
+        Hash of the case's full scene, task, method and optimiser settings: a case file with
+        another fingerprint belongs to another sweep.
+    """
+
+    index: int
+    overrides: dict
+    scene: Scene
+    fingerprint: str
+
+
+@dataclass(frozen=True)
+class SweepSpec:
+    """A validated sweep file.
+
+    Attributes
+    ----------
+    path : Path
+        The sweep file.
+    scene_path : Path
+        The base scene file.
+    task : str
+        ``"simulate"`` or ``"optimize"``.
+    method : str
+        ``"ipopt"`` or ``"nelder-mead"`` (used by ``optimize``).
+    settings : IpoptSettings, NelderMeadSettings or None
+        Optimiser settings (None for ``simulate``).
+    fixed : dict
+        The ``[set]`` overrides.
+    swept : tuple of str
+        The swept dotted keys, in file order.
+    design : str
+        ``"grid"``, ``"latin-hypercube"``, ``"uniform"`` or ``"single"`` (no sweep table).
+    cases : tuple of Case
+    text : str
+        The sweep file's text (stored with the results).
+    """
+
+    path: Path
+    scene_path: Path
+    task: str
+    method: str
+    settings: IpoptSettings | NelderMeadSettings | None
+    fixed: dict
+    swept: tuple[str, ...]
+    design: str
+    cases: tuple[Case, ...]
+    text: str
+
+
+def _fail(key: str, detail: str) -> ValueError:
+    return ValueError(f"{key}{detail}")
+
+
+def _table(data: dict, key: str) -> dict:
+    value = data.get(key, {})
+    if not isinstance(value, dict):
+        raise _fail(key, f": expected a table, got {type(value).__name__} {value!r}")
+    return value
+
+
+def _find_scene(value: Any, sweep_path: Path) -> Path:
+    """The scene file: relative to the sweep file, else a bundled scene name."""
+    if not isinstance(value, str) or not value:
+        raise _fail("scene", f": expected a scene file path or bundled scene name, got {value!r}")
+    candidates = [sweep_path.parent / value, MODELS_DIR / value, MODELS_DIR / f"{value}.toml"]
+    for candidate in candidates:
+        if candidate.is_file():
+            return candidate.resolve()
+    bundled = ", ".join(sorted(p.stem for p in MODELS_DIR.glob("*.toml")))
+    raise _fail(
+        "scene",
+        f" = {value!r}: file not found (relative to {sweep_path.parent}); bundled scenes: "
+        f"{bundled}",
+    )
+
+
+def _settings(data: dict, task: str, method: str) -> IpoptSettings | NelderMeadSettings | None:
+    options = _table(data, "optimizer")
+    if task == "simulate":
+        if options or "method" in data:
+            key = "optimizer" if options else "method"
+            raise _fail(key, ": only allowed with task = 'optimize'")
+        return None
+    cls = IpoptSettings if method == "ipopt" else NelderMeadSettings
+    allowed = [f.name for f in fields(cls)]
+    for name in options:
+        if name not in allowed:
+            raise _fail(
+                f"optimizer.{name}",
+                f": unknown key for method = {method!r}; allowed keys: {', '.join(allowed)}",
+            )
+    try:
+        return cls(**options)
+    except (TypeError, ValueError) as error:
+        raise _fail("optimizer", f": {error}") from None
+
+
+def _grid(table: dict) -> tuple[tuple[str, ...], list[dict]]:
+    for key, values in table.items():
+        if not isinstance(values, list) or not values:
+            raise _fail(f"grid.{key}", f": expected a non-empty list of values, got {values!r}")
+    keys = tuple(table)
+    combos = itertools.product(*(table[k] for k in keys))
+    return keys, [dict(zip(keys, combo, strict=True)) for combo in combos]
+
+
+def _is_number(value: Any) -> bool:
+    return isinstance(value, numbers.Real) and not isinstance(value, bool) and math.isfinite(value)
+
+
+def _range_bounds(key: str, value: Any) -> tuple[np.ndarray, np.ndarray, bool]:
+    """``[low, high]`` (scalar) or ``[[low...], [high...]]`` (vector) -> (low, high, is_vector)."""
+    where = f"sample.ranges.{key}"
+    hint = ": expected [low, high] numbers or [[low, ...], [high, ...]] vectors"
+    if not isinstance(value, list) or len(value) != 2:
+        raise _fail(where, f"{hint}, got {value!r}")
+    low, high = value
+    vector = isinstance(low, list)
+    if vector:
+        if not isinstance(high, list) or len(low) != len(high) or not low:
+            raise _fail(where, f"{hint}, got {value!r}")
+        low, high = list(low), list(high)
+    else:
+        low, high = [low], [high]
+    if not all(_is_number(v) for v in low + high):
+        raise _fail(where, f"{hint}, got {value!r}")
+    low, high = np.array(low, dtype=float), np.array(high, dtype=float)
+    if np.any(low > high):
+        raise _fail(where, f" = {value!r}: low must be <= high")
+    return low, high, vector
+
+
+def _sample(table: dict, base: Scene) -> tuple[str, tuple[str, ...], list[dict]]:
+    for name in table:
+        if name not in SAMPLE_KEYS:
+            raise _fail(f"sample.{name}", f": unknown key; allowed keys: {', '.join(SAMPLE_KEYS)}")
+    n, seed = table.get("n"), table.get("seed", 0)
+    design = table.get("design", "latin-hypercube")
+    if isinstance(n, bool) or not isinstance(n, int) or not 1 <= n <= MAX_CASES:
+        raise _fail("sample.n", f" = {n!r}: must be an integer in [1, {MAX_CASES}]")
+    if isinstance(seed, bool) or not isinstance(seed, int) or seed < 0:
+        raise _fail("sample.seed", f" = {seed!r}: must be an integer >= 0")
+    if design not in DESIGNS:
+        raise _fail("sample.design", f" = {design!r}: must be one of {', '.join(DESIGNS)}")
+    ranges = table.get("ranges", {})
+    if not isinstance(ranges, dict):
+        raise _fail("sample.ranges", f": expected a table, got {ranges!r}")
+    if not ranges:
+        raise _fail("sample.ranges", ": expected a table of at least one dotted key")
+    bounds = {key: _range_bounds(key, value) for key, value in ranges.items()}
+    integers = {key: isinstance(_base_value(base, key), int) for key in bounds}
+    width = sum(low.size for low, _, _ in bounds.values())
+    rng = np.random.default_rng(seed)
+    if design == "uniform":
+        unit = rng.random((n, width))
+    else:
+        from scipy.stats import qmc
+
+        unit = qmc.LatinHypercube(d=width, seed=rng).random(n)
+    overrides = [{} for _ in range(n)]
+    column = 0
+    for key, (low, high, vector) in bounds.items():
+        values = low + unit[:, column : column + low.size] * (high - low)
+        column += low.size
+        for case, row in zip(overrides, values, strict=True):
+            if integers[key]:
+                case[key] = int(round(float(row[0])))
+            else:
+                case[key] = [float(v) for v in row] if vector else float(row[0])
+    return design, tuple(bounds), overrides
+
+
+def _base_value(scene: Scene, key: str) -> Any:
+    """The base scene's value at a dotted key (None if there is none)."""
+    node: Any = scene.to_dict()
+    for part in key.split("."):
+        if not isinstance(node, dict) or part not in node:
+            return None
+        node = node[part]
+    return None if isinstance(node, bool) else node
+
+
+def _blame(error: SceneError, case: int, overrides: dict, design: str, grid: dict) -> str:
+    """Name the sweep file key behind a scene error of one case."""
+    for key, value in overrides.items():
+        if error.path == key or error.path.startswith((key + ".", key + "[")):
+            if design == "grid":
+                position = next(k for k, v in enumerate(grid[key]) if v == value)
+                return f"grid.{key}[{position}] = {value!r} (case {case}): {error}"
+            return f"sample.ranges.{key}: drawn value {value!r} (case {case}): {error}"
+    return f"case {case} with {json.dumps(overrides)}: {error}"
+
+
+def fingerprint(scene: Scene, task: str, method: str, settings: Any) -> str:
+    """Hash of everything that determines a case's result (scene, task, method, settings)."""
+    record = {
+        "scene": scene.to_dict(),
+        "task": task,
+        "method": method if task == "optimize" else None,
+        "settings": asdict(settings) if settings is not None else None,
+    }
+    text = json.dumps(record, sort_keys=True, default=str)
+    return hashlib.sha256(text.encode()).hexdigest()[:16]
+
+
+def _check_intervals(scene: Scene, settings: Any, case: int) -> None:
+    """IPOPT's shooting intervals must divide the RK4 steps: checked before any solve."""
+    if not isinstance(settings, IpoptSettings):
+        return
+    step = settings.step or scene.numerics.step
+    try:
+        steps = step_count(scene.numerics.duration, step)
+    except ValueError as error:
+        raise _fail("optimizer.step", f" = {step} (case {case}): {error}") from None
+    if steps % settings.intervals:
+        raise _fail(
+            "optimizer.intervals",
+            f" = {settings.intervals} (case {case}): must divide the {steps} RK4 steps "
+            f"(numerics.duration = {scene.numerics.duration} s, step = {step} s)",
+        )
+
+
+def load_sweep(path: str | Path) -> SweepSpec:
+    """Read a sweep file, expand its cases and build (validate) every case's scene.
+
+    Parameters
+    ----------
+    path : path-like
+        The sweep TOML file.
+
+    Returns
+    -------
+    SweepSpec
+
+    Raises
+    ------
+    ValueError
+        Naming the sweep file key (and case) at fault, before any case runs.
+    """
+    path = Path(path).resolve()
+    try:
+        text = path.read_text()
+    except OSError as error:
+        raise ValueError(f"sweep file {path}: cannot be read: {error}") from None
+    try:
+        data = tomllib.loads(text)
+    except tomllib.TOMLDecodeError as error:
+        raise ValueError(f"sweep file {path}: invalid TOML: {error}") from None
+    for key in data:
+        if key not in TOP_KEYS:
+            raise _fail(key, f": unknown key; allowed keys: {', '.join(TOP_KEYS)}")
+    if "scene" not in data:
+        raise _fail("scene", ": missing required key (the base scene file)")
+    scene_path = _find_scene(data["scene"], path)
+    task = data.get("task", "simulate")
+    if task not in TASKS:
+        raise _fail("task", f" = {task!r}: must be one of {', '.join(TASKS)}")
+    method = data.get("method", "ipopt")
+    if method not in METHODS:
+        raise _fail("method", f" = {method!r}: must be one of {', '.join(METHODS)}")
+    settings = _settings(data, task, method)
+    fixed = _table(data, "set")
+    try:
+        base = load_scene(scene_path, fixed)
+    except SceneError as error:
+        culprit = [k for k in fixed if error.path == k or error.path.startswith((k + ".", k + "["))]
+        raise _fail(f"set.{culprit[0]}" if culprit else "set", f": {error}") from None
+    grid, sample = _table(data, "grid"), _table(data, "sample")
+    if grid and sample:
+        raise _fail("sample", ": give either [grid] or [sample], not both")
+    if grid:
+        design = "grid"
+        swept, overrides = _grid(grid)
+    elif sample:
+        design, swept, overrides = _sample(sample, base)
+    else:
+        design, swept, overrides = "single", (), [{}]
+    if len(overrides) > MAX_CASES:
+        raise _fail("grid", f": {len(overrides)} cases; at most {MAX_CASES}")
+    cases = []
+    for index, case in enumerate(overrides):
+        try:
+            scene = base.updated(case)
+        except SceneError as error:
+            raise ValueError(_blame(error, index, case, design, grid)) from None
+        _check_intervals(scene, settings, index)
+        cases.append(Case(index, case, scene, fingerprint(scene, task, method, settings)))
+    return SweepSpec(
+        path=path,
+        scene_path=scene_path,
+        task=task,
+        method=method,
+        settings=settings,
+        fixed=dict(fixed),
+        swept=swept,
+        design=design,
+        cases=tuple(cases),
+        text=text,
+    )
