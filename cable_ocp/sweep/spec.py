@@ -174,6 +174,9 @@ def _grid(table: dict) -> tuple[tuple[str, ...], list[dict]]:
         if not isinstance(values, list) or not values:
             raise _fail(f"grid.{key}", f": expected a non-empty list of values, got {values!r}")
     keys = tuple(table)
+    count = math.prod(len(v) for v in table.values())
+    if count > MAX_CASES:
+        raise _fail("grid", f": {count} cases; at most {MAX_CASES}")
     combos = itertools.product(*(table[k] for k in keys))
     return keys, [dict(zip(keys, combo, strict=True)) for combo in combos]
 
@@ -349,8 +352,6 @@ def load_sweep(path: str | Path) -> SweepSpec:
         design, swept, overrides = _sample(sample, base)
     else:
         design, swept, overrides = "single", (), [{}]
-    if len(overrides) > MAX_CASES:
-        raise _fail("grid", f": {len(overrides)} cases; at most {MAX_CASES}")
     cases = []
     for index, case in enumerate(overrides):
         try:

@@ -1,0 +1,266 @@
+"""Sweeps: sweep-file validation and expansion, Dask runs, failed cases, resume, foreign folders.
+
+Tiny cases (hanging / small_tow, n = 5, 10-20 s): the Dask cluster runs in-process threads
+(``processes=False``) except in the command-line test, which starts worker processes.
+"""
+
+from __future__ import annotations
+
+import argparse
+import os
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+import cable_ocp as co
+from cable_ocp.sweep import load_sweep, open_sweep, run_sweep
+from cable_ocp.sweep.command import add_sweep_command
+from cable_ocp.sweep.store import case_path
+
+MODELS = Path(__file__).resolve().parent.parent / "models"
+
+HEADER = f"""
+scene = "{MODELS / "hanging.toml"}"
+task = "simulate"
+[set]
+"numerics.duration" = 10.0
+"numerics.step" = 0.1
+"model.elements" = 5
+"top.motion" = "tow"
+"top.ramp_time" = 5.0
+"""
+GRID = (
+    HEADER
+    + """
+[grid]
+"top.surge_speed" = [0.5, 1.0]
+"environment.current" = [[0.0, 0.0, 0.0], [0.3, 0.1, 0.0]]
+"""
+)
+
+
+def write(tmp_path: Path, text: str, name: str = "sweep.toml") -> Path:
+    path = tmp_path / name
+    path.write_text(text)
+    return path
+
+
+def sample_text(n=6, seed=3, design="latin-hypercube", extra="") -> str:
+    return HEADER + (
+        f'[sample]\nn = {n}\nseed = {seed}\ndesign = "{design}"\n[sample.ranges]\n'
+        '"top.surge_speed" = [0.4, 1.2]\n'
+        '"environment.current" = [[0.0, 0.0, 0.0], [0.5, 0.0, 0.0]]\n' + extra
+    )
+
+
+# --- the sweep file ---------------------------------------------------------------------------
+
+
+def test_grid_expands_to_the_full_factorial(tmp_path):
+    spec = load_sweep(write(tmp_path, GRID))
+    assert spec.swept == ("top.surge_speed", "environment.current")
+    assert [c.overrides for c in spec.cases] == [
+        {"top.surge_speed": s, "environment.current": c}
+        for s in (0.5, 1.0)
+        for c in ([0.0, 0.0, 0.0], [0.3, 0.1, 0.0])
+    ]
+    scene = spec.cases[3].scene
+    assert scene.top.surge_speed == 1.0 and scene.environment.current == (0.3, 0.1, 0.0)
+    assert scene.numerics.duration == 10.0 and scene.model.elements == 5  # [set] applied
+    assert len({c.fingerprint for c in spec.cases}) == 4
+
+
+def test_latin_hypercube_sample_is_stratified_and_reproducible(tmp_path):
+    spec = load_sweep(write(tmp_path, sample_text(n=6, seed=3, extra='"model.elements" = [5, 8]')))
+    speeds = np.array([c.overrides["top.surge_speed"] for c in spec.cases])
+    current = np.array([c.overrides["environment.current"] for c in spec.cases])
+    elements = [c.overrides["model.elements"] for c in spec.cases]
+    assert len(spec.cases) == 6 and spec.design == "latin-hypercube"
+    # One sample in each sixth of each range: the Latin hypercube property.
+    assert sorted(np.floor((speeds - 0.4) / 0.8 * 6).astype(int)) == list(range(6))
+    assert sorted(np.floor(current[:, 0] / 0.5 * 6).astype(int)) == list(range(6))
+    assert np.all(current[:, 1:] == 0.0)  # low == high: the component stays fixed
+    assert all(isinstance(e, int) and 5 <= e <= 8 for e in elements)  # integer field rounded
+    assert [c.scene.model.elements for c in spec.cases] == elements
+    again = load_sweep(write(tmp_path, sample_text(n=6, seed=3, extra='"model.elements" = [5, 8]')))
+    assert [c.overrides for c in again.cases] == [c.overrides for c in spec.cases]
+    other = load_sweep(write(tmp_path, sample_text(n=6, seed=4, extra='"model.elements" = [5, 8]')))
+    assert [c.overrides for c in other.cases] != [c.overrides for c in spec.cases]
+
+
+def test_uniform_sample_stays_in_range(tmp_path):
+    spec = load_sweep(write(tmp_path, sample_text(n=20, seed=0, design="uniform")))
+    speeds = np.array([c.overrides["top.surge_speed"] for c in spec.cases])
+    assert len(speeds) == 20 and speeds.min() >= 0.4 and speeds.max() <= 1.2
+    assert np.unique(speeds).size == 20
+
+
+@pytest.mark.parametrize(
+    "body, message",
+    [
+        ('[grid]\n"top.ramp_time" = [2.0, -1.0]',
+         "grid.top.ramp_time[1] = -1.0 (case 1): top.ramp_time = -1.0 is out of range: "
+         "must be > 0"),
+        ('[grid]\n"top.surge_sped" = [1.0]', "grid.top.surge_sped[0] = 1.0 (case 0): top.surge_sped"
+         ": unknown key"),
+        ('[grid]\n"environment.current" = [[0, 0, 0], [1, 0]]',
+         "grid.environment.current[1] = [1, 0] (case 1): environment.current: expected 3 numbers"),
+        ('[grid]\n"top.surge_speed" = []', "grid.top.surge_speed: expected a non-empty list"),
+        ('[sample]\nn = 0\n[sample.ranges]\n"top.surge_speed" = [1, 2]',
+         "sample.n = 0: must be an integer in [1, 100000]"),
+        ('[sample]\nn = 3\n[sample.ranges]\n"top.surge_speed" = [2, 1]',
+         "sample.ranges.top.surge_speed = [2, 1]: low must be <= high"),
+        ('[sample]\nn = 3\n[sample.ranges]\n"top.ramp_time" = [-2.0, -1.0]',
+         "sample.ranges.top.ramp_time: drawn value"),
+        ('[sample]\nn = 3\ndesign = "sobol"\n[sample.ranges]\n"top.surge_speed" = [1, 2]',
+         "sample.design = 'sobol': must be one of latin-hypercube, uniform"),
+        ('[grid]\n"top.surge_speed" = [1.0]\n[sample]\nn = 2', "sample: give either [grid] or"),
+        ('[optimizer]\nelements = 3', "optimizer: only allowed with task = 'optimize'"),
+    ],
+)  # fmt: skip
+def test_bad_sweep_file_names_the_key(tmp_path, body, message):
+    with pytest.raises(ValueError) as error:
+        load_sweep(write(tmp_path, HEADER + body + "\n"))
+    assert message in str(error.value)
+
+
+@pytest.mark.parametrize(
+    "text, message",
+    [
+        ('scene = "hanging"\ncolour = 1', "colour: unknown key; allowed keys: scene"),
+        ('scene = "nowhere.toml"', "scene = 'nowhere.toml': file not found"),
+        ('scene = "hanging"\ntask = "solve"', "task = 'solve': must be one of simulate, optimize"),
+        ('scene = "hanging"\ntask = "optimize"\n[optimizer]\nsteps = 1',
+         "optimizer.steps: unknown key for method = 'ipopt'"),
+        ('scene = "hanging"\ntask = "optimize"\n[optimizer]\nmax_iter = 0',
+         "optimizer: max_iter = 0: must be >= 1"),
+        ('scene = "small_tow"\ntask = "optimize"\n[optimizer]\nstep = 0.25\nintervals = 7',
+         "optimizer.intervals = 7 (case 0): must divide the 160 RK4 steps"),
+        ('scene = "hanging"\n[set]\n"model.elements" = 0',
+         "set.model.elements: model.elements = 0 is out of range: must be >= 1"),
+    ],
+)  # fmt: skip
+def test_bad_sweep_header_names_the_key(tmp_path, text, message):
+    with pytest.raises(ValueError) as error:
+        load_sweep(write(tmp_path, text + "\n"))
+    assert message in str(error.value)
+
+
+# --- running ----------------------------------------------------------------------------------
+
+
+@pytest.fixture(scope="module")
+def grid_run(tmp_path_factory):
+    """The 4-case grid run on 2 in-process workers, and its spec."""
+    folder = tmp_path_factory.mktemp("grid")
+    spec = load_sweep(write(folder, GRID))
+    report = run_sweep(spec, folder / "out", workers=2, quiet=True, processes=False)
+    return spec, report, folder / "out"
+
+
+def test_sweep_dataset_matches_a_direct_simulation(grid_run):
+    spec, report, out = grid_run
+    ds = open_sweep(out)
+    assert sorted(report.ran) == [0, 1, 2, 3] and report.skipped == []
+    assert dict(ds.sizes) == {"case": 4, "time": 101}
+    np.testing.assert_array_equal(ds["top.surge_speed"], [0.5, 0.5, 1.0, 1.0])
+    np.testing.assert_array_equal(ds["environment.current[0]"], [0.0, 0.3, 0.0, 0.3])
+    np.testing.assert_array_equal(ds["environment.current[1]"], [0.0, 0.1, 0.0, 0.1])
+    assert list(ds["status"].values) == ["ok"] * 4 and bool(ds["success"].all())
+    assert list(ds["reason"].values) == [""] * 4
+    # Case 3 recomputed here, independently of the sweep machinery.
+    scene = co.load_scene(
+        MODELS / "hanging.toml",
+        {"numerics.duration": 10.0, "numerics.step": 0.1, "model.elements": 5,
+         "top.motion": "tow", "top.ramp_time": 5.0, "top.surge_speed": 1.0,
+         "environment.current": [0.3, 0.1, 0.0]},
+    )  # fmt: skip
+    direct = co.simulate(scene)
+    case = ds.sel(case=3)
+    np.testing.assert_allclose(case["time"], direct.time, atol=1e-9)
+    assert case["omega"].item() == pytest.approx(direct.omega, rel=1e-12)
+    np.testing.assert_allclose(case["end_x"], direct.end[:, 0], rtol=1e-12, atol=1e-9)
+    np.testing.assert_allclose(case["end_z"], direct.end[:, 2], rtol=1e-12, atol=1e-9)
+    assert direct.end[-1, 0] > 1.0  # the tow moved the end: the comparison is not trivial
+    # The other cases differ from case 3 (each case ran its own scene).
+    assert len(set(np.round(ds["omega"].values, 9))) == 4
+
+
+def test_open_sweep_indexes_the_swept_keys(grid_run):
+    ds = open_sweep(grid_run[2], index=True)
+    picked = ds.sel({"top.surge_speed": 1.0, "environment.current[0]": 0.3})
+    assert picked["omega"].values.ravel()[0] == pytest.approx(
+        open_sweep(grid_run[2])["omega"].values[3], rel=0
+    )
+
+
+def test_resume_recomputes_only_the_missing_case(grid_run, tmp_path):
+    spec, _, out = grid_run
+    case_path(out, 2).unlink()
+    stamps = {k: os.stat(case_path(out, k)).st_mtime_ns for k in (0, 1, 3)}
+    before = open_sweep(out)
+    report = run_sweep(spec, out, workers=1, quiet=True, processes=False)
+    assert report.ran == [2] and report.skipped == [0, 1, 3]
+    assert {k: os.stat(case_path(out, k)).st_mtime_ns for k in (0, 1, 3)} == stamps
+    after = open_sweep(out)
+    np.testing.assert_allclose(after["omega"], before["omega"], rtol=1e-12)
+    again = run_sweep(spec, out, workers=1, quiet=True, processes=False)
+    assert again.ran == [] and again.skipped == [0, 1, 2, 3]
+
+
+def test_a_foreign_folder_is_refused(grid_run, tmp_path):
+    spec, _, out = grid_run
+    other = GRID.replace("[0.5, 1.0]", "[0.5, 0.9]")
+    with pytest.raises(ValueError, match="belongs to another sweep"):
+        run_sweep(load_sweep(write(tmp_path, other)), out, quiet=True, processes=False)
+    changed = GRID.replace('"numerics.step" = 0.1', '"numerics.step" = 0.05')
+    with pytest.raises(ValueError, match="another scene file content"):
+        run_sweep(load_sweep(write(tmp_path, changed)), out, quiet=True, processes=False)
+    stray = tmp_path / "stray"
+    stray.mkdir()
+    (stray / "notes.txt").write_text("mine")
+    with pytest.raises(ValueError, match="not empty and holds no sweep"):
+        run_sweep(spec, stray, quiet=True, processes=False)
+    assert not (stray / "sweep.json").exists()
+
+
+def test_command_records_a_failed_case_and_exits_3(tmp_path, capsys):
+    # h = 2 s blows the tow up (SimulationError); h = 0.1 s is fine. Worker processes this time.
+    text = HEADER + '[grid]\n"numerics.step" = [0.1, 2.0]\n'
+    parser = argparse.ArgumentParser()
+    add_sweep_command(parser.add_subparsers())
+    argv = ["sweep", str(write(tmp_path, text)), "--out", str(tmp_path / "out"), "--workers", "1"]
+    args = parser.parse_args([*argv, "--quiet"])
+    assert args.run(args) == 3
+    ds = open_sweep(tmp_path / "out")
+    assert list(ds["status"].values) == ["ok", "failed"]
+    assert list(ds["success"].values) == [True, False]
+    assert ds["reason"].values[0] == ""
+    assert ds["reason"].values[1].startswith("SimulationError: bond residual")
+    assert np.isnan(ds["omega"].values[1]) and np.isfinite(ds["omega"].values[0])
+    assert dict(ds.sizes) == {"case": 2, "time": 101}  # the failed case has no time series
+    assert np.isnan(ds["end_x"].values[1]).all()
+    printed = capsys.readouterr().out
+    assert "| 1 | 2 | failed | nan |" in printed and "SimulationError: bond residual" in printed
+    assert "ok 1, failed 1, not run 0" in printed
+
+
+def test_optimize_sweep_and_durations_padded_with_nan(tmp_path):
+    text = (
+        f'scene = "{MODELS / "small_tow.toml"}"\ntask = "optimize"\n'
+        "[optimizer]\nstep = 0.25\nintervals = 4\nmax_iter = 30\n"
+        '[grid]\n"numerics.duration" = [8.0, 10.0]\n'
+    )
+    spec = load_sweep(write(tmp_path, text))
+    report = run_sweep(spec, tmp_path / "out", workers=1, quiet=True, processes=False)
+    ds = report.dataset
+    assert dict(ds.sizes) == {"case": 2, "time": 41}
+    for name in ("omega_model", "iterations", "evaluations", "solver_status"):
+        assert name in ds
+    assert (ds["iterations"] > 0).all()
+    assert np.isnan(ds["winch_angle"].values[0, 33:]).all()  # 8 s case padded after t = 8 s
+    assert np.isfinite(ds["winch_angle"].values[1]).all()
+    assert np.abs(ds["winch_angle"].values[1]).max() > 0.01  # the winch moved
+    locked = co.simulate(spec.cases[1].scene)
+    assert ds["omega"].values[1] < locked.omega  # the optimised winch beats the locked one
