@@ -264,3 +264,32 @@ def test_optimize_sweep_and_durations_padded_with_nan(tmp_path):
     assert np.abs(ds["winch_angle"].values[1]).max() > 0.01  # the winch moved
     locked = co.simulate(spec.cases[1].scene)
     assert ds["omega"].values[1] < locked.omega  # the optimised winch beats the locked one
+
+
+def test_existing_scheduler_is_used_and_left_running(tmp_path):
+    from dask.distributed import Client, LocalCluster
+
+    text = HEADER + '[grid]\n"top.surge_speed" = [0.5, 1.0]\n'
+    with LocalCluster(n_workers=1, processes=False, dashboard_address=None) as cluster:
+        report = run_sweep(
+            load_sweep(write(tmp_path, text)),
+            tmp_path / "out",
+            scheduler=cluster.scheduler_address,
+            quiet=True,
+        )
+        assert report.workers == 1 and sorted(report.ran) == [0, 1] and report.all_ok
+        with Client(cluster.scheduler_address) as client:  # still up after the sweep
+            assert len(client.scheduler_info()["workers"]) == 1
+
+
+def test_retry_failed_reruns_only_the_failed_case(tmp_path):
+    spec = load_sweep(write(tmp_path, HEADER + '[grid]\n"numerics.step" = [0.1, 2.0]\n'))
+    first = run_sweep(spec, tmp_path / "out", workers=1, quiet=True, processes=False)
+    assert list(first.dataset["status"].values) == ["ok", "failed"] and not first.all_ok
+    plain = run_sweep(spec, tmp_path / "out", workers=1, quiet=True, processes=False)
+    assert plain.ran == [] and plain.skipped == [0, 1]  # a failed case counts as finished
+    retried = run_sweep(
+        spec, tmp_path / "out", workers=1, quiet=True, processes=False, retry_failed=True
+    )
+    assert retried.ran == [1] and retried.skipped == [0]
+    assert retried.dataset["reason"].values[1].startswith("SimulationError")

@@ -5,8 +5,17 @@ writes case files and assembles the Dataset, ``runner`` fans the cases out on Da
 is the ``cable-ocp sweep`` subcommand and ``benchmark`` times 1 against 2 workers.
 """
 
-from cable_ocp.sweep.runner import SweepReport, run_sweep
-from cable_ocp.sweep.spec import Case, SweepSpec, load_sweep
-from cable_ocp.sweep.store import open_sweep
+from importlib import import_module
 
-__all__ = ["Case", "SweepReport", "SweepSpec", "load_sweep", "open_sweep", "run_sweep"]
+# Loaded on first use, so that ``cable-ocp --help`` does not import Dask and xarray.
+_HOMES = {
+    "Case": "spec", "SweepSpec": "spec", "load_sweep": "spec", "SweepReport": "runner",
+    "run_sweep": "runner", "open_sweep": "store", "sweep_benchmark": "benchmark",
+}  # fmt: skip
+__all__ = sorted(_HOMES)
+
+
+def __getattr__(name: str):
+    if name in _HOMES:
+        return getattr(import_module(f"cable_ocp.sweep.{_HOMES[name]}"), name)
+    raise AttributeError(f"module 'cable_ocp.sweep' has no attribute {name!r}")

@@ -5,11 +5,12 @@ from __future__ import annotations
 import argparse
 import sys
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 import numpy as np
 
-from cable_ocp.sweep.runner import SweepReport, run_sweep
-from cable_ocp.sweep.spec import load_sweep
+if TYPE_CHECKING:
+    from cable_ocp.sweep.runner import SweepReport
 
 # Exit codes: 0 every case ok, 3 some case failed or did not run (as a failed optimize), 130 Ctrl-C.
 FAILED_EXIT, INTERRUPTED_EXIT = 3, 130
@@ -65,6 +66,9 @@ def summary(report: SweepReport) -> str:
 
 def run_sweep_command(args: argparse.Namespace) -> int:
     """Run ``cable-ocp sweep``; 0 when every case is ok, 3 otherwise, 130 after Ctrl-C."""
+    from cable_ocp.sweep.runner import run_sweep  # Dask and xarray load only for a sweep
+    from cable_ocp.sweep.spec import load_sweep
+
     if args.workers is not None and args.workers < 1:
         raise ValueError(f"--workers {args.workers}: must be >= 1")
     spec = load_sweep(args.sweep)
