@@ -293,3 +293,25 @@ def test_retry_failed_reruns_only_the_failed_case(tmp_path):
     )
     assert retried.ran == [1] and retried.skipped == [0]
     assert retried.dataset["reason"].values[1].startswith("SimulationError")
+
+
+def test_ctrl_c_keeps_the_finished_cases_and_a_rerun_completes(tmp_path, monkeypatch):
+    import cable_ocp.sweep.runner as runner
+
+    spec = load_sweep(write(tmp_path, GRID))
+    real_write, calls = runner.write_case, []
+
+    def write_then_interrupt(folder, case, record):
+        calls.append(case.index)
+        if len(calls) == 2:
+            raise KeyboardInterrupt  # Ctrl-C while the second case is being saved
+        return real_write(folder, case, record)
+
+    monkeypatch.setattr(runner, "write_case", write_then_interrupt)
+    report = run_sweep(spec, tmp_path / "out", workers=1, quiet=True, processes=False)
+    assert report.interrupted and not report.all_ok
+    statuses = list(open_sweep(tmp_path / "out")["status"].values)
+    assert statuses.count("ok") == 1 and statuses.count("not run") == 3
+    monkeypatch.setattr(runner, "write_case", real_write)
+    rerun = run_sweep(spec, tmp_path / "out", workers=1, quiet=True, processes=False)
+    assert len(rerun.ran) == 3 and len(rerun.skipped) == 1 and rerun.all_ok
