@@ -43,6 +43,7 @@ def closed_loop(short_hill):
         ({"heave_margin": 2.0}, "heave_margin = 2.0: must be in [0, 1]"),
         ({"heave_filter": -1.0}, "heave_filter = -1.0 s"),
         ({"references": ("perfect",)}, "references"),
+        ({"max_iter": 0}, "max_iter = 0: must be an integer >= 1"),
     ],
 )
 def test_arguments_are_checked_with_their_range(short_hill, change, named):
@@ -181,3 +182,16 @@ def test_quiet_prints_nothing(models_dir, capfd):
     out, err = capfd.readouterr()
     assert out == "" and err == ""
     assert result.success and result.sample_times.tolist() == [0.0, 5.0]
+
+
+def test_failed_solves_keep_the_previous_plan_and_are_reported(models_dir):
+    """One IPOPT iteration cannot solve: each failure is counted, the run goes on, success False."""
+    scene = load_scene(models_dir / "paper_hill.toml", {"numerics.duration": 10.0})
+    result = mpc(scene, **{**SHORT, "horizon": 10.0}, max_iter=1, references=(), quiet=True)
+    assert not result.success
+    assert len(result.failures) == 2 and result.failures[0].startswith("t = 0 s: Maximum_Iter")
+    assert result.statuses == ["Maximum_Iterations_Exceeded"] * 2
+    # The plan in force stays the initial one (winch at rest), so nothing but the winch at rest
+    # was applied.
+    np.testing.assert_allclose(result.planned_angle, 0.0, atol=1e-12)
+    assert np.all(np.isfinite(result.clearance_error))

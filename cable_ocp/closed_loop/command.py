@@ -19,7 +19,7 @@ def add_mpc_command(subparsers) -> None:
     )
     parser.add_argument("scene", type=Path)
     parser.add_argument("--out", type=Path, required=True, help="results folder (atomic)")
-    parser.add_argument("--horizon", type=float, default=30.0, help="prediction horizon [s]")
+    parser.add_argument("--horizon", type=float, default=20.0, help="prediction horizon [s]")
     parser.add_argument("--sample", type=float, default=5.0, help="time between solves [s]")
     parser.add_argument("--elements", type=int, default=2, help="elements of the reduced model")
     parser.add_argument("--step", type=float, default=1.0, help="RK4 step of the reduced model [s]")

@@ -211,6 +211,9 @@ class RecedingHorizon:
                 "mu_init": 1e-3,
             },
             "print_time": False,
+            # IPOPT's trial points may blow the reduced model up (NaN); its line search backs
+            # off, so CasADi's warning about them is noise (a real failure is in the status).
+            "show_eval_warnings": False,
         }
         self.solver = ca.nlpsol(
             "receding_horizon",

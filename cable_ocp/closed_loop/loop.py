@@ -36,7 +36,7 @@ def _multiple(value: float, unit: float) -> bool:
 
 
 def check_arguments(
-    scene, horizon, sample, elements, step, heave_filter, heave_margin, rate_weight
+    scene, horizon, sample, elements, step, heave_filter, heave_margin, rate_weight, max_iter
 ) -> None:
     """Raise a ValueError naming the argument and its allowed range, before any heavy work."""
     duration, plant_step = scene.numerics.duration, scene.numerics.step
@@ -68,6 +68,8 @@ def check_arguments(
         raise ValueError(f"step = {step} s: must be > 0 and divide sample = {sample} s")
     if not (heave_filter > 0 and math.isfinite(heave_filter)):
         raise ValueError(f"heave_filter = {heave_filter} s: must be > 0 (a time constant)")
+    if not (isinstance(max_iter, int) and max_iter >= 1):
+        raise ValueError(f"max_iter = {max_iter}: must be an integer >= 1")
     if not 0 <= heave_margin <= 1:
         raise ValueError(f"heave_margin = {heave_margin}: must be in [0, 1]")
     if not rate_weight >= 0:
@@ -113,7 +115,7 @@ def _command(plan: _Plan, reference: BlendedHeight | None, top, radius: float):
 
 def mpc(
     scene,
-    horizon: float = 30.0,
+    horizon: float = 20.0,
     sample: float = 5.0,
     elements: int = 2,
     step: float = 1.0,
@@ -138,7 +140,9 @@ def mpc(
     elements : int
         Elements of the controller's reduced model.
     step : float, s
-        RK4 step of the reduced model.
+        RK4 step of the reduced model. Keep several steps per sample: at ``sample = 2 s`` with
+        ``step = 1 s`` (two steps per control interval) IPOPT hit ``max_iter`` at most solves on
+        paper_hill; four or more steps per sample solved every time.
     heave_feedback : bool
         Add the measured top height's departure from the forecast to the plan (eq. 38 on the
         measured motion, :mod:`.plant`).
@@ -166,7 +170,9 @@ def mpc(
     MpcResult
         ``success`` is False if any solve failed (see ``failures``).
     """
-    check_arguments(scene, horizon, sample, elements, step, heave_filter, heave_margin, rate_weight)
+    check_arguments(
+        scene, horizon, sample, elements, step, heave_filter, heave_margin, rate_weight, max_iter
+    )
     unknown = set(references) - {"locked", "open-loop"}
     if unknown:
         raise ValueError(f"references = {references}: each must be 'locked' or 'open-loop'")

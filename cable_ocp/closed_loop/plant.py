@@ -163,5 +163,7 @@ class Plant:
         if residual > tolerance:
             raise SimulationError(
                 f"the plant's bond residual {residual:.3g} m exceeds "
-                f"numerics.constraint_tolerance = {tolerance:g} m at t = {t:.6g} s"
+                f"numerics.constraint_tolerance = {tolerance:g} m at t = {t:.6g} s. Measured on "
+                "paper_hill, this happens when the winch is driven into its bound with heave "
+                "(mpc heave_margin < 1); keep heave_margin = 1 or reduce numerics.step"
             )
