@@ -195,3 +195,21 @@ def test_failed_solves_keep_the_previous_plan_and_are_reported(models_dir):
     # was applied.
     np.testing.assert_allclose(result.planned_angle, 0.0, atol=1e-12)
     assert np.all(np.isfinite(result.clearance_error))
+
+
+def test_mpc_command_writes_results_and_figures(models_dir, tmp_path, capsys):
+    import argparse
+
+    from cable_ocp.closed_loop.command import add_mpc_command
+
+    parser = argparse.ArgumentParser(prog="cable-ocp")
+    add_mpc_command(parser.add_subparsers(dest="command", required=True))
+    out = tmp_path / "mpc"
+    args = parser.parse_args(
+        ["mpc", str(models_dir / "paper_hill.toml"), "--set", "numerics.duration=10",
+         "--horizon", "10", "--quiet", "--out", str(out)]
+    )  # fmt: skip
+    assert args.run(args) == 0
+    written = sorted(p.name for p in out.iterdir() if not p.name.startswith("."))
+    assert written == ["clearance.png", "mpc.json", "mpc.npz", "solve_times.png", "winch_angle.png"]
+    assert '"omega_m"' in capsys.readouterr().out
