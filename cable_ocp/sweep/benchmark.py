@@ -40,6 +40,8 @@ def sweep_benchmark(
     Each OCP case is IPOPT on the n = 4 model at h = 0.25 s with 8 shooting intervals (about
     10 s on one core). The compiled model is built once, untimed, before the timed runs, so
     every run finds it in the cache. Wall times include starting the LocalCluster (processes).
+    Measured on the 2-core machine with nothing else running (load 0.06): 16 OCP cases in
+    92.4 s on 1 worker, 50.6 s on 2, a speed-up of 1.83x (with another job on one core: 0.69x).
 
     Parameters
     ----------
