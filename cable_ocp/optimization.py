@@ -226,6 +226,10 @@ def optimize_ipopt(
         outcomes.append(outcome)
         if not outcome.success:
             failure = outcome.status
+            if best is None:  # show where the failed solve got to, still marked as failed
+                best, _ = _verify(scene, problem.control, outcome.parameters, quiet)
+                best_outcome = outcome if best is not None else None
+                verified.append(best.omega if best is not None else float("nan"))
             break
         trial, reason = _verify(scene, problem.control, outcome.parameters, quiet)
         if trial is None:
@@ -260,6 +264,14 @@ def optimize_ipopt(
     )
 
 
+def _nelder_mead_status(outcome, reason: str | None) -> str:
+    """The search's message, with the verification's failure where there is one."""
+    if reason is None:
+        return outcome.message
+    failed = f"verification failed: {reason}"
+    return failed if outcome.success else f"{outcome.message}; {failed}"
+
+
 def optimize_nelder_mead(
     scene,
     settings: NelderMeadSettings | None = None,
@@ -282,9 +294,9 @@ def optimize_nelder_mead(
     started = time.perf_counter()
     settings = settings or NelderMeadSettings(elements=3, step=0.5)
     outcome = solve_nelder_mead(scene, settings, quiet=quiet)
-    trajectory, reason = None, None
-    if outcome.success:
-        trajectory, reason = _verify(scene, outcome.control, outcome.parameters, quiet)
+    # A capped search is verified too (the paper's method usually stops at its cap); it stays
+    # success = False.
+    trajectory, reason = _verify(scene, outcome.control, outcome.parameters, quiet)
     omega = trajectory.omega if trajectory is not None else float("nan")
     return OcpResult(
         method="nelder-mead",
@@ -294,7 +306,7 @@ def optimize_nelder_mead(
         omega=omega,
         omega_model=outcome.objective,
         success=outcome.success and reason is None,
-        status=outcome.message if reason is None else f"verification failed: {reason}",
+        status=_nelder_mead_status(outcome, reason),
         iterations=outcome.iterations,
         evaluations=outcome.evaluations,
         wall_time=time.perf_counter() - started,
