@@ -1,10 +1,13 @@
 """cable_ocp: dynamics and optimal winch control of a cable-suspended load.
 
-The front door: load a scene, build its model, simulate it (and, later, optimise its winch).
+The front door: load a scene, build its model, simulate it, optimise its winch
+(open loop or closed loop) and sweep scenes on Dask (:mod:`cable_ocp.sweep`). Conventions and
+errata: ``cable_ocp/CONVENTIONS.md``.
 """
 
 from cable_ocp import plots
 from cable_ocp.catenary import catenary_shape
+from cable_ocp.closed_loop import MpcResult, mpc
 from cable_ocp.drive import Drive
 from cable_ocp.integrate import SimulationError, integrate, reference_solution
 from cable_ocp.model import INPUT_NAMES, CableModel
@@ -21,6 +24,7 @@ __all__ = [
     "INPUT_NAMES",
     "CableModel",
     "IpoptSettings",
+    "MpcResult",
     "NelderMeadSettings",
     "OcpResult",
     "Drive",
@@ -33,6 +37,7 @@ __all__ = [
     "equilibrium",
     "integrate",
     "load_scene",
+    "mpc",
     "optimize",
     "plots",
     "reference_solution",

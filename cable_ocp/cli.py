@@ -1,4 +1,4 @@
-"""The command line: ``cable-ocp simulate|optimize|compare|validate|study|bench``.
+"""The command line: ``cable-ocp simulate|optimize|compare|mpc|sweep|validate|study|bench``.
 
 Every expected failure is one line ``cable-ocp COMMAND: error: ...`` on stderr and a non-zero exit
 code: 2 for bad input (arguments, scene files, a results folder that must not be replaced), 1 for
@@ -15,8 +15,10 @@ from collections.abc import Callable
 from pathlib import Path
 
 from cable_ocp.bundled import models_dir
+from cable_ocp.closed_loop.command import add_mpc_command
 from cable_ocp.output import atomic_directory, check_target, json_text
 from cable_ocp.scene import load_scene
+from cable_ocp.sweep.command import add_sweep_command
 
 try:
     import tomllib
@@ -383,6 +385,8 @@ def build_parser() -> argparse.ArgumentParser:
     cmp.add_argument("--out", type=Path, required=True, help=OUT_HELP)
     _add_optimiser_options(cmp)
     cmp.set_defaults(run=_compare)
+    add_mpc_command(commands)
+    add_sweep_command(commands)
 
     study = commands.add_parser(
         "study",
@@ -426,8 +430,10 @@ def main(argv: list[str] | None = None) -> int:
         return exit_.code if isinstance(exit_.code, int) else 0
     prefix = f"cable-ocp {args.command}"
     try:
-        if getattr(args, "out", None) is not None:
-            check_target(args.out)  # before any work, so a bad --out costs nothing
+        # Before any work, so a bad --out costs nothing; a sweep folder is resumed, and
+        # cable_ocp.sweep checks it as its own.
+        if getattr(args, "out", None) is not None and args.command != "sweep":
+            check_target(args.out)
         return args.run(args)
     except KeyboardInterrupt:
         print(f"{prefix}: interrupted", file=sys.stderr)

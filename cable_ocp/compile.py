@@ -1,4 +1,4 @@
-"""C code generation of CasADi Functions, compiled once and cached on disk (DESIGN.md §2, §9).
+"""C code generation of CasADi Functions, compiled once and cached on disk (CONVENTIONS.md §2, §9).
 
 A Function is written as C, optionally with its first forward and reverse derivatives (one
 direction each, so the code stays small; CasADi calls them once per direction), compiled with

@@ -18,7 +18,7 @@ def end_force(end, t: np.ndarray) -> np.ndarray:
     """External force at the free end (3, len(t)), N.
 
     ``F = force + amplitude * S((t - t0) / T_r) * (sin(2 pi (t - t0) / P) or 1 where P = 0)``
-    (DESIGN.md §6, the end_force scene).
+    (CONVENTIONS.md §6, the end_force scene).
     """
     t = np.atleast_1d(np.asarray(t, dtype=float))
     since = t - end.force_start

@@ -1,6 +1,6 @@
 """Morison hydrodynamics of one element: drag by Gauss quadrature and added mass (paper §3).
 
-Drag per unit length (DESIGN.md §4, the MoorDyn convention)::
+Drag per unit length (CONVENTIONS.md §4, the MoorDyn convention)::
 
     f = -1/2 rho_w d C_dn |V_n| V_n - 1/2 rho_w pi d C_dt |V_t| V_t
 

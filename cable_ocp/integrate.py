@@ -2,8 +2,8 @@
 
 One RK4 step is one SX Function; a run is ``step.fold(output_every).mapaccum(count)``, evaluated
 in segments so that progress can be shown and a run that blows up stops early with a clear error
-(DESIGN.md §5). :func:`reference_solution` integrates the same right-hand side adaptively (DOP853)
-as an independent reference.
+(CONVENTIONS.md §5). :func:`reference_solution` integrates the same right-hand side adaptively
+(DOP853) as an independent reference.
 """
 
 from __future__ import annotations

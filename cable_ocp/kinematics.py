@@ -1,6 +1,6 @@
 """Kinematics of one rigid finite element: rotation, axis direction and their rates.
 
-Conventions (DESIGN.md §3): z is up; an element's generalised coordinates are
+Conventions (CONVENTIONS.md §3): z is up; an element's generalised coordinates are
 ``q_i = [x, y, z, psi, theta]`` (5 DOF) or ``[..., phi]`` (6 DOF, torsion). The element axis is
 ``e(psi, theta) = (cos(theta) cos(psi), sin(theta), cos(theta) sin(psi))``, so a hanging element has
 ``psi = pi/2, theta = 0`` and the chart is singular only for an element along ±y (theta = ±pi/2).

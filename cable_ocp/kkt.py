@@ -2,7 +2,7 @@
 
 The bonds of a chain couple only neighbouring elements and ``M`` is block diagonal, so the Schur
 complement ``S = C M^-1 C^T`` is block tridiagonal with 3x3 blocks. :func:`thomas_solve` eliminates
-it by the block Thomas algorithm in SX: an O(n) expression that compiles well (DESIGN.md §4).
+it by the block Thomas algorithm in SX: an O(n) expression that compiles well (CONVENTIONS.md §4).
 :func:`sparse_kkt_solve` assembles the whole KKT matrix and solves it with a general sparse solver;
 it is kept as an independent cross-check.
 

@@ -1,4 +1,4 @@
-"""The symbolic rfe cable model: state, inputs, right-hand side and outputs (DESIGN.md §3-4).
+"""The symbolic rfe cable model: state, inputs, right-hand side and outputs (CONVENTIONS.md §3-4).
 
 Elements ``i = 0..n``: element 0 carries the free end ``E = A_0``, element ``n`` hangs from the top
 point ``A_{n+1}`` carried by the vessel. The state is ``x = [q; q']`` with ``q`` stacked element by

@@ -8,12 +8,12 @@ trajectories are compared on a common time grid.
 
 A step counts as *stable* when its run stays finite and its end trajectory is within
 :data:`STEP_TOLERANCE` of a run at a step :data:`REFINEMENT` times smaller: too large a step can
-give a wrong answer without NaN (DESIGN.md §9). The same rule picks MoorDyn's internal step and
+give a wrong answer without NaN (CONVENTIONS.md §9). The same rule picks MoorDyn's internal step and
 cable_ocp's RK4 step, and the wall time per simulated second of the two is set side by side.
 
 MoorDyn's drag (``Cd`` on the frontal area ``d l``, ``CdAx`` on the surface ``pi d l``) and added
-mass (``Ca``, ``CaAx`` on the displaced volume) have the meaning of DESIGN.md §4, so the scene's
-coefficients are passed unchanged. The models differ otherwise: MoorDyn's line is extensible
+mass (``Ca``, ``CaAx`` on the displaced volume) have the meaning of CONVENTIONS.md §4, so the
+scene's coefficients are passed unchanged. The models differ otherwise: MoorDyn's line is extensible
 (lumped masses joined by axial springs ``EA``), ours has rigid bonds, and its end is the tip
 ``A_0`` of a half-length element; the end difference measures all of that, nothing is tuned.
 """

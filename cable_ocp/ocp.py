@@ -1,4 +1,4 @@
-"""Optimal winch control by direct multiple shooting and IPOPT (DESIGN.md §5, paper §5).
+"""Optimal winch control by direct multiple shooting and IPOPT (CONVENTIONS.md §5, paper §5).
 
 The horizon ``[0, T]`` is cut into shooting intervals; the state at every node is a decision
 variable, each interval is a fold of RK4 steps of the (possibly reduced) model, and continuity

@@ -4,7 +4,7 @@ Whatever model the optimiser works on, the result's Omega comes from a simulatio
 own model with the optimised winch angle. With a reduced optimisation model, IPOPT's answer is
 refined by model correction: the NLP is solved again with the bias ``b = e_full - e_reduced`` of the
 last winch profile added to its clearance error, so the reduced model steers while the full model
-keeps score (DESIGN.md §5, "reduced models for optimisation").
+keeps score (CONVENTIONS.md §5, "reduced models for optimisation").
 """
 
 from __future__ import annotations

@@ -1,4 +1,4 @@
-"""Equations of one rigid finite element (rfe) from its energies (paper §2, DESIGN.md §4).
+"""Equations of one rigid finite element (rfe) from its energies (paper §2, CONVENTIONS.md §4).
 
 An element of length ``l`` spans from ``A_i`` (its coordinates ``x, y, z``) along the axis ``e`` to
 ``A_{i+1} = A_i + l e``. The kinetic energy is that of a uniform solid cylinder, which is the
@@ -147,7 +147,7 @@ def element_functions(props: ElementProperties) -> tuple[ca.Function, ca.Functio
     Inputs ``q``, ``qd`` (dofs) and ``length`` (m). Outputs:
 
     - ``mass_matrix`` (dofs x dofs, kg, kg m, kg m^2): rigid plus added mass, from the kinetic
-      energy of both (DESIGN.md §4);
+      energy of both (CONVENTIONS.md §4);
     - ``force`` (dofs): generalised force without bonds and springs: ``-h`` (eq. 6, 32), weight
       less buoyancy (eq. 14, 24 corrected) and Morison drag (eq. 26);
     - ``axis``, ``axis_rate`` (3): ``e`` and its rate;

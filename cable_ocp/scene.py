@@ -321,7 +321,7 @@ class ModelOptions(_Validated):
 @_section("top")
 @dataclass(frozen=True)
 class TopMotion(_Validated):
-    """Prescribed motion of the top point A_{n+1}, carried by the vessel (DESIGN section 6)."""
+    """Prescribed motion of the top point A_{n+1}, carried by the vessel (CONVENTIONS.md §6)."""
 
     motion: str = _param("fixed", "choice", "Profile.", choices=("fixed", "tow", "table"))
     start: Vector3 = _param((0.0, 0.0, 0.0), "vec3", "Position at t = 0.", unit="m")
@@ -402,9 +402,17 @@ class Hill(_Validated):
 @_section("seabed")
 @dataclass(frozen=True)
 class Seabed(_Validated):
-    """Seabed: the end's clearance delta and the hills (none = flat)."""
+    """Seabed: the end's clearance delta (eq. 39) and the hills (none = flat).
 
-    clearance: float = _param(5.0, doc="Initial clearance delta of the end.", ge=0, unit="m")
+    The flat seabed lies delta below the end's starting position; Omega measures how far the end
+    strays from delta above the seabed, which may rise under it. delta cancels from e(t) and
+    Omega (e = z_E(t) - z_E(0) - z_hill(x_E, y_E)): it is the starting clearance and places the
+    seabed in the plots.
+    """
+
+    clearance: float = _param(
+        5.0, doc="Starting clearance delta of the end (eq. 39).", ge=0, unit="m"
+    )
     hills: tuple[Hill, ...] = _param((), "tuple", "Hills, summed.", item=Hill)
 
 

@@ -1,4 +1,4 @@
-"""Convergence and validation studies of simulated scenes (issue: scenes; DESIGN.md §8).
+"""Convergence and validation studies of simulated scenes (issue: scenes; CONVENTIONS.md §8).
 
 Each study returns its numbers as a dataclass with a ``table()`` for printing; ``cable-ocp study``
 runs them and writes the tables and charts to a folder.

@@ -1,4 +1,4 @@
-"""Validation cases that compare the model with independent references (DESIGN.md §8)."""
+"""Validation cases that compare the model with independent references (CONVENTIONS.md §8)."""
 
 from __future__ import annotations
 

@@ -43,7 +43,7 @@ def fixed_top(start) -> TopMotionFunction:
 
 
 def tow_profile(start, surge_speed, sway_speed, ramp_time, sway_period) -> TopMotionFunction:
-    """The reconstructed vessel motion of DESIGN.md §6.
+    """The reconstructed vessel motion of CONVENTIONS.md §6.
 
     ``v_x = U S(t / T_r)``, ``v_y = W sin^2(pi t / T)``; positions are the exact integrals.
 

@@ -1,4 +1,4 @@
-"""Winch angle ``phi(t)`` and the top-element length it sets (DESIGN.md §3, paper eq. 38, 41).
+"""Winch angle ``phi(t)`` and the top-element length it sets (CONVENTIONS.md §3, paper eq. 38, 41).
 
 ``l_n(t) = Delta/2 + r_D (phi(t) - phi(0))`` with ``phi > 0`` paying out. An angle history is a
 callable ``t -> (phi, phi', phi'')`` in rad, rad/s, rad/s^2.

@@ -11,7 +11,7 @@ MODELS = Path(__file__).resolve().parent.parent / "models"
 
 
 def axis(psi: float, theta: float) -> np.ndarray:
-    """Element direction e(psi, theta) of DESIGN.md §3, written out independently of the package."""
+    """Element direction e(psi, theta) of CONVENTIONS.md §3, independent of the package."""
     return np.array([np.cos(theta) * np.cos(psi), np.sin(theta), np.cos(theta) * np.sin(psi)])
 
 

@@ -156,7 +156,7 @@ def test_rk4_fourth_order_against_dop853(models_dir, tilted, validation):
 def test_energy_conserved_in_water_with_anisotropic_added_mass(models_dir, tilted, validation):
     """Drag off in water: added mass (C_a = 1, C_at = 0) and a payload store no energy.
 
-    The added-mass terms come from the water's kinetic energy (DESIGN.md §4), so cable plus
+    The added-mass terms come from the water's kinetic energy (CONVENTIONS.md §4), so cable plus
     entrained water conserve energy: max |E - E0| / (E0 - E_eq) <= 1e-6 over 20 s at h = 0.01 s.
     """
     overrides = {

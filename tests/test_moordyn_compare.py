@@ -30,7 +30,7 @@ def test_input_file_describes_the_scene_cable(scene):
     cable_line = next(line for line in text.splitlines() if line.startswith("cable "))
     values = [float(v) for v in cable_line.split()[1:]]
     area, inertia = np.pi * 0.07**2 / 4, np.pi * 0.07**4 / 64
-    # Diam, Mass/m, EA, BA, EI, Cd, Ca, CdAx, CaAx (DESIGN.md section 6)
+    # Diam, Mass/m, EA, BA, EI, Cd, Ca, CdAx, CaAx (CONVENTIONS.md §6)
     expected = [0.07, 6500 * area, 1e11 * area, 0.0, 1e11 * inertia, 1.0, 1.0, 0.1, 0.0]
     assert values == pytest.approx(expected)
     assert "1 cable 1 2 300.0 15 -" in text

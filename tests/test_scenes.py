@@ -375,9 +375,9 @@ def test_locked_winch_step_halving_on_paper_flat(flat_scene, validation):
     validation("paper_flat, locked winch, n = 15, h = 0.05 s, 210 s", "converged reference",
                "the same run at h / 2", "max |r_E(h) - r_E(h/2)|; rise of the end",
                f"{result.max_difference:.1e} m; {result.rise:.3f} m",
-               "< 0.01 m; 6.5 .. 7.5 m (DESIGN §6: about 7 m)")  # fmt: skip
+               "< 0.01 m; 6.5 .. 7.5 m (CONVENTIONS.md §6: about 7 m)")  # fmt: skip
     # h = 0.05 s against 0.025 s over 210 s: tolerance 1 cm, measured 5.9e-9 m.
     assert result.max_difference < 0.01
-    # DESIGN.md §6: the end rises about 7 m with the winch locked; 6.5..7.5 m, measured 6.972 m.
+    # CONVENTIONS.md §6: the end rises about 7 m with the winch locked; 6.5..7.5 m (6.972 m).
     assert 6.5 < result.rise < 7.5
     assert "h = 0.05 s" in result.table()

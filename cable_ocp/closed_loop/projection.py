@@ -40,7 +40,7 @@ class ProjectedState:
 
 
 def axis(psi: np.ndarray, theta: np.ndarray) -> np.ndarray:
-    """Element direction ``e(psi, theta)`` of DESIGN.md §3 (3, ...)."""
+    """Element direction ``e(psi, theta)`` of CONVENTIONS.md §3 (3, ...)."""
     return np.array([np.cos(theta) * np.cos(psi), np.sin(theta), np.cos(theta) * np.sin(psi)])
 
 

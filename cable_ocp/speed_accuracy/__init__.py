@@ -8,7 +8,7 @@ off, interpreted or compiled) is scored by ``max_t |r_E - r_E,ref|`` against the
 integration. For each ``n`` the step is doubled until a run fails (:class:`SimulationError`), which
 brackets the RK4 stability limit; the failed run is recorded as unstable. The optimal-control part
 solves ``paper_flat`` by IPOPT on reduced models and by Nelder-Mead, each verified on the scene's
-own model (DESIGN.md §5, §8).
+own model (CONVENTIONS.md §5, §8).
 
 The entry point is :func:`run_speed_accuracy`.
 

@@ -15,7 +15,7 @@ SMALLEST_STEP = 2.0**-16
 def first_step_guess(scene, elements: int, torsion: bool, largest: float) -> float:
     """A power-of-two step (s) near the RK4 stability limit, where the scan starts.
 
-    Without torsion: the power law through DESIGN.md §9's 0.4 s at n = 15 and 0.04 s at
+    Without torsion: the power law through CONVENTIONS.md §9's 0.4 s at n = 15 and 0.04 s at
     n = 100. With torsion: the time a torsional wave takes to cross an element,
     ``Delta / sqrt(G / rho)``.
     """

@@ -1,6 +1,6 @@
 """Stability study: RK4 step limits, Baumgarte gains, knots, the Euler-angle singularity.
 
-Issue "stability study" (DESIGN.md §5, §9). Four parts, each a function returning a frozen
+Issue "stability study" (CONVENTIONS.md §5, §9). Four parts, each a function returning a frozen
 dataclass with a markdown ``table()`` and, where it has one, a ``chart()``:
 
 - :func:`step_limits`: the largest stable RK4 step against ``n``, with and without torsion, by
