@@ -20,6 +20,19 @@ from scipy.interpolate import CubicSpline
 from cable_ocp.winch import knot_times, spline_angle
 
 
+def hermite_polynomials(s: np.ndarray) -> tuple[np.ndarray, ...]:
+    """The cubic Hermite basis ``h00, h10, h01, h11`` at ``s`` in [0, 1], each (3, len(s)).
+
+    Rows: the value and its first and second derivatives with respect to ``s``.
+    """
+    return (
+        np.vstack([2 * s**3 - 3 * s**2 + 1, 6 * s**2 - 6 * s, 12 * s - 6]),
+        np.vstack([s**3 - 2 * s**2 + s, 3 * s**2 - 4 * s + 1, 6 * s - 4]),
+        np.vstack([-2 * s**3 + 3 * s**2, -6 * s**2 + 6 * s, -12 * s + 6]),
+        np.vstack([s**3 - s**2, 3 * s**2 - 2 * s, 6 * s - 2]),
+    )
+
+
 @dataclass(frozen=True)
 class KnotSpline:
     """The paper's cubic spline through ``knots`` values (rad) on ``[0, duration]`` (s)."""
@@ -82,10 +95,7 @@ class HermiteIntervals:
         width = self.duration / self.intervals
         k = np.minimum((t / width + 1e-9).astype(int), self.intervals - 1)
         s = t / width - k
-        h00 = np.vstack([2 * s**3 - 3 * s**2 + 1, 6 * s**2 - 6 * s, 12 * s - 6])
-        h10 = np.vstack([s**3 - 2 * s**2 + s, 3 * s**2 - 4 * s + 1, 6 * s - 4])
-        h01 = np.vstack([-2 * s**3 + 3 * s**2, -6 * s**2 + 6 * s, -12 * s + 6])
-        h11 = np.vstack([s**3 - s**2, 3 * s**2 - 2 * s, 6 * s - 2])
+        h00, h10, h01, h11 = hermite_polynomials(s)
         scale = np.array([1.0, 1.0 / width, 1.0 / width**2])[:, None]
         out = np.zeros((3, t.size, self.size))
         rows = np.arange(t.size)

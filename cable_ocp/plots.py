@@ -27,7 +27,7 @@ from cable_ocp.seabed import seabed_height
 from cable_ocp.trajectory import Trajectory
 
 
-def _finish(fig: Figure, path: str | Path | None) -> Figure:
+def finish_figure(fig: Figure, path: str | Path | None) -> Figure:
     """Lay out ``fig``; with a ``path``, save it there and close it (the module's rule)."""
     fig.tight_layout()
     if path is not None:
@@ -63,7 +63,7 @@ def end_trajectory(
     axes[0].set_title("plane xy")
     axes[1].set_title("plane xz")
     axes[2].set_title("plane yz")
-    return _finish(fig, path)
+    return finish_figure(fig, path)
 
 
 def clearance(
@@ -87,7 +87,7 @@ def clearance(
     ax.set_xlabel("t [s]")
     ax.grid(alpha=0.3)
     ax.legend(fontsize=8)
-    return _finish(fig, path)
+    return finish_figure(fig, path)
 
 
 def cable_shapes(
@@ -122,7 +122,7 @@ def cable_shapes(
     ax.set_title("cable shapes (markers ▼: seabed under the end)")
     ax.grid(alpha=0.3)
     ax.legend(fontsize=8, ncol=2)
-    return _finish(fig, path)
+    return finish_figure(fig, path)
 
 
 def winch_angle(
@@ -142,7 +142,7 @@ def winch_angle(
     ax.set_ylabel("winch angle phi [rad]")
     ax.grid(alpha=0.3)
     ax.legend(fontsize=8)
-    return _finish(fig, path)
+    return finish_figure(fig, path)
 
 
 def catenary_comparison(
@@ -165,4 +165,4 @@ def catenary_comparison(
     ax.set_aspect("equal")
     ax.grid(alpha=0.3)
     ax.legend()
-    return _finish(fig, path)
+    return finish_figure(fig, path)

@@ -22,6 +22,7 @@ from dataclasses import dataclass
 import casadi as ca
 import numpy as np
 
+from cable_ocp.controls import hermite_polynomials
 from cable_ocp.integrate import step_function
 from cable_ocp.model import INPUT_SIZE, CableModel
 from cable_ocp.seabed import seabed_height
@@ -43,10 +44,7 @@ def hermite_basis(s: np.ndarray, width: float, intervals: int) -> tuple[np.ndarr
     s = np.clip(s, 0.0, end)
     k = np.minimum((s / width + 1e-9).astype(int), intervals - 1)
     u = s / width - k
-    h00 = np.vstack([2 * u**3 - 3 * u**2 + 1, 6 * u**2 - 6 * u, 12 * u - 6])
-    h10 = np.vstack([u**3 - 2 * u**2 + u, 3 * u**2 - 4 * u + 1, 6 * u - 4])
-    h01 = np.vstack([-2 * u**3 + 3 * u**2, -6 * u**2 + 6 * u, -12 * u + 6])
-    h11 = np.vstack([u**3 - u**2, 3 * u**2 - 2 * u, 6 * u - 2])
+    h00, h10, h01, h11 = hermite_polynomials(u)
     scale = np.array([1.0, 1.0 / width, 1.0 / width**2])[:, None]
     out = np.zeros((3, s.size, 2 * (intervals + 1)))
     rows = np.arange(s.size)

@@ -13,14 +13,7 @@ import numpy as np
 from matplotlib.figure import Figure
 
 from cable_ocp.closed_loop.result import MpcResult
-
-
-def _finish(fig: Figure, path: str | Path | None) -> Figure:
-    fig.tight_layout()
-    if path is not None:
-        fig.savefig(path, dpi=120)
-        plt.close(fig)
-    return fig
+from cable_ocp.plots import finish_figure
 
 
 def clearance(result: MpcResult, path: str | Path | None = None) -> Figure:
@@ -53,7 +46,7 @@ def clearance(result: MpcResult, path: str | Path | None = None) -> Figure:
     axes[1].legend(fontsize=8)
     for ax in axes:
         ax.grid(alpha=0.3)
-    return _finish(fig, path)
+    return finish_figure(fig, path)
 
 
 def solve_times(result: MpcResult, path: str | Path | None = None) -> Figure:
@@ -78,7 +71,7 @@ def solve_times(result: MpcResult, path: str | Path | None = None) -> Figure:
     lines, labels = ax.get_legend_handles_labels()
     more, more_labels = twin.get_legend_handles_labels()
     ax.legend(lines + more, labels + more_labels, fontsize=8, loc="upper right")
-    return _finish(fig, path)
+    return finish_figure(fig, path)
 
 
 def winch_angle(result: MpcResult, path: str | Path | None = None) -> Figure:
@@ -93,4 +86,4 @@ def winch_angle(result: MpcResult, path: str | Path | None = None) -> Figure:
     ax.set_title("winch angle; dotted: the winch range")
     ax.legend(fontsize=8)
     ax.grid(alpha=0.3)
-    return _finish(fig, path)
+    return finish_figure(fig, path)
