@@ -11,7 +11,7 @@ from __future__ import annotations
 
 from collections.abc import Callable
 from dataclasses import dataclass, field
-from functools import cached_property
+from functools import cached_property, lru_cache
 
 import casadi as ca
 import numpy as np
@@ -29,6 +29,9 @@ INPUT_NAMES = (
     "end_force_x", "end_force_y", "end_force_z",
 )  # fmt: skip
 INPUT_SIZE = len(INPUT_NAMES)
+# Models kept per process by CableModel.from_scene (each holds its symbolic graph and compiled
+# Functions; a sweep of many fidelities evicts the least recently used).
+MODEL_CACHE_SIZE = 32
 # Below this |cos(theta)| an element is taken to lie along +-y, where the Euler chart is singular.
 SINGULAR_COS_THETA = 1e-3
 
@@ -150,6 +153,15 @@ def spec_from_scene(scene, elements: int | None = None) -> ModelSpec:
     )
 
 
+@lru_cache(maxsize=MODEL_CACHE_SIZE)
+def cached_model(spec: ModelSpec) -> CableModel:
+    """The model of ``spec``, built on the first call and shared by later ones in this process.
+
+    A model is immutable once built (its memo only adds derived Functions), so sharing is safe.
+    """
+    return CableModel(spec)
+
+
 class CableModel:
     """Symbolic rfe model of the cable (CasADi SX), built once per fidelity.
 
@@ -191,8 +203,12 @@ class CableModel:
 
     @classmethod
     def from_scene(cls, scene, elements: int | None = None) -> CableModel:
-        """Build the model a scene asks for (``elements`` overrides its ``n``)."""
-        return cls(spec_from_scene(scene, elements))
+        """The model a scene asks for (``elements`` overrides its ``n``), built once per process.
+
+        Models are kept per :class:`ModelSpec` (:func:`cached_model`), so repeated simulations
+        and optimisations of one scene reuse the symbolic model and its compiled Functions.
+        """
+        return cached_model(spec_from_scene(scene, elements))
 
     # ----------------------------------------------------------------------------------------
     @property

@@ -352,3 +352,11 @@ def test_state_names(full_model, torsion):
     assert names[: model.dofs] == ["x_0", "y_0", "z_0", "psi_0", "theta_0", "phi_0"][: model.dofs]
     assert names[model.state_size // 2] == "d_x_0"
     assert ("phi_2" in names) == torsion
+
+
+def test_models_are_built_once_per_spec_in_a_process(models_dir):
+    scene = load_scene(models_dir / "hanging.toml")
+    first = CableModel.from_scene(scene)
+    assert CableModel.from_scene(scene) is first
+    assert CableModel.from_scene(scene.updated({"model.elements": 12})) is not first
+    assert CableModel.from_scene(scene, elements=4).spec.elements == 4
