@@ -17,6 +17,8 @@ from dataclasses import dataclass
 import casadi as ca
 import numpy as np
 
+from cable_ocp.parameters import is_on
+
 # Regularises |V| as sqrt(V.V + eps^2) so that the right-hand side stays differentiable at rest.
 SMOOTH_SPEED = 1e-4  # m/s
 
@@ -54,12 +56,14 @@ class HydroCoefficients:
     @property
     def has_drag(self) -> bool:
         """Whether any drag coefficient is non-zero."""
-        return self.water_density > 0 and (self.drag_normal > 0 or self.drag_axial > 0)
+        return is_on(self.water_density) and (is_on(self.drag_normal) or is_on(self.drag_axial))
 
     @property
     def has_added_mass(self) -> bool:
         """Whether any added-mass coefficient is non-zero."""
-        return self.water_density > 0 and (self.added_mass_normal > 0 or self.added_mass_axial > 0)
+        return is_on(self.water_density) and (
+            is_on(self.added_mass_normal) or is_on(self.added_mass_axial)
+        )
 
 
 def gauss_points(length: ca.SX, count: int) -> list[tuple[ca.SX, ca.SX]]:
@@ -82,14 +86,14 @@ def smooth_norm(v: ca.SX) -> ca.SX:
 
 def drag_force_density(velocity: ca.SX, axis: ca.SX, hydro: HydroCoefficients) -> ca.SX:
     """Morison drag per unit length (N/m) on a point of the axis moving with ``velocity`` (m/s)."""
-    relative = velocity - ca.DM(hydro.current)
+    relative = velocity - ca.vertcat(*hydro.current)
     axial = ca.dot(relative, axis) * axis
     normal = relative - axial
     half_rho_d = 0.5 * hydro.water_density * hydro.diameter
     force = ca.DM.zeros(3)
-    if hydro.drag_normal > 0:
+    if is_on(hydro.drag_normal):
         force = force - half_rho_d * hydro.drag_normal * smooth_norm(normal) * normal
-    if hydro.drag_axial > 0:
+    if is_on(hydro.drag_axial):
         force = force - half_rho_d * np.pi * hydro.drag_axial * smooth_norm(axial) * axial
     return force
 

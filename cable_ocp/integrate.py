@@ -9,6 +9,7 @@ in segments so that progress can be shown and a run that blows up stops early wi
 from __future__ import annotations
 
 import math
+from collections.abc import Callable
 from dataclasses import dataclass
 
 import casadi as ca
@@ -20,6 +21,7 @@ from cable_ocp.compile import CompileReport
 from cable_ocp.compile import compiled as compile_function
 from cable_ocp.drive import Drive
 from cable_ocp.model import INPUT_SIZE, CableModel
+from cable_ocp.parametric import ParametricModel
 from cable_ocp.progress import Progress
 
 SEGMENTS = 40  # progress updates (and blow-up checks) per run
@@ -40,37 +42,53 @@ class SimulationError(RuntimeError):
     """A simulation became non-finite, left its bonds or reached a singular configuration."""
 
 
-def rk4_step(model: CableModel, step: float, rhs: ca.Function | None = None) -> ca.Function:
-    """One classical RK4 step of length ``step`` (s).
+def rk4_step(model: CableModel, step: float) -> ca.Function:
+    """One classical RK4 step of length ``step`` (s) of the model, as one SX Function.
 
-    Inputs ``x`` and ``stage_inputs`` (15 x 3: ``u`` at ``t``, ``t + h/2``, ``t + h``). With the
-    model's own right-hand side the step is one SX Function; with another ``rhs`` (a compiled one)
-    it is an MX Function that calls it four times.
+    Inputs ``x`` and ``stage_inputs`` (15 x 3: ``u`` at ``t``, ``t + h/2``, ``t + h``).
+    """
+    x = ca.SX.sym("x", model.state_size)
+    stages = ca.SX.sym("stage_inputs", INPUT_SIZE, 3)
+    x_next = _rk4(lambda state, u: model.rhs(state, u), x, stages, step)
+    return ca.Function("rk4_step", [x, stages], [x_next], ["x", "stage_inputs"], ["x_next"])
+
+
+def parametric_rk4_step(parametric: ParametricModel, rhs: ca.Function | None = None) -> ca.Function:
+    """One RK4 step of a structure: ``(x, stage_inputs, p, h) -> x_next``, ``h`` in s.
+
+    With the parametric right-hand side the step is one SX Function; with another ``rhs`` of
+    ``(x, u, p)`` (the structured one, a compiled one) it is an MX Function calling it four times.
     """
     kind = ca.SX if rhs is None else ca.MX
-    rhs = model.rhs if rhs is None else rhs
-    x = kind.sym("x", model.state_size)
+    rhs = parametric.rhs if rhs is None else rhs
+    x = kind.sym("x", parametric.state_size)
     stages = kind.sym("stage_inputs", INPUT_SIZE, 3)
+    p, h = kind.sym("p", parametric.p.numel()), kind.sym("h")
+    x_next = _rk4(lambda state, u: rhs(state, u, p), x, stages, h)
+    return ca.Function(
+        "rk4_step", [x, stages, p, h], [x_next], ["x", "stage_inputs", "p", "h"], ["x_next"]
+    )
+
+
+def _rk4(rhs: Callable, x, stages, step):
     k1 = rhs(x, stages[:, 0])
     k2 = rhs(x + step / 2 * k1, stages[:, 1])
     k3 = rhs(x + step / 2 * k2, stages[:, 1])
     k4 = rhs(x + step * k3, stages[:, 2])
-    x_next = x + step / 6 * (k1 + 2 * k2 + 2 * k3 + k4)
-    return ca.Function("rk4_step", [x, stages], [x_next], ["x", "stage_inputs"], ["x_next"])
+    return x + step / 6 * (k1 + 2 * k2 + 2 * k3 + k4)
 
 
 def step_function(
     model: CableModel, step: float, compiled: bool = False, derivatives: bool = False
 ) -> ca.Function:
-    """The RK4 step, interpreted or compiled to C (cached on disk, :mod:`cable_ocp.compile`).
+    """The RK4 step ``(x, stage_inputs) -> x_next``, interpreted or compiled to C.
 
-    A small model's whole step is compiled as one flat Function (at n = 3 its derivatives are
-    25 % faster than around a compiled right-hand side). A large one's four copies of the
-    right-hand side made gcc run out of memory at n = 100, so its step is compiled around the
-    structured right-hand side (5 DOF) or its flat right-hand side alone (torsion).
-    ``derivatives`` compiles the first derivatives too (for optimisation). The Function is kept
-    on the model, so repeated runs (Nelder-Mead, studies) build and load it once;
-    :func:`step_compile_report` tells whether it came from the disk cache.
+    Interpreted, it is the model's own SX step. Compiled, it calls the step of the model's
+    structure (:func:`compiled_parametric_step`, cached on disk, :mod:`cable_ocp.compile`) with
+    the model's numbers and ``step`` as inputs, so every scene of one structure and every step
+    share one library. ``derivatives`` compiles the first derivatives too (for optimisation).
+    The Function is kept on the model, so repeated runs (Nelder-Mead, studies) build it once;
+    :func:`step_compile_report` tells whether the library came from the disk cache.
     """
     return _step_and_report(model, step, compiled, derivatives)[0]
 
@@ -80,20 +98,39 @@ def step_compile_report(model: CableModel, step: float, derivatives: bool = Fals
     return _step_and_report(model, step, True, derivatives)[1]
 
 
+def compiled_parametric_step(
+    parametric: ParametricModel, derivatives: bool = False
+) -> tuple[ca.Function, CompileReport]:
+    """The RK4 step of a structure compiled to C: ``(x, stage_inputs, p, h) -> x_next``.
+
+    A small model's whole step is compiled as one flat Function (at n = 3 its derivatives are
+    25 % faster than around a compiled right-hand side). A large one's four copies of the
+    right-hand side made gcc run out of memory at n = 100, so its step is compiled around the
+    structured right-hand side (5 DOF) or its flat right-hand side alone (torsion). Built once
+    per structure and process; the library is keyed by the structure, not by its numbers.
+    """
+
+    def build() -> tuple[ca.Function, CompileReport]:
+        description = repr(parametric.structure)
+        if RK4_STAGES * parametric.rhs.n_instructions() <= WHOLE_STEP_LIMIT:
+            return compile_function(parametric_rk4_step(parametric), description, derivatives)
+        if structured.supports(parametric):
+            looped = parametric_rk4_step(parametric, structured.structured_rhs(parametric))
+            return compile_function(looped, description, derivatives)
+        rhs, report = compile_function(parametric.rhs, description, derivatives)
+        return parametric_rk4_step(parametric, rhs), report
+
+    return parametric.memo(("rk4_step", derivatives), build)
+
+
 def _step_and_report(
     model: CableModel, step: float, compiled: bool, derivatives: bool
 ) -> tuple[ca.Function, CompileReport | None]:
     def build() -> tuple[ca.Function, CompileReport | None]:
-        description = f"{model.spec!r}|step={step!r}"
         if not compiled:
             return rk4_step(model, step), None
-        if RK4_STAGES * model.rhs.n_instructions() <= WHOLE_STEP_LIMIT:
-            return compile_function(rk4_step(model, step), description, derivatives)
-        if structured.supports(model):
-            looped = rk4_step(model, step, structured.structured_rhs(model))
-            return compile_function(looped, description, derivatives)
-        rhs, report = compile_function(model.rhs, repr(model.spec), derivatives)
-        return rk4_step(model, step, rhs), report
+        function, report = compiled_parametric_step(model.parametric, derivatives)
+        return model.bind(function, h=step), report
 
     return model.memo(("rk4_step", step, compiled, derivatives), build)
 
@@ -188,14 +225,14 @@ def integrate(
         size = min(per_segment, outputs - first)
         rows = slice(first + 1, first + 1 + size)
         steps = times[first * output_every : (first + size) * output_every]
-        _evaluate_into(
+        evaluate_into(
             _segment_function(model, step, compiled, output_every, size),
             [states[first], stage_inputs(drive, steps, step).T],
-            states[rows],
+            [states[rows]],
         )
         norms = np.empty(size)
-        _evaluate_into(
-            _residual_norms(model, size, compiled), [states[rows], all_inputs[rows]], norms
+        evaluate_into(
+            _residual_norms(model, size, compiled), [states[rows], all_inputs[rows]], [norms]
         )
         _check_block(model, states[rows], norms, all_times[rows], step, tolerance)
         progress.update(all_times[rows][-1])
@@ -203,8 +240,10 @@ def integrate(
     return RawRun(all_times, states, all_inputs)
 
 
-def _evaluate_into(function: ca.Function, arguments: list[np.ndarray], result: np.ndarray) -> None:
-    """Evaluate a Function on numpy arrays, writing its first output into ``result``.
+def evaluate_into(
+    function: ca.Function, arguments: list[np.ndarray], results: list[np.ndarray]
+) -> None:
+    """Evaluate a Function on numpy arrays, writing its outputs into ``results``.
 
     Each array holds a CasADi matrix column by column as C-ordered rows (its transpose), so no
     conversion through CasADi's DM is needed: at n = 100 that conversion cost a third of a run.
@@ -213,7 +252,8 @@ def _evaluate_into(function: ca.Function, arguments: list[np.ndarray], result: n
     arguments = [np.ascontiguousarray(a, dtype=float) for a in arguments]
     for k, argument in enumerate(arguments):
         buffer.set_arg(k, memoryview(argument))
-    buffer.set_res(0, memoryview(result))
+    for k, result in enumerate(results):
+        buffer.set_res(k, memoryview(result))
     evaluate()
     if buffer.ret() != 0:
         raise SimulationError(f"evaluating {function.name()} failed (code {buffer.ret()})")
@@ -222,27 +262,45 @@ def _evaluate_into(function: ca.Function, arguments: list[np.ndarray], result: n
 def _segment_function(
     model: CableModel, step: float, compiled: bool, output_every: int, size: int
 ) -> ca.Function:
-    """``size`` outputs of ``output_every`` RK4 steps each, in one call."""
-    return model.memo(
-        ("segment", step, compiled, output_every, size),
-        lambda: step_function(model, step, compiled).fold(output_every).mapaccum(size),
-    )
+    """``size`` outputs of ``output_every`` RK4 steps each, in one call.
+
+    Compiled, the structure's library is folded and mapped first and the numbers bound once
+    around the loops, not at every step.
+    """
+
+    def build() -> ca.Function:
+        if not compiled:
+            return step_function(model, step).fold(output_every).mapaccum(size)
+        library = compiled_parametric_step(model.parametric)[0]
+        loops = model.parametric.memo(
+            ("segment", output_every, size), lambda: library.fold(output_every).mapaccum(size)
+        )
+        return model.bind(loops, h=step)
+
+    return model.memo(("segment", step, compiled, output_every, size), build)
 
 
 def _residual_norms(model: CableModel, count: int, compiled: bool) -> ca.Function:
     """Largest bond residual (m) of each of ``count`` states (compiled along with the step)."""
 
-    def build() -> ca.Function:
-        x = ca.SX.sym("x", model.state_size)
-        u = ca.SX.sym("u", INPUT_SIZE)
-        residual = model.outputs(x, u)[2]
-        norm = ca.Function("bond_norm", [x, u], [ca.mmax(ca.fabs(residual))])
-        if compiled:
-            norm = compile_function(norm, repr(model.spec), derivatives=False)[0]
-        return norm
+    def parametric_norm() -> ca.Function:
+        parametric = model.parametric
+        x, u, p = parametric.x, parametric.u, parametric.p
+        residual = parametric.outputs(x=x, u=u, p=p)["bond_residual"]
+        norm = ca.Function(
+            "bond_norm", [x, u, p], [ca.mmax(ca.fabs(residual))], ["x", "u", "p"], ["norm"]
+        )
+        return compile_function(norm, repr(parametric.structure), derivatives=False)[0]
 
-    single = model.memo(("bond_norm", compiled), build)
-    return model.memo(("bond_norm", compiled, count), lambda: single.map(count))
+    def build() -> ca.Function:
+        if not compiled:
+            x, u = ca.SX.sym("x", model.state_size), ca.SX.sym("u", INPUT_SIZE)
+            residual = model.outputs(x=x, u=u)["bond_residual"]
+            return ca.Function("bond_norm", [x, u], [ca.mmax(ca.fabs(residual))]).map(count)
+        library = model.parametric.memo(("bond_norm",), parametric_norm)
+        return model.bind(model.parametric.memo(("bond_norm", count), lambda: library.map(count)))
+
+    return model.memo(("bond_norm", compiled, count), build)
 
 
 def _check_block(model, block, norms, times, step, tolerance) -> None:

@@ -1,10 +1,15 @@
-"""The symbolic rfe cable model: state, inputs, right-hand side and outputs (CONVENTIONS.md §3-4).
+"""The rfe cable model of a scene: state, inputs, right-hand side and outputs (CONVENTIONS.md §3-4).
 
 Elements ``i = 0..n``: element 0 carries the free end ``E = A_0``, element ``n`` hangs from the top
 point ``A_{n+1}`` carried by the vessel. The state is ``x = [q; q']`` with ``q`` stacked element by
 element; the inputs ``u`` are the prescribed top motion, the top-element length set by the winch
 (with its rates) and the external force at the end, so that one model serves every scene and every
 way of driving it.
+
+A :class:`CableModel` is the parametric model of its structure
+(:class:`cable_ocp.parametric.ParametricModel`) with the scene's numbers bound: its symbolic
+Functions ``(x, u)`` have them folded in as constants, its compiled ones call the structure's
+library with them as the input ``p``.
 """
 
 from __future__ import annotations
@@ -16,19 +21,19 @@ from functools import cached_property, lru_cache
 import casadi as ca
 import numpy as np
 
-from cable_ocp.hydro import HydroCoefficients, smooth_norm
-from cable_ocp.kinematics import POSITION, TWIST_ANGLE, relative_twist
-from cable_ocp.kkt import sparse_kkt_solve, thomas_solve
-from cable_ocp.rfe import ElementProperties, element_functions, element_rotation
+from cable_ocp.hydro import HydroCoefficients
+from cable_ocp.kinematics import TWIST_ANGLE
+from cable_ocp.kkt import sparse_kkt_solve
+from cable_ocp.parameters import parameter_names, parameter_values, structure_of
+from cable_ocp.parametric import (
+    INPUT_NAMES,
+    INPUT_SIZE,
+    ModelLayout,
+    parametric_model,
+)
+from cable_ocp.rfe import ElementProperties
 
-INPUT_NAMES = (
-    "top_x", "top_y", "top_z",
-    "top_vx", "top_vy", "top_vz",
-    "top_ax", "top_ay", "top_az",
-    "top_length", "top_length_rate", "top_length_acceleration",
-    "end_force_x", "end_force_y", "end_force_z",
-)  # fmt: skip
-INPUT_SIZE = len(INPUT_NAMES)
+__all__ = ["INPUT_NAMES", "INPUT_SIZE", "CableModel", "ModelSpec", "Payload", "spec_from_scene"]
 # Models kept per process by CableModel.from_scene (each holds its symbolic graph and compiled
 # Functions; a sweep of many fidelities evicts the least recently used).
 MODEL_CACHE_SIZE = 32
@@ -157,17 +162,22 @@ def spec_from_scene(scene, elements: int | None = None) -> ModelSpec:
 def cached_model(spec: ModelSpec) -> CableModel:
     """The model of ``spec``, built on the first call and shared by later ones in this process.
 
-    A model is immutable once built (its memo only adds derived Functions), so sharing is safe.
+    A model is immutable once built (its memo only adds derived Functions), so sharing is safe;
+    models of one structure share one :class:`~cable_ocp.parametric.ParametricModel`.
     """
     return CableModel(spec)
 
 
-class CableModel:
-    """Symbolic rfe model of the cable (CasADi SX), built once per fidelity.
+class CableModel(ModelLayout):
+    """The rfe model of one scene (CasADi SX): a parametric model with the scene's numbers bound.
 
     Attributes
     ----------
     spec : ModelSpec
+    parametric : ParametricModel
+        The model of this structure, shared by every spec that differs only in its numbers.
+    parameters : array
+        The numbers bound to its input ``p`` (names: :attr:`parameter_names`).
     x : SX
         State ``[q; q']``, size ``2 * dofs * (n + 1)``.
     u : SX
@@ -186,13 +196,10 @@ class CableModel:
     def __init__(self, spec: ModelSpec):
         if spec.elements < 1:
             raise ValueError(f"elements = {spec.elements} is out of range: must be >= 1")
-        self.spec = spec
-        self.dofs = spec.element.dofs
-        self.element_count = spec.elements + 1
-        size = self.dofs * self.element_count
-        self.x = ca.SX.sym("x", 2 * size)
-        self.u = ca.SX.sym("u", INPUT_SIZE)
-        self._build()
+        super().__init__(spec)
+        self.parametric = parametric_model(structure_of(spec))
+        self.parameters = parameter_values(spec)
+        self.x, self.u = self.parametric.x, self.parametric.u
         self._memo: dict = {}
 
     def memo(self, key: tuple, build: Callable[[], ca.Function]) -> ca.Function:
@@ -211,10 +218,10 @@ class CableModel:
         return cached_model(spec_from_scene(scene, elements))
 
     # ----------------------------------------------------------------------------------------
-    @property
-    def state_size(self) -> int:
-        """Length of the state vector."""
-        return self.x.numel()
+    @cached_property
+    def parameter_names(self) -> list[str]:
+        """Names of the entries of :attr:`parameters` (dotted paths into the spec)."""
+        return parameter_names(self.spec)
 
     @cached_property
     def state_names(self) -> list[str]:
@@ -223,176 +230,58 @@ class CableModel:
         names = [f"{c}_{i}" for i in range(self.element_count) for c in coords]
         return names + [f"d_{name}" for name in names]
 
-    def element_lengths(self, top_length: ca.SX | float) -> list:
-        """Lengths ``l_0 .. l_n`` (m): Delta/2 at both ends, Delta between, l_n from the winch."""
-        delta = self.spec.segment_length
-        lengths = [delta / 2] + [delta] * (self.element_count - 2) + [top_length]
-        return lengths if self.element_count > 1 else [top_length]
+    def bind(self, function: ca.Function, **values: float) -> ca.Function:
+        """A Function with its input ``p`` set to :attr:`parameters` (and others to ``values``).
 
-    def coordinates(self, x) -> tuple[list, list]:
-        """Split a state (SX or array) into per-element ``q_i`` and ``q'_i``."""
-        size = self.dofs * self.element_count
-        q = [x[i * self.dofs : (i + 1) * self.dofs] for i in range(self.element_count)]
-        qd = [
-            x[size + i * self.dofs : size + (i + 1) * self.dofs] for i in range(self.element_count)
-        ]
-        return q, qd
-
-    # ----------------------------------------------------------------------------------------
-    def _build(self) -> None:
-        spec = self.spec
-        element, element_energy = element_functions(spec.element)
-        q, qd = self.coordinates(self.x)
-        u = self.u
-        top, top_velocity, top_acceleration = u[0:3], u[3:6], u[6:9]
-        top_length, top_length_rate, top_length_acc = u[9], u[10], u[11]
-        end_force = u[12:15]
-        lengths = self.element_lengths(top_length)
-
-        terms = [element(qi, qdi, li) for qi, qdi, li in zip(q, qd, lengths, strict=True)]
-        mass = [t[0] for t in terms]
-        axes = [t[2] for t in terms]
-        axis_rates = [t[3] for t in terms]
-        axis_quadratic = [t[4] for t in terms]
-        top_jacobians = [t[5] for t in terms]
-
-        q_all, qd_all = ca.vertcat(*q), ca.vertcat(*qd)
-        potential, dissipation = self._spring_energies(q, qd, axes, axis_rates)
-        chain_force = -ca.gradient(potential, q_all) - ca.gradient(dissipation, qd_all)
-        forces = [
-            t[1] + chain_force[i * self.dofs : (i + 1) * self.dofs] for i, t in enumerate(terms)
-        ]
-        mass[0], forces[0] = self.end_loads(mass[0], forces[0], qd[0], end_force)
-
-        # Bond positions, rates and the quadratic part of their second derivative.
-        upper_points = [qi[POSITION] + li * ei for qi, li, ei in zip(q, lengths, axes, strict=True)]
-        lower_points = [qi[POSITION] for qi in q[1:]] + [top]
-        upper_rates = [
-            qdi[POSITION] + li * edi for qdi, li, edi in zip(qd, lengths, axis_rates, strict=True)
-        ]
-        upper_rates[-1] = upper_rates[-1] + top_length_rate * axes[-1]
-        lower_rates = [qdi[POSITION] for qdi in qd[1:]] + [top_velocity]
-        quadratic = [li * eq for li, eq in zip(lengths, axis_quadratic, strict=True)]
-        quadratic[-1] = (
-            quadratic[-1]
-            + top_length_acc * axes[-1]
-            + 2 * top_length_rate * axis_rates[-1]
-            - top_acceleration
-        )
-        residual = [lo - up for lo, up in zip(lower_points, upper_points, strict=True)]
-        rate = [lo - up for lo, up in zip(lower_rates, upper_rates, strict=True)]
-        alpha, beta = spec.baumgarte_alpha, spec.baumgarte_beta
-        bond_rhs = [
-            g - 2 * alpha * r - beta**2 * p
-            for g, r, p in zip(quadratic, rate, residual, strict=True)
-        ]
-
-        accelerations, bond_forces = thomas_solve(mass, forces, top_jacobians, bond_rhs)
-        qdd = ca.vertcat(*accelerations)
-        # Common subexpression elimination: 17 % fewer instructions at n = 15 and 100.
-        self.rhs = ca.Function(
-            "rhs", [self.x, u], [ca.vertcat(qd_all, qdd)], ["x", "u"], ["xdot"], {"cse": True}
+        An SX Function stays SX, with the numbers folded in as constants (the same expression as
+        a model built with them); any other (a compiled library) is wrapped in an MX call. A
+        mapped input (``p`` of a map over k calls) takes the one value for every call.
+        """
+        kind = ca.SX if function.is_a("SXFunction") else ca.MX
+        fixed = {"p": self.parameters, **values}
+        names = [name for name in function.name_in() if name not in fixed]
+        arguments = {name: kind.sym(name, function.sparsity_in(name)) for name in names}
+        constants = {name: ca.DM(value) for name, value in fixed.items()}
+        results = function.call({**arguments, **constants})
+        return ca.Function(
+            function.name(),
+            list(arguments.values()),
+            [results[name] for name in function.name_out()],
+            names,
+            function.name_out(),
+            {"cse": True} if kind is ca.SX else {},
         )
 
-        self._sparse_parts = ca.Function(
-            "kkt_parts",
-            [self.x, u],
-            [
-                ca.diagcat(*mass),
-                ca.vertcat(*forces),
-                ca.jacobian(ca.vertcat(*residual), q_all),
-                ca.vertcat(*bond_rhs),
-            ],
-        )
-        joints = ca.horzcat(*[qi[POSITION] for qi in q], upper_points[-1])
-        joint_velocities = ca.horzcat(*[qdi[POSITION] for qdi in qd], upper_rates[-1])
-        forces_matrix = ca.horzcat(*bond_forces)
-        tensions = ca.vertcat(*[ca.norm_2(f) for f in bond_forces])
-        self.outputs = ca.Function(
-            "outputs",
-            [self.x, u],
-            [
-                joints,
-                joint_velocities,
-                ca.vertcat(*residual),
-                ca.vertcat(*rate),
-                forces_matrix,
-                tensions,
-                qdd,
-            ],
-            ["x", "u"],
-            [
-                "joints",
-                "joint_velocities",
-                "bond_residual",
-                "bond_rate",
-                "bond_forces",
-                "tensions",
-                "accelerations",
-            ],
-        )
-        energy = potential + sum(
-            element_energy(qi, qdi, li) for qi, qdi, li in zip(q, qd, lengths, strict=True)
-        )
-        energy += self._payload_energy(q[0], qd[0])
-        self.energy = ca.Function("energy", [self.x, u], [energy], ["x", "u"], ["energy"])
+    def output_values(self, x: np.ndarray, u: np.ndarray) -> dict[str, np.ndarray]:
+        """The outputs at one state and input, by name (see :attr:`outputs`), as arrays.
 
-    def _spring_energies(self, q, qd, axes, axis_rates) -> tuple[ca.SX, ca.SX]:
-        """Bending (and torsion) potential and Rayleigh dissipation of the joints."""
-        spec = self.spec
-        bending = spec.bending_stiffness / spec.segment_length
-        potential = ca.SX(0)
-        dissipation = ca.SX(0)
-        for i in range(1, self.element_count):
-            potential += bending * (1 - ca.dot(axes[i - 1], axes[i]))
-            relative_rate = axis_rates[i] - axis_rates[i - 1]
-            dissipation += (
-                0.5 * spec.bending_damping * bending * ca.dot(relative_rate, relative_rate)
-            )
-        if spec.element.torsion:
-            torsion = spec.torsional_stiffness / spec.segment_length
-            rotations = [element_rotation(qi, True) for qi in q]
-            q_all, qd_all = ca.vertcat(*q), ca.vertcat(*qd)
-            for i in range(1, self.element_count):
-                twist = relative_twist(rotations[i - 1], rotations[i])
-                twist_rate = ca.jtimes(twist, q_all, qd_all)
-                potential += 0.5 * torsion * twist**2
-                dissipation += 0.5 * spec.torsion_damping * torsion * twist_rate**2
-        return potential, dissipation
+        Evaluated on the parametric model with :attr:`parameters`: no bound Function is built
+        (binding the outputs of a model of n = 100 costs 0.7 s, evaluating them a millisecond).
+        """
+        results = self.parametric.outputs(x=x, u=u, p=self.parameters)
+        return {name: np.array(value) for name, value in results.items()}
 
-    def end_loads(self, mass, force, qd_end, end_force) -> tuple[ca.SX, ca.SX]:
-        """Add the external end force and the payload to element 0."""
-        spec, payload = self.spec, self.spec.payload
-        translational = ca.vertcat(end_force, ca.SX.zeros(self.dofs - 3))
-        force = force + translational
-        if payload.mass > 0 or payload.volume > 0:
-            water = spec.water_density
-            added = payload.added_mass_coefficient * water * payload.volume
-            mass = mass + ca.diagcat(
-                ca.SX.eye(3) * (payload.mass + added), ca.SX(self.dofs - 3, self.dofs - 3)
-            )
-            weight = (payload.mass - water * payload.volume) * spec.gravity
-            payload_force = ca.vertcat(0, 0, -weight)
-            if water > 0 and payload.drag_area > 0:
-                relative = qd_end[POSITION] - ca.DM(spec.element.hydro.current)
-                coeff = 0.5 * water * payload.drag_coefficient * payload.drag_area
-                payload_force = payload_force - coeff * smooth_norm(relative) * relative
-            force = force + ca.vertcat(payload_force, ca.SX.zeros(self.dofs - 3))
-        return mass, force
+    @cached_property
+    def rhs(self) -> ca.Function:
+        """``(x, u) -> x'`` (see the class attributes)."""
+        return self.bind(self.parametric.rhs)
 
-    def _payload_energy(self, q_end, qd_end) -> ca.SX:
-        payload, water = self.spec.payload, self.spec.water_density
-        velocity = qd_end[POSITION]
-        inertia = payload.mass + payload.added_mass_coefficient * water * payload.volume
-        weight = (payload.mass - water * payload.volume) * self.spec.gravity
-        return 0.5 * inertia * ca.dot(velocity, velocity) + weight * q_end[2]
+    @cached_property
+    def outputs(self) -> ca.Function:
+        """``(x, u) ->`` joints, velocities, bond residuals and forces, tensions, accelerations."""
+        return self.bind(self.parametric.outputs)
+
+    @cached_property
+    def energy(self) -> ca.Function:
+        """``(x, u) ->`` kinetic plus potential energy (J), external force excluded."""
+        return self.bind(self.parametric.energy)
 
     # ----------------------------------------------------------------------------------------
     @cached_property
     def rhs_sparse(self) -> ca.Function:
         """Right-hand side by the assembled sparse KKT solve (independent of the Thomas path)."""
         x, u = ca.MX.sym("x", self.state_size), ca.MX.sym("u", INPUT_SIZE)
-        mass, force, jac, rhs = self._sparse_parts(x, u)
+        mass, force, jac, rhs = self.bind(self.parametric.kkt_parts)(x, u)
         qdd, bond_forces = sparse_kkt_solve(mass, force, jac, rhs)
         size = self.state_size // 2
         return ca.Function(

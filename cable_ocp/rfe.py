@@ -141,10 +141,14 @@ def closed_form_kinetic_energy(
     )
 
 
-def element_functions(props: ElementProperties) -> tuple[ca.Function, ca.Function]:
+def element_functions(
+    props: ElementProperties, parameters: ca.SX | None = None
+) -> tuple[ca.Function, ca.Function]:
     """Build the per-element terms as SX Functions, to be inlined for every element.
 
-    Inputs ``q``, ``qd`` (dofs) and ``length`` (m). Outputs:
+    Inputs ``q``, ``qd`` (dofs), ``length`` (m) and, when ``props`` holds symbols of a parameter
+    vector (:func:`cable_ocp.parameters.symbolic_spec`), that vector ``parameters`` as ``p``.
+    Outputs:
 
     - ``mass_matrix`` (dofs x dofs, kg, kg m, kg m^2): rigid plus added mass, from the kinetic
       energy of both (CONVENTIONS.md §4);
@@ -186,10 +190,13 @@ def element_functions(props: ElementProperties) -> tuple[ca.Function, ca.Functio
     axis_rate = ca.jtimes(axis, q, qd)
     axis_quadratic = ca.jtimes(axis_rate, q, qd)
     top_jacobian = ca.jacobian(q[POSITION] + length * axis, q)
+    inputs, names = [q, qd, length], ["q", "qd", "length"]
+    if parameters is not None:
+        inputs, names = [*inputs, parameters], [*names, "p"]
     return ca.Function(
         "element",
-        [q, qd, length],
+        inputs,
         [ca.densify(mass_matrix), force, axis, axis_rate, axis_quadratic, top_jacobian],
-        ["q", "qd", "length"],
+        names,
         ["mass_matrix", "force", "axis", "axis_rate", "axis_quadratic", "top_jacobian"],
-    ), ca.Function("element_energy", [q, qd, length], [kinetic + potential])
+    ), ca.Function("element_energy", inputs, [kinetic + potential], names, ["energy"])

@@ -4,13 +4,14 @@ from __future__ import annotations
 
 from collections.abc import Callable
 
+import casadi as ca
 import numpy as np
 
 from cable_ocp import structured
 from cable_ocp import winch as winch_angles
 from cable_ocp.bounds import BOUND_TOLERANCE
 from cable_ocp.drive import Drive
-from cable_ocp.integrate import integrate
+from cable_ocp.integrate import evaluate_into, integrate
 from cable_ocp.model import CableModel
 from cable_ocp.seabed import clearance_error, rms_objective
 from cable_ocp.statics import equilibrium
@@ -92,13 +93,31 @@ def joints_and_tensions(
     Compiled, a 5-DOF model evaluates them with the structured loops compiled to C (cached):
     at n = 100 the interpreted outputs cost twice the whole compiled integration.
     """
-    count = len(states)
+    count, joint_count = len(states), model.element_count + 1
     if compiled and structured.supports(model):
-        function = structured.compiled_structured(model, "outputs")
-        joints, tensions = function.map(count)(states.T, inputs.T)
+        function = structured.compiled_structured(model, "outputs", count)
     else:
-        joints, _, _, _, _, tensions, _ = model.outputs.map(count)(states.T, inputs.T)
-    return np.array(joints).reshape(3, count, -1).transpose(1, 0, 2), np.array(tensions).T
+        function = model.memo(("joints_tensions", count), lambda: _joints_tensions(model, count))
+    # Column-major CasADi results, written as their C-ordered transposes.
+    joints = np.empty((count * joint_count, 3))
+    tensions = np.empty((count, model.element_count))
+    evaluate_into(function, [states, inputs], [joints, tensions])
+    return joints.reshape(count, joint_count, 3).transpose(0, 2, 1), tensions
+
+
+def _joints_tensions(model: CableModel, count: int):
+    """``count`` states and inputs -> joints and tensions, from the model's own outputs."""
+    outputs = model.outputs
+    x, u = outputs.mx_in("x"), outputs.mx_in("u")
+    results = outputs(x=x, u=u)
+    single = ca.Function(
+        "joints_tensions",
+        [x, u],
+        [results["joints"], results["tensions"]],
+        ["x", "u"],
+        ["joints", "tensions"],
+    )
+    return single.map(count)
 
 
 def simulate(

@@ -197,8 +197,8 @@ def bond_tensions(model: CableModel, state: np.ndarray, u: np.ndarray) -> np.nda
     its tension is the bond force along the axis of element ``j`` (``model.outputs`` gives only
     the norm).
     """
-    joints, _, _, _, forces, _, _ = model.outputs(state, u)
-    return _signed_tensions(np.array(joints), np.array(forces))
+    outputs = model.output_values(state, u)
+    return _signed_tensions(outputs["joints"], outputs["bond_forces"])
 
 
 def _signed_tensions(joints: np.ndarray, forces: np.ndarray) -> np.ndarray:
@@ -224,9 +224,9 @@ def check_physical(model: CableModel, state: np.ndarray, u: np.ndarray) -> None:
         The inputs the equilibrium holds under.
     """
     spec = model.spec
-    joints, _, _, _, forces, _, _ = model.outputs(state, u)
-    joints = np.array(joints)
-    tensions = _signed_tensions(joints, np.array(forces))
+    outputs = model.output_values(state, u)
+    joints = outputs["joints"]
+    tensions = _signed_tensions(joints, outputs["bond_forces"])
     weight_in_air = spec.element.mass_per_length * spec.gravity * spec.cable_length
     scale = max(float(np.abs(tensions).max()), weight_in_air)
     pushing = np.flatnonzero(tensions < -COMPRESSION_TOLERANCE * scale)

@@ -37,7 +37,7 @@ def random_point(model, rng):
 
 
 def test_structured_rhs_equals_the_flat_one(model, validation):
-    rhs = structured_rhs(model)
+    rhs = model.bind(structured_rhs(model.parametric))
     rng = np.random.default_rng(3)
     worst = 0.0
     for _ in range(5):
@@ -51,7 +51,7 @@ def test_structured_rhs_equals_the_flat_one(model, validation):
 
 
 def test_structured_jacobian_equals_the_flat_one(model):
-    rhs = structured_rhs(model)
+    rhs = model.bind(structured_rhs(model.parametric))
     x_sym = ca.MX.sym("x", model.state_size)
     x, u = random_point(model, np.random.default_rng(4))
     looped = ca.Function("j", [x_sym], [ca.jacobian(rhs(x_sym, u), x_sym)])(x)
@@ -61,7 +61,7 @@ def test_structured_jacobian_equals_the_flat_one(model):
 
 
 def test_structured_joints_and_tensions_equal_the_model_outputs(model):
-    outputs = structured_outputs(model)
+    outputs = model.bind(structured_outputs(model.parametric))
     x, u = random_point(model, np.random.default_rng(6))
     joints, tensions = (np.array(v) for v in outputs(x, u))
     reference = model.outputs(x, u)
@@ -75,4 +75,4 @@ def test_torsion_is_not_supported(models_dir):
     )
     assert not supports(torsion)
     with pytest.raises(ValueError, match="5-DOF"):
-        structured_rhs(torsion)
+        structured_rhs(torsion.parametric)

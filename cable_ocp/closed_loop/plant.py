@@ -158,7 +158,7 @@ class Plant:
                 f"the plant state became non-finite by t = {t:.6g} s (numerics.step = "
                 f"{self.step} s): the RK4 step is beyond its stability limit"
             )
-        residual = float(np.max(np.abs(np.array(self.model.outputs(x, u)[2]))))
+        residual = float(np.max(np.abs(self.model.output_values(x, u)["bond_residual"])))
         tolerance = self.scene.numerics.constraint_tolerance
         if residual > tolerance:
             raise SimulationError(

@@ -51,9 +51,11 @@ def reference_run(scene, plan: StudyPlan) -> Reference:
     if plan.compiled:
         # The structured form (equal to model.rhs) compiles in seconds where the flat one takes
         # minutes; reference_solution reads only ``model.rhs``: hand it the compiled one.
-        flat = not structured.supports(model)
-        rhs = model.rhs if flat else structured.structured_rhs(model)
-        model = SimpleNamespace(rhs=compile_function(rhs, repr(model.spec), derivatives=False)[0])
+        if structured.supports(model):
+            rhs = structured.compiled_structured(model, "rhs")
+        else:
+            rhs = compile_function(model.rhs, repr(model.spec), derivatives=False)[0]
+        model = SimpleNamespace(rhs=rhs)
     duration = scene.numerics.duration
     times = np.linspace(0.0, duration, 1 + round(duration / plan.output_interval))
     states, cpu, wall = timed(

@@ -1,0 +1,75 @@
+"""One parametric model per structure: numbers as the input p, compiled once for many scenes."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from cable_ocp import parametric
+from cable_ocp.drive import Drive
+from cable_ocp.model import CableModel, cached_model, spec_from_scene
+from cable_ocp.parameters import parameter_names, parameter_values, structure_of
+from cable_ocp.scene import load_scene
+from cable_ocp.simulation import simulate
+from cable_ocp.statics import rest_inputs
+
+SMALL = {"model.elements": 6, "numerics.duration": 2.0}
+
+
+def test_structure_keeps_switches_and_drops_numbers(models_dir):
+    scene = load_scene(models_dir / "hanging.toml")
+    spec = spec_from_scene(scene)
+    current = spec_from_scene(scene.updated({"environment.current": [0.5, -0.2, 0.0]}))
+    stiffer = spec_from_scene(scene.updated({"hydrodynamics.drag_normal": 2.0}))
+    no_drag = spec_from_scene(scene.updated({"hydrodynamics.drag": False}))
+    assert structure_of(spec) == structure_of(current) == structure_of(stiffer)
+    assert structure_of(no_drag) != structure_of(spec)
+    names = parameter_names(spec)
+    assert len(names) == len(set(names)) == parameter_values(spec).size
+    # The current is a parameter even in still water; a switched-off term is no parameter.
+    assert "element.hydro.current[0]" in names
+    assert "element.hydro.drag_normal" not in parameter_names(no_drag)
+    assert dict(zip(names, parameter_values(current), strict=True))[
+        "element.hydro.current[0]"
+    ] == pytest.approx(0.5)
+
+
+def test_scenes_of_one_structure_share_the_symbolic_model(models_dir):
+    scene = load_scene(models_dir / "hanging.toml")
+    still = CableModel.from_scene(scene)
+    flowing = CableModel.from_scene(scene.updated({"environment.current": [0.0, 1.0, 0.0]}))
+    assert flowing.parametric is still.parametric
+    rng = np.random.default_rng(5)
+    u = rest_inputs(Drive.from_scene(scene))
+    x = rng.normal(size=still.state_size) * 0.1
+    x[3 : still.state_size // 2 : still.dofs] += np.pi / 2
+    shared = np.array(still.parametric.rhs(x, u, flowing.parameters))
+    bound = np.array(flowing.rhs(x, u))
+    # The bound Function folds the numbers in: the same arithmetic, so equal to rounding.
+    np.testing.assert_allclose(bound, shared, rtol=1e-13, atol=1e-12)
+    # ... and the current does act: the accelerations differ from still water's.
+    assert np.abs(bound - np.array(still.rhs(x, u))).max() > 1e-3
+
+
+def test_a_sweep_over_currents_compiles_once(models_dir, tmp_path, monkeypatch):
+    """Three currents and two drag coefficients: one set of libraries, written by the first run."""
+    monkeypatch.setenv("CABLE_OCP_CACHE", str(tmp_path))
+    # Forget what this process compiled, so that the first run here compiles into tmp_path.
+    cached_model.cache_clear()
+    parametric.parametric_model.cache_clear()
+    scene = load_scene(models_dir / "hanging.toml", SMALL)
+    first = simulate(scene, compiled=True)
+    libraries = sorted(tmp_path.glob("*.so"))
+    assert libraries, "the first run compiled nothing"
+    ends = [first.end[-1]]
+    for overrides in (
+        {"environment.current": [0.0, 0.5, 0.0]},
+        {"environment.current": [0.3, 1.0, 0.0]},
+        {"hydrodynamics.drag_normal": 1.6},
+    ):
+        run = simulate(scene.updated(overrides), compiled=True)
+        ends.append(run.end[-1])
+    assert sorted(tmp_path.glob("*.so")) == libraries
+    assert parametric.parametric_model.cache_info().misses == 1
+    # The runs did see their own numbers: the end trails downstream in each current.
+    assert ends[1][1] > ends[0][1] + 1.0 and ends[2][1] > ends[1][1]
