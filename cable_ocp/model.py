@@ -24,13 +24,9 @@ import numpy as np
 from cable_ocp.hydro import HydroCoefficients
 from cable_ocp.kinematics import TWIST_ANGLE
 from cable_ocp.kkt import sparse_kkt_solve
+from cable_ocp.layout import INPUT_NAMES, INPUT_SIZE
 from cable_ocp.parameters import parameter_names, parameter_values, structure_of
-from cable_ocp.parametric import (
-    INPUT_NAMES,
-    INPUT_SIZE,
-    ModelLayout,
-    parametric_model,
-)
+from cable_ocp.parametric import ModelLayout, parametric_model
 from cable_ocp.rfe import ElementProperties
 
 __all__ = ["INPUT_NAMES", "INPUT_SIZE", "CableModel", "ModelSpec", "Payload", "spec_from_scene"]

@@ -18,26 +18,10 @@ import casadi as ca
 from cable_ocp.hydro import smooth_norm
 from cable_ocp.kinematics import POSITION, relative_twist
 from cable_ocp.kkt import thomas_solve
+from cable_ocp.layout import INPUT_SIZE, INPUTS, OUTPUT_NAMES
 from cable_ocp.parameters import is_on, symbolic_spec
 from cable_ocp.rfe import element_functions, element_rotation
 
-INPUT_NAMES = (
-    "top_x", "top_y", "top_z",
-    "top_vx", "top_vy", "top_vz",
-    "top_ax", "top_ay", "top_az",
-    "top_length", "top_length_rate", "top_length_acceleration",
-    "end_force_x", "end_force_y", "end_force_z",
-)  # fmt: skip
-INPUT_SIZE = len(INPUT_NAMES)
-OUTPUT_NAMES = (
-    "joints",
-    "joint_velocities",
-    "bond_residual",
-    "bond_rate",
-    "bond_forces",
-    "tensions",
-    "accelerations",
-)
 # Structures kept per process (each holds its symbolic graph and compiled Functions).
 STRUCTURE_CACHE_SIZE = 16
 
@@ -95,14 +79,14 @@ class ParametricModel(ModelLayout):
     structure : ModelSpec
         The structure it was built from (:func:`cable_ocp.parameters.structure_of`).
     x, u, p : SX
-        State ``[q; q']``, inputs (:data:`INPUT_NAMES`) and parameters.
+        State ``[q; q']``, inputs (:mod:`cable_ocp.layout`) and parameters.
     rhs : casadi.Function
         ``(x, u, p) -> x'`` with the bonds solved by the block Thomas elimination.
     kkt_parts : casadi.Function
         ``(x, u, p) ->`` block-diagonal mass matrix, forces, bond Jacobian and bond right-hand
         side, for the assembled sparse solve.
     outputs : casadi.Function
-        ``(x, u, p) ->`` :data:`OUTPUT_NAMES`.
+        ``(x, u, p) ->`` :data:`cable_ocp.layout.OUTPUT_NAMES`.
     energy : casadi.Function
         ``(x, u, p) ->`` kinetic plus potential energy (J), external force excluded.
     """
@@ -133,9 +117,11 @@ class ParametricModel(ModelLayout):
         element, element_energy = element_functions(spec.element, p)
         q, qd = self.coordinates(self.x)
         u = self.u
-        top, top_velocity, top_acceleration = u[0:3], u[3:6], u[6:9]
-        top_length, top_length_rate, top_length_acc = u[9], u[10], u[11]
-        end_force = u[12:15]
+        top, top_velocity = u[INPUTS.top], u[INPUTS.top_velocity]
+        top_acceleration = u[INPUTS.top_acceleration]
+        top_length, top_length_rate = u[INPUTS.top_length], u[INPUTS.top_length_rate]
+        top_length_acc = u[INPUTS.top_length_acceleration]
+        end_force = u[INPUTS.end_force]
         lengths = self.element_lengths(top_length)
 
         terms = [element(qi, qdi, li, p) for qi, qdi, li in zip(q, qd, lengths, strict=True)]

@@ -12,6 +12,7 @@ from cable_ocp import winch as winch_angles
 from cable_ocp.bounds import BOUND_TOLERANCE
 from cable_ocp.drive import Drive
 from cable_ocp.integrate import evaluate_into, integrate
+from cable_ocp.layout import INPUTS
 from cable_ocp.model import CableModel
 from cable_ocp.seabed import clearance_error, rms_objective
 from cable_ocp.statics import equilibrium
@@ -54,7 +55,7 @@ def check_top_length(scene, drive: Drive, times: np.ndarray) -> None:
     A length outside by at most ``winch.drum_radius * BOUND_TOLERANCE`` (the angle tolerance of
     :mod:`cable_ocp.bounds` as a length, m) counts as within it.
     """
-    length = drive.inputs(times)[9]
+    length = drive.inputs(times)[INPUTS.top_length]
     low, high = scene.winch.top_length_min, scene.winch.top_length_max
     tolerance = scene.winch.drum_radius * BOUND_TOLERANCE
     outside = (length < low - tolerance) | (length > high + tolerance)

@@ -19,6 +19,7 @@ from cable_ocp import structured
 from cable_ocp.drive import Drive
 from cable_ocp.hydro import HydroCoefficients
 from cable_ocp.kinematics import axis_direction
+from cable_ocp.layout import INPUTS
 from cable_ocp.model import CableModel, Payload
 
 RESIDUAL_TOLERANCE = 1e-10  # rad/s^2, largest angular acceleration left at the equilibrium
@@ -60,11 +61,11 @@ def string_guess(model: CableModel, u: np.ndarray) -> np.ndarray:
     array (n+1, 2), rad: psi and theta per element
     """
     spec = model.spec
-    lengths = np.array(model.element_lengths(float(u[9])))
+    lengths = np.array(model.element_lengths(float(u[INPUTS.top_length])))
     below = np.cumsum(lengths) - lengths / 2
     weight = spec.element.submerged_weight_per_length
     payload = (spec.payload.mass - spec.water_density * spec.payload.volume) * spec.gravity
-    pull = np.outer(weight * below + payload, [0.0, 0.0, 1.0]) - u[12:15]
+    pull = np.outer(weight * below + payload, [0.0, 0.0, 1.0]) - u[INPUTS.end_force]
     hydro = spec.element.hydro
     if hydro is not None and hydro.has_drag and np.any(hydro.current):
         pull = _trailing_pulls(pull, lengths, hydro, spec.payload)
@@ -117,8 +118,8 @@ def _smallest_root(current: np.ndarray, loads: np.ndarray, turn: float) -> float
 def _state_from_angles(model: CableModel, angles: ca.SX, u: np.ndarray) -> ca.SX:
     """State at rest whose positions follow from the angles by chaining down from the top."""
     count, rotational = model.element_count, model.dofs - 3
-    lengths = model.element_lengths(float(u[9]))
-    point = ca.DM(u[0:3])
+    lengths = model.element_lengths(float(u[INPUTS.top_length]))
+    point = ca.DM(u[INPUTS.top])
     q = [None] * count
     for i in reversed(range(count)):
         a = angles[i * rotational : (i + 1) * rotational]

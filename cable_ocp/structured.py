@@ -20,14 +20,9 @@ import casadi as ca
 from cable_ocp.compile import compiled as compile_function
 from cable_ocp.kinematics import POSITION
 from cable_ocp.kkt import cholesky_solve, inverse_3x3
+from cable_ocp.layout import INPUT_SIZE, INPUTS
 from cable_ocp.model import CableModel
-from cable_ocp.parametric import (
-    INPUT_SIZE,
-    ModelLayout,
-    ParametricModel,
-    baumgarte,
-    bending_energies,
-)
+from cable_ocp.parametric import ModelLayout, ParametricModel, baumgarte, bending_energies
 from cable_ocp.rfe import element_functions
 
 
@@ -221,8 +216,10 @@ def _structured_graph(model: ParametricModel) -> tuple[ca.MX, ...]:
     p = ca.MX.sym("p", model.p.numel())
     q = ca.reshape(x[:size], dofs, count)
     qd = ca.reshape(x[size:], dofs, count)
-    top, top_velocity, top_acceleration = u[0:3], u[3:6], u[6:9]
-    top_length, top_length_rate, top_length_acc = u[9], u[10], u[11]
+    top, top_velocity = u[INPUTS.top], u[INPUTS.top_velocity]
+    top_acceleration = u[INPUTS.top_acceleration]
+    top_length, top_length_rate = u[INPUTS.top_length], u[INPUTS.top_length_rate]
+    top_length_acc = u[INPUTS.top_length_acceleration]
     delta = ca.Function("segment_length", [model.p], [model.spec.segment_length])(p)
 
     lower_forces, upper_forces = _joint_forces(model).map(count - 1)(
@@ -235,7 +232,9 @@ def _structured_graph(model: ParametricModel) -> tuple[ca.MX, ...]:
     rest = _element_solve(model, end=False).map(count - 1)(
         q[:, 1:], qd[:, 1:], lengths, spring[:, 1:], p
     )
-    first = _element_solve(model, end=True)(q[:, 0], qd[:, 0], delta / 2, spring[:, 0], u[12:15], p)
+    first = _element_solve(model, end=True)(
+        q[:, 0], qd[:, 0], delta / 2, spring[:, 0], u[INPUTS.end_force], p
+    )
     free, along_p, along_d, top_jac, point, rate, quad, axis, axis_rate = (
         ca.horzcat(a, b) for a, b in zip(first, rest, strict=True)
     )

@@ -10,6 +10,7 @@ from pathlib import Path
 
 import numpy as np
 
+from cable_ocp.layout import INPUTS
 from cable_ocp.output import json_text
 
 ARRAY_FIELDS = (
@@ -65,7 +66,7 @@ class Trajectory:
     @property
     def top_length(self) -> np.ndarray:
         """Length of the top element over time (k,), m."""
-        return self.inputs[:, 9]
+        return self.inputs[:, INPUTS.top_length]
 
     @property
     def top_tension(self) -> np.ndarray:

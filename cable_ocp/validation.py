@@ -9,6 +9,7 @@ import numpy as np
 
 from cable_ocp.catenary import catenary_shape, relative_errors
 from cable_ocp.drive import Drive
+from cable_ocp.layout import INPUTS
 from cable_ocp.model import CableModel
 from cable_ocp.scene import ModelOptions
 from cable_ocp.statics import equilibrium
@@ -72,12 +73,13 @@ def catenary_check(scene, elements: int | None = None) -> CatenaryCheck:
     drive = Drive.from_scene(scene, elements=model.spec.elements)
     state = equilibrium(model, drive)
     u = drive.inputs(np.zeros(1))[:, 0]
-    outputs = model.outputs(state, u)
-    joints = np.array(outputs[0]) - u[0:3, None]
+    outputs = model.output_values(state, u)
+    joints = outputs["joints"] - u[INPUTS.top, None]
     lengths = np.array(model.element_lengths(model.spec.segment_length / 2))
     length = scene.cable.length
     arc = length - np.concatenate([[0.0], np.cumsum(lengths)])
-    horizontal, vertical = float(np.hypot(u[12], u[13])), float(u[14])
+    force_x, force_y, force_z = u[INPUTS.end_force]
+    horizontal, vertical = float(np.hypot(force_x, force_y)), float(force_z)
     weight = scene.cable.mass_per_length * scene.environment.gravity
     stiffness = scene.cable.youngs_modulus * scene.cable.cross_section_area
     compared = slice(0, model.element_count - 1)
@@ -92,7 +94,7 @@ def catenary_check(scene, elements: int | None = None) -> CatenaryCheck:
             relative_errors(joints[2][compared], z_in[compared]).max(),
         ),
     }
-    top_tension = float(np.array(outputs[5]).ravel()[-1])
+    top_tension = float(outputs["tensions"].ravel()[-1])
     return CatenaryCheck(
         elements=model.spec.elements,
         max_error_x=float(errors["x"]),

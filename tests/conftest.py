@@ -7,6 +7,8 @@ from pathlib import Path
 import numpy as np
 import pytest
 
+from cable_ocp.layout import INPUTS
+
 MODELS = Path(__file__).resolve().parent.parent / "models"
 
 
@@ -25,9 +27,9 @@ def chained_state(model, u: np.ndarray, psi, theta) -> np.ndarray:
     count = model.element_count
     psi = np.broadcast_to(np.asarray(psi, dtype=float), (count,))
     theta = np.broadcast_to(np.asarray(theta, dtype=float), (count,))
-    lengths = [float(length) for length in model.element_lengths(float(u[9]))]
+    lengths = [float(length) for length in model.element_lengths(float(u[INPUTS.top_length]))]
     q = np.zeros((count, model.dofs))
-    point = np.asarray(u[0:3], dtype=float).copy()
+    point = np.asarray(u[INPUTS.top], dtype=float).copy()
     for i in reversed(range(count)):
         point = point - lengths[i] * axis(psi[i], theta[i])
         q[i, :3] = point

@@ -9,6 +9,7 @@ import pytest
 
 from cable_ocp import compile as compile_module
 from cable_ocp.integrate import rk4_step
+from cable_ocp.layout import INPUTS
 from cable_ocp.model import CableModel
 from cable_ocp.scene import load_scene
 
@@ -32,7 +33,7 @@ def test_compiled_step_matches_and_is_cached(tiny_step, tmp_path, monkeypatch):
     rng = np.random.default_rng(0)
     x = rng.normal(size=model.state_size) * 0.1
     u = rng.normal(size=(15, 3))
-    u[9] = 25.0
+    u[INPUTS.top_length] = 25.0
     reference = np.array(step(x, u))
     for f in (fast, again):
         assert np.allclose(np.array(f(x, u)), reference, rtol=1e-12, atol=1e-12)

@@ -8,6 +8,7 @@ import pytest
 
 from cable_ocp.drive import Drive
 from cable_ocp.kinematics import axis_direction, rotation_matrix
+from cable_ocp.layout import INPUTS
 from cable_ocp.model import INPUT_SIZE, CableModel
 from cable_ocp.rfe import (
     ElementProperties,
@@ -57,9 +58,9 @@ def random_state(model: CableModel, rng: np.random.Generator) -> np.ndarray:
 def random_inputs(rng: np.random.Generator) -> np.ndarray:
     """Top motion, a top-element length in the winch's range (2..30 m), rates and an end force."""
     u = rng.normal(size=INPUT_SIZE)
-    u[0:3] *= 10.0  # m
-    u[9] = rng.uniform(2.0, 30.0)  # m
-    u[12:15] *= 1e4  # N
+    u[INPUTS.top] *= 10.0  # m
+    u[INPUTS.top_length] = rng.uniform(2.0, 30.0)  # m
+    u[INPUTS.end_force] *= 1e4  # N
     return u
 
 
@@ -81,7 +82,7 @@ def test_thomas_agrees_with_sparse_kkt(full_model, torsion, validation):
     for _ in range(4):
         x, u = random_state(model, rng), random_inputs(rng)
         xdot = np.array(model.rhs(x, u)).ravel()
-        forces = np.array(model.outputs(x, u)[4])
+        forces = model.output_values(x, u)["bond_forces"]
         xdot_sparse, forces_sparse = (np.array(v) for v in model.rhs_sparse(x, u))
         assert forces.shape == forces_sparse.shape == (3, model.element_count)
         assert np.all(np.isfinite(xdot))
@@ -240,7 +241,7 @@ def test_translational_mass_of_hanging_chain(models_dir, submerged):
     q, qd = model.coordinates(x)
     blocks = [
         np.array(element(qi, qdi, li)[0])
-        for qi, qdi, li in zip(q, qd, model.element_lengths(u[9]), strict=True)
+        for qi, qdi, li in zip(q, qd, model.element_lengths(u[INPUTS.top_length]), strict=True)
     ]
     cable, hyd = scene.cable, scene.hydrodynamics
     water = scene.environment.water_density if submerged else 0.0
@@ -299,8 +300,8 @@ def test_jacobians(full_model, tilted):
 
     rng = np.random.default_rng(7)
     u = np.zeros(INPUT_SIZE)
-    u[9] = model.spec.segment_length / 2
-    u[12:15] = [2e3, -1e3, -3e3]  # N
+    u[INPUTS.top_length] = model.spec.segment_length / 2
+    u[INPUTS.end_force] = [2e3, -1e3, -3e3]  # N
     x = tilted(model, u)
     x[size // 2 :] = 0.2 * rng.normal(size=size // 2)
     dense_x = np.array(jac_x(x, u))
@@ -331,7 +332,7 @@ def test_singular_state_is_rejected(full_model, tilted):
     """An element along y (theta = pi/2) is on the singular set of the Euler chart."""
     model = full_model(False)
     u = np.zeros(INPUT_SIZE)
-    u[9] = model.spec.segment_length / 2
+    u[INPUTS.top_length] = model.spec.segment_length / 2
     x = tilted(model, u)
     model.check_regular(x)  # regular: no error
     x[model.state_names.index("theta_2")] = np.pi / 2

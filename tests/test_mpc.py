@@ -10,6 +10,7 @@ from cable_ocp.closed_loop.controller import hermite_basis
 from cable_ocp.closed_loop.forecast import BlendedHeight, HeightFilter, TopForecast
 from cable_ocp.closed_loop.projection import project_state
 from cable_ocp.drive import Drive
+from cable_ocp.layout import INPUTS
 from cable_ocp.model import CableModel
 from cable_ocp.scene import load_scene
 from cable_ocp.statics import equilibrium
@@ -67,7 +68,10 @@ def _full_and_reduced(models_dir, chained, psi, theta, velocity):
     for i in range(full.element_count):
         x[half + 5 * i : half + 5 * i + 3] = velocity
     u_reduced = Drive.from_scene(scene, elements=2).inputs(np.zeros(1))[:, 0]
-    projected = project_state(full, x, u[9], reduced, u[0:3], velocity, u_reduced[9], 0.0)
+    projected = project_state(
+        full, x, u[INPUTS.top_length], reduced, u[INPUTS.top], velocity,
+        u_reduced[INPUTS.top_length], 0.0,
+    )  # fmt: skip
     return scene, full, reduced, u_reduced, projected
 
 
@@ -77,7 +81,14 @@ def test_projection_of_the_hanging_equilibrium_is_the_reduced_equilibrium(models
     drive, drive_reduced = Drive.from_scene(scene), Drive.from_scene(scene, elements=2)
     u, u_reduced = drive.inputs(np.zeros(1))[:, 0], drive_reduced.inputs(np.zeros(1))[:, 0]
     projected = project_state(
-        full, equilibrium(full, drive), u[9], reduced, u[0:3], u[3:6], u_reduced[9], 0.0
+        full,
+        equilibrium(full, drive),
+        u[INPUTS.top_length],
+        reduced,
+        u[INPUTS.top],
+        u[INPUTS.top_velocity],
+        u_reduced[INPUTS.top_length],
+        0.0,
     )
     expected = equilibrium(reduced, drive_reduced)
     np.testing.assert_allclose(projected.state, expected, atol=1e-9)
@@ -108,7 +119,14 @@ def test_projection_keeps_the_reduced_bonds(models_dir):
     u = run.inputs[-1]
     u_reduced = Drive.from_scene(scene, elements=3).inputs(np.array([20.0]))[:, 0]
     projected = project_state(
-        full, run.states[-1], u[9], reduced, u[0:3], u[3:6], u_reduced[9], u_reduced[10]
+        full,
+        run.states[-1],
+        u[INPUTS.top_length],
+        reduced,
+        u[INPUTS.top],
+        u[INPUTS.top_velocity],
+        u_reduced[INPUTS.top_length],
+        u_reduced[INPUTS.top_length_rate],
     )
     outputs = reduced.outputs(projected.state, u_reduced)
     assert np.max(np.abs(np.array(outputs[2]))) < 1e-12

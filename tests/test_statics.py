@@ -7,6 +7,7 @@ import pytest
 
 from cable_ocp.catenary import catenary_shape, relative_errors
 from cable_ocp.drive import Drive
+from cable_ocp.layout import INPUTS
 from cable_ocp.model import CableModel
 from cable_ocp.scene import load_scene
 from cable_ocp.statics import equilibrium, rest_inputs
@@ -30,7 +31,9 @@ class CatenaryCase:
         self.area = cable.cross_section_area
         self.weight = cable.density * self.area * scene.environment.gravity  # w = rho A g
         self.horizontal, _, self.vertical = scene.end.force
-        lengths = np.array([float(v) for v in self.model.element_lengths(self.u[9])])
+        lengths = np.array(
+            [float(v) for v in self.model.element_lengths(self.u[INPUTS.top_length])]
+        )
         # Unstretched arc length from the pinned top: s(A_j) = L - sum_{k<j} l_k, j = 0..n+1.
         self.arc = self.length - np.concatenate([[0.0], np.cumsum(lengths)])
 
@@ -148,12 +151,12 @@ def test_hanging_top_tension_is_submerged_weight(hanging_case, torsion, validati
     scene, model, x, u = hanging_case(torsion)
     cable, env = scene.cable, scene.environment
     per_length = (cable.density - env.water_density) * cable.cross_section_area * env.gravity
-    tensions = np.array(model.outputs(x, u)[5]).ravel()
+    tensions = model.output_values(x, u)["tensions"].ravel()
     validation(f"hanging in water, top tension, {model.dofs} DOF", "analytic",
                "submerged weight (rho - rho_w) A g L", "relative error",
                f"{abs(tensions[-1] / (per_length * cable.length) - 1):.1e}", "<= 1e-6")  # fmt: skip
     assert tensions[-1] == pytest.approx(per_length * cable.length, rel=1e-6)
-    lengths = np.array([float(v) for v in model.element_lengths(u[9])])
+    lengths = np.array([float(v) for v in model.element_lengths(u[INPUTS.top_length])])
     np.testing.assert_allclose(tensions, per_length * np.cumsum(lengths), rtol=1e-6)
 
 

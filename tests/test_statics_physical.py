@@ -83,7 +83,7 @@ def test_equilibrium_in_a_current_is_the_trailing_shape(models_dir, current, val
     scene, model, drive, u = in_current(models_dir, current)
     x = equilibrium(model, drive)
     tensions = bond_tensions(model, x, u)
-    joints = np.array(model.outputs(x, u)[0])
+    joints = model.output_values(x, u)["joints"]
     end = joints[:, 0] - joints[:, -1]
     speed = float(np.linalg.norm(current))
     downstream = np.array(current) / speed

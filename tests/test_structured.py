@@ -6,6 +6,7 @@ import casadi as ca
 import numpy as np
 import pytest
 
+from cable_ocp.layout import INPUTS
 from cable_ocp.model import CableModel
 from cable_ocp.scene import load_scene
 from cable_ocp.structured import structured_outputs, structured_rhs, supports
@@ -31,8 +32,8 @@ def random_point(model, rng):
     x = rng.normal(size=model.state_size) * 0.3
     x[3 : model.state_size // 2 : model.dofs] += np.pi / 2  # near hanging, off the singular set
     u = rng.normal(size=15) * 2.0
-    u[9] = 20.0  # m, top element
-    u[12:15] *= 1e3  # N
+    u[INPUTS.top_length] = 20.0  # m, top element
+    u[INPUTS.end_force] *= 1e3  # N
     return x, u
 
 

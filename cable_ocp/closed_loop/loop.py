@@ -22,6 +22,7 @@ from cable_ocp.closed_loop.plant import LIMITER_BAND, Plant
 from cable_ocp.closed_loop.projection import project_state
 from cable_ocp.closed_loop.result import MpcResult
 from cable_ocp.drive import end_force
+from cable_ocp.layout import INPUTS
 from cable_ocp.model import CableModel
 from cable_ocp.progress import Progress
 from cable_ocp.seabed import clearance_error, rms_objective
@@ -218,12 +219,12 @@ def mpc(
     for k in range(samples):
         now = k * sample
         u_now = inputs[-1][-1]
-        forecast = forecast_top(now, u_now[0:3], u_now[3:6], height_filter)
+        forecast = forecast_top(now, u_now[INPUTS.top], u_now[INPUTS.top_velocity], height_filter)
         phi, rate, _ = plan(np.array([now]))
         projected = project_state(
             plant.model,
             x,
-            u_now[9],
+            u_now[INPUTS.top_length],
             reduced,
             forecast.position,
             forecast.velocity,

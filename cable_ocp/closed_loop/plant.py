@@ -17,6 +17,7 @@ import numpy as np
 from cable_ocp.closed_loop.projection import chain_state, plant_joints
 from cable_ocp.drive import Drive, end_force
 from cable_ocp.integrate import SimulationError, step_function
+from cable_ocp.layout import INPUTS
 from cable_ocp.model import CableModel
 from cable_ocp.statics import equilibrium
 from cable_ocp.vessel import top_motion
@@ -113,11 +114,13 @@ class Plant:
         x = equilibrium(model, Drive.from_scene(self.scene), compiled=True)
         u = self.inputs(applied, np.zeros(1))[:, 0]
         joints, _ = plant_joints(model, x)
-        upper = np.vstack([joints[1:], u[0:3]])
+        top, velocity = u[INPUTS.top], u[INPUTS.top_velocity]
+        upper = np.vstack([joints[1:], top])
         directions = upper - joints
         rates = np.zeros_like(directions)
-        rates[-1] = u[3:6] / np.linalg.norm(directions[-1])
-        return chain_state(model, u[0:3], u[3:6], u[9], u[10], directions, rates)
+        rates[-1] = velocity / np.linalg.norm(directions[-1])
+        length, length_rate = u[INPUTS.top_length], u[INPUTS.top_length_rate]
+        return chain_state(model, top, velocity, length, length_rate, directions, rates)
 
     def advance(self, x: np.ndarray, start: float, count: int, angle: AngleFunction):
         """Integrate ``count`` steps from ``x`` at ``start`` (s) under a commanded angle.
