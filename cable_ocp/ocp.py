@@ -1,11 +1,15 @@
-"""Optimal winch control by direct multiple shooting and IPOPT (CONVENTIONS.md §5, paper §5).
+"""Optimal winch control by direct shooting and IPOPT (CONVENTIONS.md §5, paper §5).
 
-The horizon ``[0, T]`` is cut into shooting intervals; the state at every node is a decision
-variable, each interval is a fold of RK4 steps of the (possibly reduced) model, and continuity
-constraints join the intervals. The winch angle is linear in its parameters
-(:mod:`cable_ocp.controls`), so the angle, rate, acceleration and top-element length bounds are
-linear constraints; they hold between the RK4 samples too (:mod:`cable_ocp.bounds`), within
-:data:`cable_ocp.bounds.BOUND_TOLERANCE`. The objective is ``Omega^2`` of eq. 39 by the
+The horizon ``[0, T]`` is cut into intervals, each a fold of RK4 steps of the (possibly reduced)
+model. With single shooting (the default) the intervals are chained from the initial state and
+the winch parameters are the only decision variables: the objective's gradient is one reverse
+sweep through the RK4 steps. With multiple shooting the state at every node is a decision
+variable too and continuity constraints join the intervals: its constraint Jacobian needs one
+forward sweep per state and parameter colour (about 45 at n = 3), so it costs far more per
+iteration, for more robustness on strongly nonlinear problems. The winch angle is linear in its
+parameters (:mod:`cable_ocp.controls`), so the angle, rate, acceleration and top-element length
+bounds are linear constraints; they hold between the RK4 samples too (:mod:`cable_ocp.bounds`),
+within :data:`cable_ocp.bounds.BOUND_TOLERANCE`. The objective is ``Omega^2`` of eq. 39 by the
 trapezoidal rule over the RK4 steps.
 """
 
@@ -19,12 +23,18 @@ import numpy as np
 
 from cable_ocp import winch
 from cable_ocp.bounds import LinearBounds, angle_bounds
+from cable_ocp.compile import CompileReport
+from cable_ocp.compile import compiled as compile_function
 from cable_ocp.controls import HermiteIntervals, KnotSpline
 from cable_ocp.drive import Drive
 from cable_ocp.integrate import (
+    RK4_STAGES,
+    WHOLE_STEP_LIMIT,
     SimulationError,
     integrate,
+    parametric_rk4_step,
     stage_inputs,
+    step_compile_report,
     step_count,
     step_function,
 )
@@ -41,7 +51,7 @@ NLP_FUNCTIONS = ("nlp_f", "nlp_g", "nlp_grad_f", "nlp_jac_g", "nlp_hess_l", "nlp
 
 @dataclass(frozen=True)
 class IpoptSettings:
-    """How the multiple-shooting NLP is built and solved.
+    """How the shooting NLP is built and solved.
 
     Attributes
     ----------
@@ -50,8 +60,12 @@ class IpoptSettings:
         model; Omega is always verified on the scene's own model.
     step : float or None, s
         RK4 step inside the intervals (None: the scene's step).
+    shooting : str
+        ``"single"`` (only the winch parameters are variables) or ``"multiple"`` (the states at
+        the interval ends too, joined by continuity constraints).
     intervals : int
-        Shooting intervals; the number of RK4 steps must be a multiple of it.
+        Shooting intervals; the number of RK4 steps must be a multiple of it. With single
+        shooting they only cut the chain of RK4 steps (and set the Hermite control's intervals).
     control : str
         ``"hermite"`` (piecewise cubic per control interval) or ``"spline"`` (the paper's knots).
     control_intervals : int or None
@@ -62,16 +76,17 @@ class IpoptSettings:
     tolerance : float
         IPOPT's ``tol``.
     threads : int
-        Shooting intervals evaluated in parallel.
+        Shooting intervals evaluated in parallel (multiple shooting only).
     compiled : bool
-        Compile the RK4 step and its first derivatives to C (cached on disk); about 6x faster
-        derivatives at n = 3 after a one-off compile of about 30 s.
+        Compile the model's right-hand side and its first derivatives to C (cached on disk,
+        one library per model structure), and verify on the compiled full model.
     ipopt_options : dict
         Further IPOPT options, passed as they are.
     """
 
     elements: int | None = None
     step: float | None = None
+    shooting: str = "single"
     intervals: int = 42
     control: str = "hermite"
     control_intervals: int | None = None
@@ -83,6 +98,8 @@ class IpoptSettings:
     ipopt_options: dict = field(default_factory=dict)
 
     def __post_init__(self):
+        if self.shooting not in ("single", "multiple"):
+            raise ValueError(f"shooting = {self.shooting!r}: must be 'single' or 'multiple'")
         if self.control not in ("hermite", "spline"):
             raise ValueError(f"control = {self.control!r}: must be 'hermite' or 'spline'")
         if self.hessian not in ("limited-memory", "exact"):
@@ -117,6 +134,9 @@ class IpoptOutcome:
     objective : float, m^2
         ``Omega^2`` on the optimisation model.
     build_time, solve_time : float, s
+        ``build_time`` includes ``compile_time``.
+    compile_time : float, s
+        Compiling the model to C (0 when the library came from the disk cache).
     function_time : float, s
         Wall time spent evaluating the NLP functions and derivatives.
     history : list of float
@@ -130,6 +150,7 @@ class IpoptOutcome:
     iterations: int
     objective: float
     build_time: float
+    compile_time: float
     solve_time: float
     function_time: float
     history: list[float]
@@ -143,18 +164,45 @@ def make_control(scene, settings: IpoptSettings) -> KnotSpline | HermiteInterval
     return HermiteIntervals(duration, settings.control_intervals or settings.intervals)
 
 
-def _interval_function(model, step, steps, hills, end_height0, compiled) -> ca.Function:
+def ocp_step(
+    model: CableModel, step: float, compiled: bool
+) -> tuple[ca.Function, CompileReport | None]:
+    """The RK4 step ``(x, stage_inputs) -> x_next`` with first derivatives, for the NLP.
+
+    Compiled, a model whose whole step :func:`cable_ocp.integrate.step_function` would compile
+    flat gets its step built around the compiled right-hand side (with its derivatives) instead:
+    at n = 3 that library compiles in about 4 s instead of about 45 s for the flat step's
+    derivatives, for the same nominal cost and 15 % more per reverse sweep. Larger models use the
+    compiled step of :mod:`cable_ocp.integrate`. Interpreted, it is the model's SX step (second
+    derivatives too). The report is None when nothing was compiled.
+    """
+    if not compiled:
+        return step_function(model, step), None
+    parametric = model.parametric
+    if RK4_STAGES * parametric.rhs.n_instructions() > WHOLE_STEP_LIMIT:
+        function = step_function(model, step, compiled=True, derivatives=True)
+        return function, step_compile_report(model, step, derivatives=True)
+
+    def build():
+        rhs, report = compile_function(parametric.rhs, repr(parametric.structure), derivatives=True)
+        return model.bind(parametric_rk4_step(parametric, rhs), h=step), report
+
+    return model.memo(("ocp_step", step), build)
+
+
+def _interval_function(step_function, step, steps, hills, end_height0) -> ca.Function:
     """``(x, stage inputs, bias) -> (x_end, integral of (e + bias)^2)`` over one interval.
 
     ``bias`` (1 x steps+1) is added to the clearance error at the RK4 points: the correction that
-    makes a reduced model reproduce the full model's error (see :class:`MultipleShooting`).
+    makes a reduced model reproduce the full model's error (see :class:`ShootingProblem`).
     """
-    x = ca.MX.sym("x", model.state_size)
+    size = step_function.size1_in(0)
+    x = ca.MX.sym("x", size)
     stages = ca.MX.sym("stages", 15, 3 * steps)
     bias = ca.MX.sym("bias", 1, steps + 1)
-    states = step_function(model, step, compiled, derivatives=True).mapaccum(steps)(x, stages)
+    states = step_function.mapaccum(steps)(x, stages)
     points = ca.horzcat(x, states)
-    xe = ca.SX.sym("xe", model.state_size)
+    xe = ca.SX.sym("xe", size)
     error = xe[2] - end_height0 - seabed_height(hills, xe[0], xe[1])
     errors = ca.Function("e", [xe], [error]).map(steps + 1)(points) + bias
     weights = np.full(steps + 1, step)
@@ -174,8 +222,8 @@ def initial_parameters(scene, control, run_time, rise, low, high) -> np.ndarray:
     return guess
 
 
-class MultipleShooting:
-    """The multiple-shooting NLP of a scene, built once and solved as often as needed.
+class ShootingProblem:
+    """The shooting NLP of a scene, built once and solved as often as needed.
 
     The NLP has a parameter, the bias ``b(t)`` on the RK4 grid, added to the clearance error:
     ``Omega^2 = 1/T int (e(t) + b(t))^2 dt``. With ``b = 0`` it is the plain problem; the front door
@@ -230,18 +278,24 @@ class MultipleShooting:
                 for k in range(settings.intervals)
             ]
         )
+        step_function, report = ocp_step(model, step, settings.compiled)
+        self.compile_time = report.compile_time if report is not None else 0.0
         interval = _interval_function(
-            model, step, per_interval, scene.seabed.hills, self.x0[2], settings.compiled
+            step_function, step, per_interval, scene.seabed.hills, self.x0[2]
         )
-        nodes = ca.MX.sym("nodes", model.state_size, settings.intervals)
-        starts = ca.horzcat(ca.DM(self.x0), nodes[:, :-1])
-        mapped = interval.map(settings.intervals, "thread", settings.threads)
-        ends, costs = mapped(starts, inputs, bias_rows)
+        if settings.shooting == "single":
+            costs = interval.mapaccum(settings.intervals)(ca.DM(self.x0), inputs, bias_rows)[1]
+            nodes, continuity = ca.MX(model.state_size, 0), ca.MX(0, 1)
+        else:
+            nodes = ca.MX.sym("nodes", model.state_size, settings.intervals)
+            starts = ca.horzcat(ca.DM(self.x0), nodes[:, :-1])
+            mapped = interval.map(settings.intervals, "thread", settings.threads)
+            ends, costs = mapped(starts, inputs, bias_rows)
+            continuity = ca.vec(ends - nodes)
         objective = ca.sum2(costs) / duration
-        continuity = ca.vec(ends - nodes)
 
         bounds = LinearBounds.build(scene, control, self.grid)
-        variables = ca.vertcat(ca.vec(nodes), parameters)
+        variables = ca.vertcat(ca.vec(nodes), parameters) if nodes.numel() else parameters
         constraints = ca.densify(
             ca.vertcat(continuity, ca.sparsify(ca.DM(bounds.matrix)) @ parameters)
         )
@@ -277,7 +331,11 @@ class MultipleShooting:
         self.build_time = time.perf_counter() - started
 
     def simulate(self, parameters: np.ndarray) -> np.ndarray:
-        """States of the optimisation model on the RK4 grid under a winch (array (k, nx))."""
+        """States of the optimisation model on the RK4 grid under a winch (array (k, nx)).
+
+        Interpreted: a reduced model's run is short (0.03 s at n = 3, h = 0.5 s), and a
+        compiled one would need a library of its own.
+        """
         drive = Drive.from_scene(
             self.scene, self.control.angle_function(parameters), elements=self.model.spec.elements
         )
@@ -288,7 +346,6 @@ class MultipleShooting:
             self.duration,
             self.step,
             tolerance=GUESS_TOLERANCE,
-            compiled=self.settings.compiled,
         )
         return run.states
 
@@ -310,6 +367,8 @@ class MultipleShooting:
             parameters = np.zeros(self.control.size)
             states = self.simulate(parameters)
         nodes = states[self.per_interval :: self.per_interval].T
+        if self.settings.shooting == "single":
+            nodes = nodes[:, :0]
         bias = np.zeros(self.grid.size) if bias is None else bias
         self.history.clear()
         self.log.restart()
@@ -330,6 +389,7 @@ class MultipleShooting:
             iterations=int(stats["iter_count"]),
             objective=float(solution["f"]),
             build_time=self.build_time,
+            compile_time=self.compile_time,
             solve_time=solve_time,
             function_time=sum(stats.get(f"t_wall_{name}", 0.0) for name in NLP_FUNCTIONS),
             history=list(self.history),

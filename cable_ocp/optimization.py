@@ -19,7 +19,7 @@ import numpy as np
 
 from cable_ocp.bounds import violation
 from cable_ocp.nelder_mead import NelderMeadSettings, solve_nelder_mead
-from cable_ocp.ocp import IpoptOutcome, IpoptSettings, MultipleShooting
+from cable_ocp.ocp import IpoptOutcome, IpoptSettings, ShootingProblem
 from cable_ocp.progress import check_verbosity
 from cable_ocp.simulation import simulate
 from cable_ocp.trajectory import Trajectory
@@ -59,7 +59,7 @@ class OcpResult:
     wall_time : float, s
         Everything, including building and verification.
     build_time : float, s
-        Building the NLP (symbolic work), reported apart.
+        Building the NLP (symbolic work and compiling), reported apart.
     solve_time : float, s
         Time inside the solver(s).
     function_time : float, s
@@ -69,6 +69,10 @@ class OcpResult:
         evaluation (Nelder-Mead, m).
     refinements : list of float
         Verified Omega after each solve (m); more than one entry with model correction.
+    compile_time : float, s
+        Of ``build_time``, compiling C (0 when the libraries came from the disk cache).
+    verification_time : float, s
+        Checking the bounds and simulating the scene's model with the optimised winch.
     """
 
     method: str
@@ -87,6 +91,8 @@ class OcpResult:
     function_time: float
     history: list[float] = field(default_factory=list)
     refinements: list[float] = field(default_factory=list)
+    compile_time: float = 0.0
+    verification_time: float = 0.0
 
     def save(self, folder: str | Path) -> None:
         """Write ``result.json``, ``result.npz`` and the trajectory into ``folder``.
@@ -119,7 +125,7 @@ class OcpResult:
         try:
             meta = json.loads(path.read_text())
             names = {f.name for f in fields(cls)} - {"parameters", "trajectory"}
-            if not isinstance(meta, dict) or set(meta) != names:
+            if not isinstance(meta, dict) or not names - _OPTIONAL_FIELDS <= set(meta) <= names:
                 raise ValueError(f"fields {sorted(meta) if isinstance(meta, dict) else meta!r}")
             meta = {k: _from_json(k, v) for k, v in meta.items()}
             path = folder / "result.npz"
@@ -139,6 +145,8 @@ class OcpResult:
         return cls(parameters=parameters, trajectory=trajectory, **meta)
 
 
+# Fields of OcpResult that results written before them lack (their defaults are used).
+_OPTIONAL_FIELDS = {"compile_time", "verification_time"}
 # Fields of OcpResult that hold floats which may be NaN.
 _FLOAT_FIELDS = ("omega", "omega_model", "history", "refinements")
 
@@ -161,8 +169,12 @@ def _from_json(name: str, value):
     return float("nan") if value is None else float(value)
 
 
-def _verify(scene, control, parameters, quiet) -> tuple[Trajectory | None, str | None]:
+def _verify(
+    scene, control, parameters, quiet, compiled: bool = False
+) -> tuple[Trajectory | None, str | None]:
     """Check the winch bounds and simulate the scene's model with the winch.
+
+    ``compiled`` simulates with the model compiled to C (cached on disk).
 
     Returns
     -------
@@ -173,7 +185,8 @@ def _verify(scene, control, parameters, quiet) -> tuple[Trajectory | None, str |
     if reason is not None:
         return None, reason
     try:
-        return simulate(scene, winch=control.angle_function(parameters), quiet=quiet), None
+        winch = control.angle_function(parameters)
+        return simulate(scene, winch=winch, quiet=quiet, compiled=compiled), None
     except Exception as error:  # noqa: BLE001 - any failure of the check is a failed result
         return None, f"the full-model simulation raised {type(error).__name__}: {error}"
 
@@ -191,7 +204,8 @@ def optimize_ipopt(
     ----------
     scene : Scene
     settings : IpoptSettings, optional
-        Defaults: a reduced model of 3 elements at h = 0.5 s, 42 intervals, Hermite control.
+        Defaults: a reduced model of 3 elements at h = 0.5 s, single shooting, Hermite control
+        on 42 intervals; Omega verified on the scene's model compiled to C.
     refinements : int
         Model-correction solves after the first (0 disables them); they stop early when the
         verified Omega stops improving. Ignored when the optimisation model is the scene's own.
@@ -209,7 +223,7 @@ def optimize_ipopt(
     """
     started = time.perf_counter()
     settings = settings or IpoptSettings(elements=3, step=0.5)
-    problem = MultipleShooting(scene, settings, quiet=quiet, verbose=verbose)
+    problem = ShootingProblem(scene, settings, quiet=quiet, verbose=verbose)
     reduced = (
         problem.model.spec.elements != scene.model.elements or problem.step != scene.numerics.step
     )
@@ -217,6 +231,15 @@ def optimize_ipopt(
     verified: list[float] = []
     best_outcome, best, failure = None, None, None
     parameters, bias = problem.first_guess(), None
+    verification_time = 0.0
+
+    def verify(parameters):
+        nonlocal verification_time
+        begun = time.perf_counter()
+        checked = _verify(scene, problem.control, parameters, quiet, settings.compiled)
+        verification_time += time.perf_counter() - begun
+        return checked
+
     for _ in range(1 + (refinements if reduced else 0)):
         if best is not None:
             full_error = np.interp(problem.grid, best.time, best.clearance_error)
@@ -227,11 +250,11 @@ def optimize_ipopt(
         if not outcome.success:
             failure = outcome.status
             if best is None:  # show where the failed solve got to, still marked as failed
-                best, _ = _verify(scene, problem.control, outcome.parameters, quiet)
+                best, _ = verify(outcome.parameters)
                 best_outcome = outcome if best is not None else None
                 verified.append(best.omega if best is not None else float("nan"))
             break
-        trial, reason = _verify(scene, problem.control, outcome.parameters, quiet)
+        trial, reason = verify(outcome.parameters)
         if trial is None:
             verified.append(float("nan"))
             failure = f"verification failed: {reason}"
@@ -261,6 +284,8 @@ def optimize_ipopt(
         function_time=sum(o.function_time for o in outcomes),
         history=[v for o in outcomes for v in o.history],
         refinements=verified,
+        compile_time=problem.compile_time,
+        verification_time=verification_time,
     )
 
 
