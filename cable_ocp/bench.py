@@ -1,6 +1,6 @@
 """Benchmarks that print their figures next to a baseline measured or quoted in the same run.
 
-``cable-ocp bench`` has three parts, each printing a table:
+``cable-ocp bench`` has four parts, each printing a table:
 
 - ``rk4``: the simulation loop (:func:`cable_ocp.integrate.integrate`, bond checks included) at
   n = 15 on ``paper_flat`` (winch locked) and n = 100 on ``end_force``, interpreted (CasADi's SX
@@ -10,12 +10,20 @@
 - ``moordyn``: the same cable and tow in MoorDyn at its largest stable step (optional extra).
 - ``ocp``: IPOPT (multiple shooting) against the paper's Nelder-Mead on ``paper_flat``:
   seconds per iteration or evaluation, total, and the verified Omega.
+- ``ocp-speed``: the default ``optimize`` of ``paper_hill`` end to end, each run in a fresh
+  process: cold (an empty compile cache) and warm, split into build / compile / solve /
+  verification, against multiple shooting (the previous default) warm in the same run.
 
 ``cable-ocp bench --hessian`` compares IPOPT's exact and limited-memory Hessians.
 """
 
 from __future__ import annotations
 
+import json
+import os
+import subprocess
+import sys
+import tempfile
 import time
 from dataclasses import dataclass
 from pathlib import Path
@@ -26,7 +34,7 @@ from cable_ocp.drive import Drive
 from cable_ocp.integrate import integrate, stage_inputs, step_compile_report, step_function
 from cable_ocp.model import CableModel
 from cable_ocp.nelder_mead import NelderMeadSettings
-from cable_ocp.ocp import IpoptSettings
+from cable_ocp.ocp import IpoptSettings, make_control
 from cable_ocp.optimization import OcpResult, optimize
 from cable_ocp.scene import load_scene
 from cable_ocp.statics import equilibrium
@@ -261,3 +269,97 @@ def hessian_report(models_dir: Path) -> None:
             f"{r.solve_time:>11.1f}{r.solve_time / max(r.iterations, 1):>13.2f}"
             f"{r.build_time:>11.1f}"
         )
+
+
+# The quick ocp-speed runs: small_tow as in the quick ocp part (n = 4, h = 0.25 s, 8 intervals).
+QUICK_OCP_SETTINGS = {"step": 0.25, "intervals": 8}
+
+
+def ocp_speed_case(scene_path: str, shooting: str, quick: bool) -> dict:
+    """One ``optimize`` of a scene timed in this process, as a dict of figures.
+
+    The scene's default IPOPT settings with ``shooting`` (``"single"``: the default; else
+    ``"multiple"``); ``quick``: :data:`QUICK_OCP_SETTINGS`. Times in s, Omega in m.
+    """
+    from cable_ocp.bounds import violation
+
+    scene = load_scene(scene_path)
+    base = QUICK_OCP_SETTINGS if quick else {"elements": 3, "step": 0.5}
+    settings = IpoptSettings(**base, shooting=shooting)
+    started = time.perf_counter()
+    result = optimize(scene, "ipopt", settings, quiet=True)
+    wall = time.perf_counter() - started
+    control = make_control(scene, settings)
+    return {
+        "wall": wall,
+        "build": result.build_time - result.compile_time,
+        "compile": result.compile_time,
+        "solve": result.solve_time,
+        "verification": result.verification_time,
+        "iterations": result.iterations,
+        "solves": len(result.refinements),
+        "omega": result.omega,
+        "success": result.success,
+        "bounds_held": violation(scene, control, result.parameters) is None,
+    }
+
+
+def _ocp_speed_process(scene_path: Path, shooting: str, quick: bool, cache: Path) -> dict:
+    """:func:`ocp_speed_case` in a fresh Python process with ``$CABLE_OCP_CACHE = cache``.
+
+    ``process`` is the process's whole wall time (s): interpreter, imports and the run.
+    """
+    code = (
+        "import json, sys; from cable_ocp.bench import ocp_speed_case; "
+        "print(json.dumps(ocp_speed_case(sys.argv[1], sys.argv[2], sys.argv[3] == 'quick')))"
+    )
+    command = [sys.executable, "-c", code, str(scene_path), shooting, "quick" if quick else "full"]
+    env = {**os.environ, "CABLE_OCP_CACHE": str(cache)}
+    started = time.perf_counter()
+    run = subprocess.run(command, env=env, capture_output=True, text=True)
+    elapsed = time.perf_counter() - started
+    if run.returncode != 0:
+        raise RuntimeError(f"the timed optimize process failed:\n{run.stderr.strip()[-2000:]}")
+    return {**json.loads(run.stdout.strip().splitlines()[-1]), "process": elapsed}
+
+
+def ocp_speed_report(models_dir: Path, quick: bool = False) -> list[tuple[str, dict]]:
+    """Print the default ``optimize`` of ``paper_hill`` cold and warm against multiple shooting.
+
+    Every run is a fresh process; the cold one starts from an empty compile cache (a temporary
+    folder), the others reuse what it compiled. ``quick``: ``small_tow`` with
+    :data:`QUICK_OCP_SETTINGS`. Returns the rows as ``(label, figures)``.
+    """
+    name = "small_tow" if quick else "paper_hill"
+    scene_path = models_dir / f"{name}.toml"
+    cases = [
+        ("single shooting, cold", "single"),
+        ("single shooting, warm", "single"),
+        ("multiple shooting, warm", "multiple"),
+    ]
+    with tempfile.TemporaryDirectory(prefix="cable_ocp_bench_") as cache:
+        rows = [
+            (label, _ocp_speed_process(scene_path, shooting, quick, Path(cache)))
+            for label, shooting in cases
+        ]
+    print(f"optimize({name}) end to end, default IPOPT settings, each run a fresh process; "
+          "cold: empty compile cache; same run")  # fmt: skip
+    print(f"{'case':<26}{'process':>8}{'wall':>7}{'build':>7}{'compile':>8}{'solve':>7}"
+          f"{'verify':>7}{'other':>7}{'iter.':>6}{'solves':>7}{'Omega [m]':>11}{'success':>8}"
+          f"{'bounds':>7}{'vs base':>8}")  # fmt: skip
+    baseline = rows[-1][1]["wall"]
+    for label, r in rows:
+        other = r["wall"] - r["build"] - r["compile"] - r["solve"] - r["verification"]
+        print(
+            f"{label:<26}{r['process']:>8.1f}{r['wall']:>7.1f}{r['build']:>7.1f}"
+            f"{r['compile']:>8.1f}{r['solve']:>7.1f}{r['verification']:>7.1f}{other:>7.1f}"
+            f"{r['iterations']:>6}{r['solves']:>7}{r['omega']:>11.3e}{str(r['success']):>8}"
+            f"{'held' if r['bounds_held'] else 'BROKEN':>7}{baseline / r['wall']:>7.1f}x"
+        )
+    print(
+        "times in s; 'process' includes starting Python and the imports, 'wall' is optimize() "
+        "alone; 'compile' is the optimisation model's C compile (the full model's compile for "
+        "verification is in 'verify'); 'other': first guess and model-correction runs; "
+        "'vs base': multiple shooting's wall over the row's."
+    )
+    return rows

@@ -303,6 +303,7 @@ def _bench(args) -> int:
         "rk4": bench.rk4_report,
         "moordyn": moordyn_report,
         "ocp": bench.ocp_report,
+        "ocp-speed": bench.ocp_speed_report,
     }
     for name in args.only or list(parts):
         parts[name](models_dir(), quick=args.quick)
@@ -413,7 +414,10 @@ def build_parser() -> argparse.ArgumentParser:
         "--quick", action="store_true", help="scene steps only, short MoorDyn runs, small OCP"
     )
     bench.add_argument(
-        "--only", nargs="+", choices=["rk4", "moordyn", "ocp"], help="run only these parts"
+        "--only",
+        nargs="+",
+        choices=["rk4", "moordyn", "ocp", "ocp-speed"],
+        help="run only these parts",
     )
     bench.add_argument(
         "--hessian", action="store_true", help="IPOPT exact vs limited-memory Hessian instead"

@@ -84,6 +84,43 @@ def test_nelder_mead_at_its_evaluation_limit_is_not_a_success(small):
     assert "evaluations" in result.status.lower()
 
 
+def test_single_and_multiple_shooting_find_the_same_winch(solved, small):
+    """Two formulations of one NLP: the optimum's verified Omega agrees within 1e-5 m (measured
+    2.218e-4 m both), and both hold the bounds."""
+    single, _ = solved
+    assert SETTINGS.shooting == "single"
+    multiple = optimize(small, "ipopt", replace(SETTINGS, shooting="multiple"), quiet=True)
+    assert single.success and multiple.success, (single.status, multiple.status)
+    assert abs(single.omega - multiple.omega) < 1e-5
+
+
+def test_single_shooting_reports_its_phases(solved):
+    """Compile and verification times are part of the wall time (0 <= each <= wall)."""
+    result, _ = solved
+    assert 0.0 <= result.compile_time <= result.build_time <= result.wall_time
+    assert 0.0 < result.verification_time <= result.wall_time
+
+
+def test_unknown_shooting_is_rejected():
+    with pytest.raises(ValueError, match="shooting = 'double'"):
+        IpoptSettings(shooting="double")
+
+
+def test_a_result_saved_without_the_phase_times_loads(solved, tmp_path):
+    """Results written before compile_time/verification_time existed load with them 0."""
+    import json
+
+    result, _ = solved
+    result.save(tmp_path / "r")
+    path = tmp_path / "r" / "result.json"
+    meta = json.loads(path.read_text())
+    del meta["compile_time"], meta["verification_time"]
+    path.write_text(json.dumps(meta))
+    back = OcpResult.load(tmp_path / "r")
+    assert back.compile_time == 0.0 and back.verification_time == 0.0
+    assert back.omega == result.omega
+
+
 def test_exact_hessian_needs_the_interpreted_model():
     with pytest.raises(ValueError, match="second derivatives"):
         IpoptSettings(hessian="exact", compiled=True)

@@ -1,0 +1,21 @@
+"""The ocp-speed benchmark part: its figures and its command line (no wall-clock assertions)."""
+
+from __future__ import annotations
+
+from cable_ocp import bench
+from cable_ocp.cli import build_parser
+
+
+def test_ocp_speed_case_reports_a_verified_solve(models_dir):
+    """The quick case (small_tow) converges, holds its bounds and splits its wall time."""
+    figures = bench.ocp_speed_case(str(models_dir / "small_tow.toml"), "single", quick=True)
+    assert figures["success"] and figures["bounds_held"]
+    assert figures["omega"] < 1e-3  # measured 2.2e-4 m
+    parts = ("build", "compile", "solve", "verification")
+    assert all(figures[k] >= 0.0 for k in parts)
+    assert sum(figures[k] for k in parts) <= figures["wall"]
+
+
+def test_bench_accepts_the_ocp_speed_part():
+    args = build_parser().parse_args(["bench", "--only", "ocp-speed", "--quick"])
+    assert args.only == ["ocp-speed"] and args.quick
