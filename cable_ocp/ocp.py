@@ -171,10 +171,11 @@ def ocp_step(
 
     Compiled, a model whose whole step :func:`cable_ocp.integrate.step_function` would compile
     flat gets its step built around the compiled right-hand side (with its derivatives) instead:
-    at n = 3 that library compiles in about 4 s instead of about 45 s for the flat step's
-    derivatives, for the same nominal cost and 15 % more per reverse sweep. Larger models use the
-    compiled step of :mod:`cable_ocp.integrate`. Interpreted, it is the model's SX step (second
-    derivatives too). The report is None when nothing was compiled.
+    gcc spends superlinear time on one long function, so the right-hand side's derivatives
+    compile about ten times faster than the flat step's, for the same nominal cost and a
+    slightly slower reverse sweep (figures: ``cable-ocp bench --only ocp-speed``). Larger models
+    use the compiled step of :mod:`cable_ocp.integrate`. Interpreted, it is the model's SX step
+    (second derivatives too). The report is None when nothing was compiled.
     """
     if not compiled:
         return step_function(model, step), None
@@ -333,8 +334,8 @@ class ShootingProblem:
     def simulate(self, parameters: np.ndarray) -> np.ndarray:
         """States of the optimisation model on the RK4 grid under a winch (array (k, nx)).
 
-        Interpreted: a reduced model's run is short (0.03 s at n = 3, h = 0.5 s), and a
-        compiled one would need a library of its own.
+        Interpreted: a reduced model's run is short, and a compiled one would need a library of
+        its own (without derivatives).
         """
         drive = Drive.from_scene(
             self.scene, self.control.angle_function(parameters), elements=self.model.spec.elements
