@@ -32,6 +32,9 @@ class CatenaryCheck:
         ``max(eps_x, eps_z)`` against the inextensible catenary, as a fraction.
     top_tension_error : float
         Relative error of the top tension against eq. 34c.
+    tension_error : float
+        Largest relative error of the bond tensions ``|lambda_1| .. |lambda_{n+1}|`` against
+        ``T(s)`` of eq. 34c at their joints ``A_1 .. A_{n+1}`` (the top included).
     joints : array (2, n+2), m
         x and z of the model's joints.
     arc_length : array (n+2,), m
@@ -43,6 +46,7 @@ class CatenaryCheck:
     max_error_z: float
     max_error_inextensible: float
     top_tension_error: float
+    tension_error: float
     joints: np.ndarray
     arc_length: np.ndarray
 
@@ -94,13 +98,15 @@ def catenary_check(scene, elements: int | None = None) -> CatenaryCheck:
             relative_errors(joints[2][compared], z_in[compared]).max(),
         ),
     }
-    top_tension = float(outputs["tensions"].ravel()[-1])
+    tensions = outputs["tensions"].ravel()  # at A_1 .. A_{n+1}
+    top_tension = float(tensions[-1])
     return CatenaryCheck(
         elements=model.spec.elements,
         max_error_x=float(errors["x"]),
         max_error_z=float(errors["z"]),
         max_error_inextensible=float(errors["inextensible"]),
         top_tension_error=abs(top_tension / tension[-1] - 1),
+        tension_error=float(relative_errors(tensions, tension[1:]).max()),
         joints=np.vstack([planar_x, joints[2]]),
         arc_length=arc,
     )
