@@ -8,7 +8,7 @@
   each step against a run at a quarter of it, so that a faster step is seen to be accurate; the
   paper's 52 s per simulated second (n = 100) as a ratio; compile and cache-load times.
 - ``moordyn``: the same cable and tow in MoorDyn at its largest stable step (optional extra).
-- ``ocp``: IPOPT (multiple shooting) against the paper's Nelder-Mead on ``paper_flat``:
+- ``ocp``: IPOPT (single shooting) against the paper's Nelder-Mead on ``paper_flat``:
   seconds per iteration or evaluation, total, and the verified Omega.
 - ``ocp-speed``: the default ``optimize`` of ``paper_hill`` end to end, each run in a fresh
   process: cold (an empty compile cache) and warm, split into build / compile / solve /

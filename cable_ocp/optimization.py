@@ -198,7 +198,7 @@ def optimize_ipopt(
     quiet: bool = False,
     verbose: bool = False,
 ) -> OcpResult:
-    """Direct multiple shooting + IPOPT, verified (and refined) on the scene's model.
+    """Direct (single or multiple) shooting + IPOPT, verified (and refined) on the scene's model.
 
     Parameters
     ----------
@@ -357,7 +357,7 @@ def optimize(
     ----------
     scene : Scene
     method : str
-        ``"ipopt"`` (multiple shooting) or ``"nelder-mead"`` (the paper's method).
+        ``"ipopt"`` (direct shooting) or ``"nelder-mead"`` (the paper's method).
     settings : IpoptSettings or NelderMeadSettings, optional
     quiet : bool
         Print nothing at all.
