@@ -1,7 +1,9 @@
-"""Shared fixtures of the physics tests: scene paths and state builders."""
+"""Shared fixtures of the tests: scene paths, state builders, scene mutants, validation record."""
 
 from __future__ import annotations
 
+import re
+from collections.abc import Iterator
 from pathlib import Path
 
 import numpy as np
@@ -57,6 +59,69 @@ def tilted():
         return chained_state(model, u, np.pi / 2 + tilt, theta)
 
     return build
+
+
+# ----------------------------------------------------------------------------------------------
+# Fuzz: deterministic mutants of the bundled scene files. test_scene.py checks that each loads or
+# raises SceneError; test_cli.py that the command line refuses the refused ones.
+MUTANTS_PER_SCENE = 150
+BAD_VALUES = [
+    '"text"', "1e400", "-1e400", "nan", "-nan", "inf", "-3", "0", "-0.0", '""', "1" + "0" * 400,
+    "-" + "9" * 30, "1" * 5000, "true", "[]", "[1, 2]", "[nan, 1, 2]", "{ a = 1 }", "1979-05-27",
+    "0x7fffffffffffffff", "1e-320", "1e308", "'~/missing.csv'",
+]  # fmt: skip
+EXTRA_LINES = ["[cable]", "unknown = 1", "[[seabed.hills]]\nheight = 1", "model = 3", "[top.x]",
+               "name = 3", "source = 'x'", "[[model]]", "[numerics]\nstep = 1"]  # fmt: skip
+ASSIGNMENT = re.compile(r"^(\s*[\w.]+\s*=\s*)(\S.*)$")
+
+
+def mutate(text: bytes, rng: np.random.Generator) -> tuple[bytes, str]:
+    """One to three random mutations of a scene file; returns (bytes, what was done)."""
+    done = []
+    for _ in range(rng.integers(1, 4)):
+        lines = text.decode("utf-8", errors="surrogateescape").split("\n")
+        k = int(rng.integers(len(lines)))
+        kind = rng.choice(["delete", "truncate", "value", "duplicate", "bytes", "insert", "swap"])
+        if kind == "delete":
+            del lines[k]
+        elif kind == "value":
+            values = [i for i, line in enumerate(lines) if ASSIGNMENT.match(line)]
+            k = int(rng.choice(values)) if values else k
+            bad = str(rng.choice(BAD_VALUES))
+            lines[k] = ASSIGNMENT.sub(lambda m, bad=bad: m.group(1) + bad, lines[k])
+        elif kind == "duplicate":
+            lines.insert(k, lines[k])
+        elif kind == "insert":
+            lines.insert(k, str(rng.choice(EXTRA_LINES)))
+        elif kind == "swap":
+            j = int(rng.integers(len(lines)))
+            lines[k], lines[j] = lines[j], lines[k]
+        text = "\n".join(lines).encode("utf-8", errors="surrogateescape")
+        if kind == "truncate":
+            text = text[: int(rng.integers(len(text) + 1))]
+        elif kind == "bytes":
+            start = int(rng.integers(len(text) + 1))
+            size = int(rng.integers(1, 9))
+            text = text[:start] + rng.bytes(size) + text[start + size :]
+        done.append(f"{kind} at line {k}")
+    return text, ", ".join(done)
+
+
+def scene_mutants(name: str) -> Iterator[tuple[bytes, str]]:
+    """The ``MUTANTS_PER_SCENE`` mutants of ``models/<name>.toml``: (bytes, what was done).
+
+    The generator is seeded by the name, so every test sees the same mutants.
+    """
+    rng = np.random.default_rng(sum(map(ord, name)))
+    original = (MODELS / f"{name}.toml").read_bytes()
+    for _ in range(MUTANTS_PER_SCENE):
+        yield mutate(original, rng)
+
+
+@pytest.fixture(scope="session")
+def mutants():
+    """``name -> iterator of (bytes, what was done)``: the mutants of a bundled scene file."""
+    return scene_mutants
 
 
 # ----------------------------------------------------------------------------------------------

@@ -1,4 +1,9 @@
-"""The command line: bad input is one line on stderr and exit 2, before any heavy work."""
+"""The command line: bad input is one line on stderr and exit 2, before any heavy work.
+
+The fuzz tests drive the CLI in-process with bad options and with mutants of the bundled scenes
+(deterministic, see conftest.py): each must be refused with one ``cable-ocp CMD: error:`` line and
+exit 2 before any simulation (simulating fails the test).
+"""
 
 import json
 import shutil
@@ -11,6 +16,8 @@ import pytest
 
 from cable_ocp import cli, optimization, simulation, studies, validation
 from cable_ocp.output import MARKER
+from cable_ocp.scene import SceneError, load_scene
+from cable_ocp.trajectory import Trajectory
 
 MODELS = Path(__file__).resolve().parent.parent / "models"
 HANGING = str(MODELS / "hanging.toml")
@@ -182,3 +189,135 @@ def test_console_script_exit_codes_end_to_end(tmp_path):
         assert "Traceback" not in done.stderr + done.stdout
     assert [p.name for p in tmp_path.iterdir()] == ["notes.txt"]
     assert (tmp_path / "notes.txt").read_text() == "keep me"
+
+
+# --- fuzz: bad command lines and mutants of the bundled scene files ----------------------------
+
+
+def assert_refused(args, capsys) -> str:
+    """Run the CLI in-process; assert exit 2 and one error line without a traceback."""
+    code, out, err = run_cli(args, capsys)
+    assert code == 2, (args, out, err)
+    assert "Traceback" not in out + err, args
+    assert err.strip().splitlines()[-1].startswith(f"cable-ocp {args[0]}: error: "), err
+    return err
+
+
+@pytest.mark.parametrize("name", sorted(p.stem for p in MODELS.glob("*.toml")))
+def test_refused_scene_mutants_are_refused_by_every_command(
+    tmp_path, capsys, no_heavy_work, mutants, name
+):
+    """The first 12 mutants that load_scene refuses: the CLI refuses them too, before simulating."""
+    refused = []
+    for k, (text, _) in enumerate(mutants(name)):
+        path = tmp_path / f"mutant_{k}.toml"
+        path.write_bytes(text)
+        try:
+            load_scene(path)
+        except SceneError:
+            refused.append(path)
+        if len(refused) == 12:
+            break
+    assert refused
+    for path in refused:
+        for command in (["simulate", path], ["optimize", path], ["validate", path]):
+            assert_refused([*command, "--out", tmp_path / "out"], capsys)
+    assert not (tmp_path / "out").exists()
+
+
+BAD_OPTIONS = {
+    "--knots": ["nan", "inf", "a,b", "1,,2", "", " ", "1e400", "0x1", "1;2"],
+    "--set": ["model.elements=nan", "model.elements=0", "cable.length=-1", "numerics.step=0",
+              "top.motion=42", "seabed.hills=3", "x", "=", "cable=1", "model.elements=1e400",
+              f"model.elements={10**400}", "cable.density=500", "numerics.step=1e-300",
+              "cable.diameter=1e200", "environment.current=[1,2]"],
+}  # fmt: skip
+BAD_INTEGERS = ["nan", "-1", "1e400", "", "a", "1.5", "9" * 5000, "0x10"]
+BAD_OPTIMISER = {
+    "--elements": [*BAD_INTEGERS, "0", "1001"],
+    "--intervals": [*BAD_INTEGERS, "0"],
+    "--max-iter": [*BAD_INTEGERS, "0"],
+    "--max-evaluations": [*BAD_INTEGERS, "0"],
+    "--refinements": [*BAD_INTEGERS, "101"],
+    "--step": ["nan", "inf", "-inf", "0", "-0.5", "1e400", "", "a"],
+    "--method": ["", "ipopt2"],
+    "--hessian": ["", "approx"],
+}
+
+
+@pytest.mark.parametrize("option", sorted(BAD_OPTIONS))
+def test_bad_simulate_options_are_refused(tmp_path, capsys, no_heavy_work, option):
+    for value in BAD_OPTIONS[option]:
+        assert_refused(["simulate", HANGING, "--out", tmp_path / "o", option, value], capsys)
+
+
+@pytest.mark.parametrize("option", sorted(BAD_OPTIMISER))
+def test_bad_optimiser_options_are_refused(tmp_path, capsys, no_heavy_work, option):
+    for value in BAD_OPTIMISER[option]:
+        assert_refused(["optimize", HANGING, "--out", tmp_path / "o", option, value], capsys)
+        if option not in ("--method", "--refinements"):
+            assert_refused(["compare", HANGING, "--out", tmp_path / "o", option, value], capsys)
+
+
+def test_bad_validate_elements_are_refused(capsys, no_heavy_work):
+    for value in [*BAD_INTEGERS, "0", "1001"]:
+        assert_refused(["validate", "--elements", "5", value], capsys)
+
+
+# --- simulate end to end -----------------------------------------------------------------------
+
+FIGURES = {"end_trajectory.png", "clearance.png", "cable_shapes.png", "winch_angle.png"}
+
+
+def test_cli_simulate_writes_results(tmp_path, capsys):
+    out = tmp_path / "out"
+    args = ["simulate", HANGING, "--out", str(out),
+            "--set", "numerics.duration=10.0", "--quiet"]  # fmt: skip
+    assert cli.main(args) == 0
+    names = {p.name for p in out.iterdir()}
+    written = {"trajectory.npz", "trajectory.json", "summary.json", ".cable_ocp-results"}
+    assert names == written | FIGURES
+    assert all((out / f).stat().st_size > 1000 for f in FIGURES)
+    summary = json.loads((out / "summary.json").read_text())
+    assert summary["scene"] == "hanging"
+    run = Trajectory.load(out / "trajectory")
+    assert run.time[-1] == 10.0 and run.scene_name == "hanging"
+    # Hanging at rest stays at rest: rise tolerance 1e-6 m.
+    assert abs(summary["end_rise_m"]) < 1e-6
+    assert [p.name for p in tmp_path.iterdir()] == ["out"]  # no scratch folder left over
+    assert "written to" in capsys.readouterr().out
+
+
+@pytest.mark.parametrize(
+    ("scene", "step", "message"),
+    [("hanging", 7.0, "must divide"), ("paper_flat", 5.0, "bond residual")],
+    ids=["step does not divide", "step blows up"],
+)
+def test_cli_failing_run_writes_nothing(tmp_path, capsys, scene, step, message):
+    # A cable at rest stays at rest at any step, so the blow-up needs the towed scene.
+    settings = ["--set", "numerics.duration=10.0", "--set", f"numerics.step={step}"]
+    args = ["simulate", str(MODELS / f"{scene}.toml"), "--out", str(tmp_path / "bad"), *settings,
+            "--quiet"]  # fmt: skip
+    assert cli.main(args) != 0
+    assert message in capsys.readouterr().err
+    assert list(tmp_path.iterdir()) == []  # neither "bad" nor a hidden scratch folder
+
+
+def test_cli_failure_while_writing_keeps_the_old_folder(tmp_path, monkeypatch, capsys):
+    """A failure inside the atomic block (here: a figure) leaves an existing folder untouched."""
+    from cable_ocp import plots
+
+    def broken(*args, **kwargs):
+        raise RuntimeError("figure failed")
+
+    kept = tmp_path / "kept"
+    kept.mkdir()
+    (kept / ".cable_ocp-results").write_text("")  # a previous results folder
+    (kept / "old.txt").write_text("previous results")
+    monkeypatch.setattr(plots, "winch_angle", broken)
+    args = ["simulate", HANGING, "--out", str(kept),
+            "--set", "numerics.duration=2.0", "--quiet"]  # fmt: skip
+    assert cli.main(args) != 0
+    assert "figure failed" in capsys.readouterr().err
+    assert [p.name for p in tmp_path.iterdir()] == ["kept"]
+    assert sorted(p.name for p in kept.iterdir()) == [".cable_ocp-results", "old.txt"]

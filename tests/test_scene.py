@@ -23,6 +23,7 @@ from cable_ocp.scene import (
 
 MODELS = Path(__file__).resolve().parent.parent / "models"
 SCENES = ["catenary", "paper_flat", "paper_hill", "end_force", "hanging"]
+BUNDLED = sorted(p.stem for p in MODELS.glob("*.toml"))
 HILL = {"height": 15.0, "x0": 70.0, "y0": 20.0, "width_x": 20.0, "width_y": 20.0}
 
 
@@ -232,3 +233,29 @@ def test_missing_file_and_folder_are_scene_errors(tmp_path):
 def test_the_three_required_tables_are_enough(tmp_path):
     scene = load_scene(_write(tmp_path / "s.toml", "[model]\n[top]\n[numerics]\n"))
     assert scene == Scene(name="s", source=str(tmp_path / "s.toml"))
+
+
+@pytest.mark.parametrize("name", BUNDLED)
+def test_scene_mutants_load_or_raise_scene_error(tmp_path, mutants, name):
+    """Mutants of the bundled scene files load to a valid scene or raise SceneError, nothing else.
+
+    The mutations must exercise both outcomes: more than half of them refused, some loaded.
+    """
+    refused, loaded, wrong = 0, 0, []
+    for k, (text, what) in enumerate(mutants(name)):
+        path = tmp_path / f"mutant_{k}.toml"
+        path.write_bytes(text)
+        try:
+            scene = load_scene(path)
+        except SceneError as error:
+            assert str(error), what
+            refused += 1
+            continue
+        except Exception as error:  # the failure this test looks for
+            wrong.append(f"{what}: {type(error).__name__}: {error}")
+            continue
+        assert isinstance(scene, Scene)
+        assert scene_from_dict(scene.to_dict(), name=scene.name) == scene, what
+        loaded += 1
+    assert wrong == []
+    assert refused > (refused + loaded) // 2 and loaded > 0
