@@ -37,8 +37,8 @@ def test_energy_conserved_in_air(models_dir, tilted, validation):
     """No dissipation (in air, so no drag; bending_damping = 0): energy stays constant.
 
     Straight line tilted by psi = pi/2 + 0.3, theta = 0.1, released from rest, n = 10, h = 0.01 s,
-    20 s, default Baumgarte gains. max |E - E0| / (E0 - E_eq) <= 1e-6 (measured 6e-11), with E_eq
-    the energy of the hanging equilibrium; bond residual <= 1e-8 m (measured 1.9e-9 m).
+    20 s, default Baumgarte gains. max |E - E0| / (E0 - E_eq) <= 1e-6, with E_eq the energy of
+    the hanging equilibrium; bond residual <= 1e-8 m.
     """
     scene, model, drive, u = build(models_dir, {"environment.submerged": False})
     assert model.spec.element.hydro is None and model.spec.bending_damping == 0.0
@@ -65,10 +65,7 @@ def test_energy_conserved_in_air(models_dir, tilted, validation):
 
 
 def test_hanging_at_rest_stays_at_rest(in_water, validation):
-    """From the equilibrium in water (n = 10, h = 0.05 s, 100 s): max |r(t) - r(0)| <= 1e-9 m.
-
-    Measured 6e-13 m.
-    """
+    """From the equilibrium in water (n = 10, h = 0.05 s, 100 s): max |r(t) - r(0)| <= 1e-9 m."""
     _, model, drive, _, x_eq = in_water
     run = integrate(model, x_eq, drive, 100.0, 0.05)
     assert len(run.time) == 2001
@@ -90,8 +87,7 @@ def perturbed(model, u, chained, seed: int = 0) -> np.ndarray:
 def test_unstable_step_raises_non_finite(in_water, chained):
     """h = 5 s, far above the stability limit: the state overflows and the run stops with a remedy.
 
-    The bond check is disabled (tolerance = inf) so that the non-finite check is what fires
-    (measured: non-finite at t = 15 s).
+    The bond check is disabled (tolerance = inf) so that the non-finite check is what fires.
     """
     _, model, drive, u, _ = in_water
     x0 = perturbed(model, u, chained)
@@ -133,8 +129,7 @@ def test_integrate_rejects_non_dividing_step(in_water):
 def test_rk4_fourth_order_against_dop853(models_dir, tilted, validation):
     """RK4 vs DOP853 (rtol = atol = 1e-10): in-water tilted release, n = 5, 2 s.
 
-    Error of the final state at h = 0.02 s over h = 0.01 s must exceed 10 (4th order: 16;
-    measured 15.8, errors 1.1e-8 and 7.0e-10).
+    Error of the final state at h = 0.02 s over h = 0.01 s must exceed 10 (4th order: 16).
     """
     _, model, drive, u = build(models_dir, {"model.elements": 5})
     x0 = tilted(model, u)

@@ -65,13 +65,19 @@ def test_bisection_brackets_the_limit(end_force):
     assert result.quarter_step_difference < 0.1 * result.end_excursion
 
 
-def test_limit_falls_with_elements(end_force):
-    """With torsion h_max falls about as 1/n: n = 15 is at least 2x below n = 5 (measured 3.1x).
+def test_limit_falls_with_elements(end_force, validation):
+    """With torsion h_max falls about as 1/n: n = 15 is at least 2x below n = 5.
 
     The linearised limit agrees with the bisection to within the bracket's ratio and a margin.
     """
     coarse = largest_stable_step(end_force, 5, True, **TORSION_QUICK)
     fine = largest_stable_step(end_force, 15, True, first_step=coarse.step, **TORSION_QUICK)
+    agreement = [result.step / result.linearised_step for result in (coarse, fine)]
+    validation("largest stable RK4 step with torsion, end_force, n = 5 and 15",
+               "second formulation", "linearised limit (eigenvalues of the FD Jacobian)",
+               "bisected h_max at n = 5, 15 (ratio); bisected / linearised at n = 5, 15",
+               f"{coarse.step:.3g} s, {fine.step:.3g} s ({coarse.step / fine.step:.1f}x); "
+               f"{agreement[0]:.2f}, {agreement[1]:.2f}", "ratio > 2; 0.5 .. 2")  # fmt: skip
     assert fine.step < coarse.step / 2
     for result in (coarse, fine):
         assert "twist" in result.failure
