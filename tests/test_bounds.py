@@ -23,7 +23,7 @@ from cable_ocp.optimization import optimize
 from cable_ocp.scene import load_scene
 from cable_ocp.simulation import check_top_length
 
-# small_tow over 20 s at h = 0.5 s (locked: Omega = 0.23 m); an IPOPT solve takes 1-3 s.
+# small_tow cut to 20 s at h = 0.5 s, so that each IPOPT solve is short.
 SHORT = {"numerics.duration": 20.0, "numerics.step": 0.5}
 FINE = np.linspace(0.0, 20.0, 200_001)  # 0.1 ms apart
 
