@@ -1,5 +1,7 @@
-"""Simulation of the bundled scenes end to end (cable_ocp.simulation): the top moved by a table,
-the winch inputs checked before integrating, heave compensation."""
+"""Simulation of the bundled scenes end to end (cable_ocp.simulation).
+
+The top moved by a table, the inputs checked before integrating, heave compensation.
+"""
 
 from __future__ import annotations
 
