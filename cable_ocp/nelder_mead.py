@@ -15,16 +15,11 @@ from dataclasses import dataclass
 import numpy as np
 from scipy.optimize import minimize
 
-from cable_ocp import winch
-from cable_ocp.bounds import LinearBounds, angle_bounds, violation
+from cable_ocp.bounds import violation
 from cable_ocp.controls import KnotSpline
-from cable_ocp.drive import Drive
-from cable_ocp.integrate import SimulationError, integrate, step_count
-from cable_ocp.model import CableModel
-from cable_ocp.ocp import GUESS_TOLERANCE, initial_parameters
+from cable_ocp.integrate import SimulationError
+from cable_ocp.problem import SolverOutcome, WinchProblem
 from cable_ocp.progress import Progress
-from cable_ocp.seabed import clearance_error, rms_objective
-from cable_ocp.statics import equilibrium
 
 # Objective given to Nelder-Mead for a winch whose simulation fails (m): worse than any real run.
 FAILED_RUN_OBJECTIVE = 1e3
@@ -66,80 +61,34 @@ class NelderMeadSettings:
             raise ValueError(f"step = {self.step}: must be > 0 s")
 
 
-@dataclass(frozen=True)
-class NelderMeadOutcome:
-    """What the search returned (before verification on the full model).
-
-    Attributes
-    ----------
-    parameters : array (knots,), rad
-    control : KnotSpline
-    success : bool
-    message : str
-    evaluations : int
-    iterations : int
-    objective : float, m
-        Omega on the evaluation model.
-    solve_time : float, s
-    history : list of float
-        Best Omega after each evaluation, m.
-    """
-
-    parameters: np.ndarray
-    control: KnotSpline
-    success: bool
-    message: str
-    evaluations: int
-    iterations: int
-    objective: float
-    solve_time: float
-    history: list[float]
+def nelder_mead_problem(scene, settings: NelderMeadSettings) -> WinchProblem:
+    """The scene's problem as the paper states it: the winch angle a spline through its knots."""
+    control = KnotSpline(scene.numerics.duration, scene.winch.knots)
+    return WinchProblem.from_scene(scene, control, settings.elements, settings.step)
 
 
 def solve_nelder_mead(
-    scene, settings: NelderMeadSettings, quiet: bool = False
-) -> NelderMeadOutcome:
-    """Minimise Omega over the spline knots with SciPy's bounded Nelder-Mead.
+    problem: WinchProblem, settings: NelderMeadSettings, quiet: bool = False
+) -> SolverOutcome:
+    """Minimise Omega over the parameters of ``problem`` with SciPy's bounded Nelder-Mead.
 
-    ``success`` is False, with the reason in ``message``, when SciPy reports a failure (e.g. the
+    ``success`` is False, with the reason in ``status``, when SciPy reports a failure (e.g. the
     evaluation limit), when no evaluated profile both kept the winch bounds and simulated, or when
     the returned profile breaks a bound by more than :data:`cable_ocp.bounds.BOUND_TOLERANCE`.
     """
     started = time.perf_counter()
-    duration = scene.numerics.duration
-    step = settings.step or scene.numerics.step
-    control = KnotSpline(duration, scene.winch.knots)
-    low, high = angle_bounds(scene, scene.segment_length)
-    model = CableModel.from_scene(scene, settings.elements)
-    n = model.spec.elements
-    locked = Drive.from_scene(scene, winch.locked, elements=n)
-    x0 = equilibrium(model, locked)
-    hills = scene.seabed.hills
-    compiled = settings.compiled
-
-    grid = np.arange(step_count(duration, step) + 1) * step
-    constraints = LinearBounds.build(scene, control, grid)
+    constraints, low, high = problem.bounds, problem.low, problem.high
 
     def omega(parameters: np.ndarray) -> float:
         excess = constraints.excess(parameters)
         if excess > 0:
             return INFEASIBLE_OBJECTIVE + FAILED_RUN_OBJECTIVE * excess
-        drive = Drive.from_scene(scene, control.angle_function(parameters), elements=n)
         try:
-            run = integrate(
-                model, x0, drive, duration, step, tolerance=GUESS_TOLERANCE, compiled=compiled
-            )
+            return problem.omega(problem.simulate(parameters, compiled=settings.compiled))
         except SimulationError:
             return FAILED_RUN_OBJECTIVE
-        return rms_objective(run.time, clearance_error(hills, run.states[:, :3]))
 
-    locked_run = integrate(
-        model, x0, locked, duration, step, tolerance=GUESS_TOLERANCE, compiled=compiled
-    )
-    rise = clearance_error(hills, locked_run.states[:, :3])
-    guess = np.clip(initial_parameters(scene, control, locked_run.time, rise, low, high), low, high)
-    guess = constraints.scale_into(guess)
-
+    guess = constraints.scale_into(np.clip(problem.first_guess(settings.compiled), low, high))
     history: list[float] = []
     progress = Progress("nelder-mead", settings.max_evaluations, quiet)
 
@@ -153,7 +102,7 @@ def solve_nelder_mead(
         tracked,
         guess,
         method="Nelder-Mead",
-        bounds=[(low, high)] * control.size,
+        bounds=[(low, high)] * problem.control.size,
         options={
             "maxfev": settings.max_evaluations,
             "xatol": settings.xatol,
@@ -163,20 +112,23 @@ def solve_nelder_mead(
     )
     progress.close()
     parameters = np.asarray(result.x)
-    success, message = bool(result.success), str(result.message)
-    reason = violation(scene, control, parameters)
+    success, status = bool(result.success), str(result.message)
+    reason = violation(problem.scene, problem.control, parameters)
     if reason is not None:
-        success, message = False, f"no profile within the winch bounds found: {reason}"
+        success, status = False, f"no profile within the winch bounds found: {reason}"
     elif result.fun >= FAILED_RUN_OBJECTIVE:
-        success, message = False, "no winch profile with a successful simulation found"
-    return NelderMeadOutcome(
+        success, status = False, "no winch profile with a successful simulation found"
+    solve_time = time.perf_counter() - started
+    return SolverOutcome(
         parameters=parameters,
-        control=control,
+        status=status,
         success=success,
-        message=message,
-        evaluations=int(result.nfev),
         iterations=int(result.nit),
-        objective=float(result.fun),
-        solve_time=time.perf_counter() - started,
+        evaluations=int(result.nfev),
+        omega=float(result.fun),
+        build_time=0.0,
+        compile_time=0.0,
+        solve_time=solve_time,
+        function_time=solve_time,
         history=history,
     )

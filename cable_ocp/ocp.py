@@ -21,31 +21,25 @@ from dataclasses import dataclass, field
 import casadi as ca
 import numpy as np
 
-from cable_ocp import winch
-from cable_ocp.bounds import LinearBounds, angle_bounds
 from cable_ocp.compile import CompileReport
 from cable_ocp.compile import compiled as compile_function
 from cable_ocp.controls import HermiteIntervals, KnotSpline
-from cable_ocp.drive import Drive
 from cable_ocp.integrate import (
     RK4_STAGES,
     WHOLE_STEP_LIMIT,
     SimulationError,
-    integrate,
     parametric_rk4_step,
     stage_inputs,
     step_compile_report,
     step_count,
     step_function,
 )
+from cable_ocp.layout import INPUT_SIZE, INPUTS
 from cable_ocp.model import CableModel
+from cable_ocp.problem import SolverOutcome, WinchProblem
 from cable_ocp.progress import IterationLog, check_verbosity
-from cable_ocp.seabed import clearance_error, seabed_height
-from cable_ocp.statics import equilibrium
+from cable_ocp.seabed import seabed_height
 
-# Bond residual allowed in the forward runs that make the initial guess (m): a coarse optimisation
-# model only has to be close, not exact.
-GUESS_TOLERANCE = 1e-3
 NLP_FUNCTIONS = ("nlp_f", "nlp_g", "nlp_grad_f", "nlp_jac_g", "nlp_hess_l", "nlp_grad")
 
 
@@ -118,50 +112,19 @@ class IpoptSettings:
             )
 
 
-@dataclass(frozen=True)
-class IpoptOutcome:
-    """What the NLP solve returned (before verification on the full model).
-
-    Attributes
-    ----------
-    parameters : array
-        Winch parameters.
-    control : KnotSpline or HermiteIntervals
-    status : str
-        IPOPT's return status.
-    success : bool
-    iterations : int
-    objective : float, m^2
-        ``Omega^2`` on the optimisation model.
-    build_time, solve_time : float, s
-        ``build_time`` includes ``compile_time``.
-    compile_time : float, s
-        Compiling the model to C (0 when the library came from the disk cache).
-    function_time : float, s
-        Wall time spent evaluating the NLP functions and derivatives.
-    history : list of float
-        Objective at each iteration, m^2.
-    """
-
-    parameters: np.ndarray
-    control: KnotSpline | HermiteIntervals
-    status: str
-    success: bool
-    iterations: int
-    objective: float
-    build_time: float
-    compile_time: float
-    solve_time: float
-    function_time: float
-    history: list[float]
-
-
 def make_control(scene, settings: IpoptSettings) -> KnotSpline | HermiteIntervals:
     """The control parametrisation the settings ask for."""
     duration = scene.numerics.duration
     if settings.control == "spline":
         return KnotSpline(duration, scene.winch.knots)
     return HermiteIntervals(duration, settings.control_intervals or settings.intervals)
+
+
+def ipopt_problem(scene, settings: IpoptSettings) -> WinchProblem:
+    """The scene's winch problem with the control, model and step the IPOPT settings ask for."""
+    return WinchProblem.from_scene(
+        scene, make_control(scene, settings), settings.elements, settings.step
+    )
 
 
 def ocp_step(
@@ -212,17 +175,6 @@ def _interval_function(step_function, step, steps, hills, end_height0) -> ca.Fun
     return ca.Function("interval", [x, stages, bias], [states[:, -1], cost])
 
 
-def initial_parameters(scene, control, run_time, rise, low, high) -> np.ndarray:
-    """Winch parameters that pay out what the locked winch lets the end rise (rad).
-
-    A least-squares fit of ``phi = e_locked(t) / r_D`` (clipped to the bounds) by the control.
-    """
-    target = np.clip(rise / scene.winch.drum_radius, low, high)
-    basis = control.basis(run_time)[0]
-    guess, *_ = np.linalg.lstsq(basis, target, rcond=None)
-    return guess
-
-
 class ShootingProblem:
     """The shooting NLP of a scene, built once and solved as often as needed.
 
@@ -232,7 +184,7 @@ class ShootingProblem:
 
     Parameters
     ----------
-    scene : Scene
+    problem : WinchProblem
     settings : IpoptSettings
     quiet : bool
         Print nothing.
@@ -240,13 +192,18 @@ class ShootingProblem:
         Print IPOPT's own log and timing table instead of one progress line per iteration.
     """
 
-    def __init__(self, scene, settings: IpoptSettings, quiet: bool = False, verbose: bool = False):
+    def __init__(
+        self,
+        problem: WinchProblem,
+        settings: IpoptSettings,
+        quiet: bool = False,
+        verbose: bool = False,
+    ):
         check_verbosity(quiet, verbose)
         started = time.perf_counter()
-        self.scene, self.settings = scene, settings
-        numerics = scene.numerics
-        self.duration = duration = numerics.duration
-        self.step = step = settings.step or numerics.step
+        self.problem, self.settings = problem, settings
+        duration, step = problem.duration, problem.step
+        model, control = problem.model, problem.control
         total_steps = step_count(duration, step)
         if total_steps % settings.intervals:
             raise ValueError(
@@ -254,24 +211,19 @@ class ShootingProblem:
                 f"(T = {duration} s, h = {step} s)"
             )
         self.per_interval = per_interval = total_steps // settings.intervals
-        self.low, self.high = angle_bounds(scene, scene.segment_length)
-        self.control = control = make_control(scene, settings)
-        self.model = model = CableModel.from_scene(scene, settings.elements)
-        self.drive = Drive.from_scene(scene, winch.locked, elements=model.spec.elements)
-        self.x0 = equilibrium(model, self.drive)
-        self.grid = np.arange(total_steps + 1) * step
 
-        step_times = self.grid[:-1]
-        fixed = stage_inputs(self.drive, step_times, step)
+        step_times = problem.grid[:-1]
+        fixed = stage_inputs(problem.drive, step_times, step)
         stage_times = (step_times[:, None] + np.array([0.0, step / 2, step])).ravel()
         parameters = ca.MX.sym("winch", control.size)
-        radius = scene.winch.drum_radius
+        radius = problem.scene.winch.drum_radius
         winch_rows = ca.vertcat(
             *[(radius * ca.sparsify(ca.DM(b)) @ parameters).T for b in control.basis(stage_times)]
         )
-        inputs = ca.DM(fixed) + ca.vertcat(
-            ca.DM.zeros(9, fixed.shape[1]), winch_rows, ca.DM.zeros(3, fixed.shape[1])
-        )
+        # The winch sets the top-element length with its rate and acceleration (three rows).
+        winch_inputs = ca.MX.zeros(INPUT_SIZE, fixed.shape[1])
+        winch_inputs[INPUTS.top_length : INPUTS.top_length_acceleration + 1, :] = winch_rows
+        inputs = ca.DM(fixed) + winch_inputs
         bias = ca.MX.sym("bias", total_steps + 1)
         bias_rows = ca.horzcat(
             *[
@@ -282,20 +234,20 @@ class ShootingProblem:
         step_function, report = ocp_step(model, step, settings.compiled)
         self.compile_time = report.compile_time if report is not None else 0.0
         interval = _interval_function(
-            step_function, step, per_interval, scene.seabed.hills, self.x0[2]
+            step_function, step, per_interval, problem.scene.seabed.hills, problem.x0[2]
         )
         if settings.shooting == "single":
-            costs = interval.mapaccum(settings.intervals)(ca.DM(self.x0), inputs, bias_rows)[1]
+            costs = interval.mapaccum(settings.intervals)(ca.DM(problem.x0), inputs, bias_rows)[1]
             nodes, continuity = ca.MX(model.state_size, 0), ca.MX(0, 1)
         else:
             nodes = ca.MX.sym("nodes", model.state_size, settings.intervals)
-            starts = ca.horzcat(ca.DM(self.x0), nodes[:, :-1])
+            starts = ca.horzcat(ca.DM(problem.x0), nodes[:, :-1])
             mapped = interval.map(settings.intervals, "thread", settings.threads)
             ends, costs = mapped(starts, inputs, bias_rows)
             continuity = ca.vec(ends - nodes)
         objective = ca.sum2(costs) / duration
 
-        bounds = LinearBounds.build(scene, control, self.grid)
+        bounds = problem.bounds
         variables = ca.vertcat(ca.vec(nodes), parameters) if nodes.numel() else parameters
         constraints = ca.densify(
             ca.vertcat(continuity, ca.sparsify(ca.DM(bounds.matrix)) @ parameters)
@@ -331,46 +283,22 @@ class ShootingProblem:
         )
         self.build_time = time.perf_counter() - started
 
-    def simulate(self, parameters: np.ndarray) -> np.ndarray:
-        """States of the optimisation model on the RK4 grid under a winch (array (k, nx)).
+    def solve(self, parameters: np.ndarray, bias: np.ndarray | None = None) -> SolverOutcome:
+        """Solve from the forward run of ``parameters`` with the given bias (m, on the grid).
 
-        Interpreted: a reduced model's run is short, and a compiled one would need a library of
-        its own (without derivatives).
+        The forward runs are interpreted: a reduced model's run is short, and a compiled one
+        would need a library of its own (without derivatives).
         """
-        drive = Drive.from_scene(
-            self.scene, self.control.angle_function(parameters), elements=self.model.spec.elements
-        )
-        run = integrate(
-            self.model,
-            self.x0,
-            drive,
-            self.duration,
-            self.step,
-            tolerance=GUESS_TOLERANCE,
-        )
-        return run.states
-
-    def clearance(self, states: np.ndarray) -> np.ndarray:
-        """Clearance error e(t) (m) of the optimisation model's states."""
-        return clearance_error(self.scene.seabed.hills, states[:, :3])
-
-    def first_guess(self) -> np.ndarray:
-        """Winch parameters from the locked run of the optimisation model."""
-        locked = self.simulate(np.zeros(self.control.size))
-        rise = self.clearance(locked)
-        return initial_parameters(self.scene, self.control, self.grid, rise, self.low, self.high)
-
-    def solve(self, parameters: np.ndarray, bias: np.ndarray | None = None) -> IpoptOutcome:
-        """Solve from the forward run of ``parameters`` with the given bias (m, on the grid)."""
+        problem = self.problem
         try:
-            states = self.simulate(parameters)
+            states = problem.simulate(parameters)
         except SimulationError:
-            parameters = np.zeros(self.control.size)
-            states = self.simulate(parameters)
+            parameters = np.zeros(problem.control.size)
+            states = problem.simulate(parameters)
         nodes = states[self.per_interval :: self.per_interval].T
         if self.settings.shooting == "single":
             nodes = nodes[:, :0]
-        bias = np.zeros(self.grid.size) if bias is None else bias
+        bias = np.zeros(problem.grid.size) if bias is None else bias
         self.history.clear()
         self.log.restart()
         started = time.perf_counter()
@@ -382,13 +310,14 @@ class ShootingProblem:
         )
         solve_time = time.perf_counter() - started
         stats = self.solver.stats()
-        return IpoptOutcome(
-            parameters=np.array(solution["x"][-self.control.size :]).ravel(),
-            control=self.control,
+        iterations = int(stats["iter_count"])
+        return SolverOutcome(
+            parameters=np.array(solution["x"][-problem.control.size :]).ravel(),
             status=stats["return_status"],
             success=bool(stats["success"]),
-            iterations=int(stats["iter_count"]),
-            objective=float(solution["f"]),
+            iterations=iterations,
+            evaluations=iterations + 1,
+            omega=float(np.sqrt(max(float(solution["f"]), 0.0))),
             build_time=self.build_time,
             compile_time=self.compile_time,
             solve_time=solve_time,

@@ -12,16 +12,16 @@ from __future__ import annotations
 import json
 import time
 import zipfile
+from collections.abc import Callable
 from dataclasses import asdict, dataclass, field, fields
 from pathlib import Path
 
 import numpy as np
 
-from cable_ocp.bounds import violation
-from cable_ocp.nelder_mead import NelderMeadSettings, solve_nelder_mead
-from cable_ocp.ocp import IpoptOutcome, IpoptSettings, ShootingProblem
+from cable_ocp.nelder_mead import NelderMeadSettings, nelder_mead_problem, solve_nelder_mead
+from cable_ocp.ocp import IpoptSettings, ShootingProblem, ipopt_problem
+from cable_ocp.problem import SolverOutcome, WinchProblem
 from cable_ocp.progress import check_verbosity
-from cable_ocp.simulation import simulate
 from cable_ocp.trajectory import Trajectory
 
 # Model correction stops once a solve improves the verified Omega by less than this factor.
@@ -169,43 +169,32 @@ def _from_json(name: str, value):
     return float("nan") if value is None else float(value)
 
 
-def _verify(
-    scene, control, parameters, quiet, compiled: bool = False
-) -> tuple[Trajectory | None, str | None]:
-    """Check the winch bounds and simulate the scene's model with the winch.
+def _timed_verify(problem: WinchProblem, quiet: bool, compiled: bool):
+    """``problem.verify`` that adds up its wall time: returns (verify, elapsed) callables."""
+    elapsed = [0.0]
 
-    ``compiled`` simulates with the model compiled to C (cached on disk).
+    def verify(parameters: np.ndarray) -> tuple[Trajectory | None, str | None]:
+        begun = time.perf_counter()
+        checked = problem.verify(parameters, quiet=quiet, compiled=compiled)
+        elapsed[0] += time.perf_counter() - begun
+        return checked
 
-    Returns
-    -------
-    (trajectory, None), or (None, reason) when the profile breaks a winch bound beyond
-    :data:`cable_ocp.bounds.BOUND_TOLERANCE` or the simulation raises (any exception).
-    """
-    reason = violation(scene, control, parameters)
-    if reason is not None:
-        return None, reason
-    try:
-        winch = control.angle_function(parameters)
-        return simulate(scene, winch=winch, quiet=quiet, compiled=compiled), None
-    except Exception as error:  # noqa: BLE001 - any failure of the check is a failed result
-        return None, f"the full-model simulation raised {type(error).__name__}: {error}"
+    return verify, lambda: elapsed[0]
 
 
-def optimize_ipopt(
-    scene,
-    settings: IpoptSettings | None = None,
+def solve_ipopt(
+    problem: WinchProblem,
+    settings: IpoptSettings,
     refinements: int = 3,
     quiet: bool = False,
     verbose: bool = False,
 ) -> OcpResult:
-    """Direct (single or multiple) shooting + IPOPT, verified (and refined) on the scene's model.
+    """Direct shooting + IPOPT on a problem, verified (and refined) on the scene's model.
 
     Parameters
     ----------
-    scene : Scene
-    settings : IpoptSettings, optional
-        Defaults: a reduced model of 3 elements at h = 0.5 s, single shooting, Hermite control
-        on 42 intervals; Omega verified on the scene's model compiled to C.
+    problem : WinchProblem
+    settings : IpoptSettings
     refinements : int
         Model-correction solves after the first (0 disables them); they stop early when the
         verified Omega stops improving. Ignored when the optimisation model is the scene's own.
@@ -222,30 +211,18 @@ def optimize_ipopt(
         the best verified profile, if any.
     """
     started = time.perf_counter()
-    settings = settings or IpoptSettings(elements=3, step=0.5)
-    problem = ShootingProblem(scene, settings, quiet=quiet, verbose=verbose)
-    reduced = (
-        problem.model.spec.elements != scene.model.elements or problem.step != scene.numerics.step
-    )
-    outcomes: list[IpoptOutcome] = []
+    nlp = ShootingProblem(problem, settings, quiet=quiet, verbose=verbose)
+    verify, verification_time = _timed_verify(problem, quiet, settings.compiled)
+    outcomes: list[SolverOutcome] = []
     verified: list[float] = []
     best_outcome, best, failure = None, None, None
     parameters, bias = problem.first_guess(), None
-    verification_time = 0.0
-
-    def verify(parameters):
-        nonlocal verification_time
-        begun = time.perf_counter()
-        checked = _verify(scene, problem.control, parameters, quiet, settings.compiled)
-        verification_time += time.perf_counter() - begun
-        return checked
-
-    for _ in range(1 + (refinements if reduced else 0)):
+    for _ in range(1 + (refinements if problem.reduced else 0)):
         if best is not None:
             full_error = np.interp(problem.grid, best.time, best.clearance_error)
             model_error = problem.clearance(problem.simulate(best_outcome.parameters))
             parameters, bias = best_outcome.parameters, full_error - model_error
-        outcome = problem.solve(parameters, bias)
+        outcome = nlp.solve(parameters, bias)
         outcomes.append(outcome)
         if not outcome.success:
             failure = outcome.status
@@ -273,43 +250,42 @@ def optimize_ipopt(
         control=f"{settings.control}({problem.control.size})",
         trajectory=best,
         omega=best.omega if best is not None else float("nan"),
-        omega_model=float(np.sqrt(max(shown.objective, 0.0))),
+        omega_model=shown.omega,
         success=failure is None,
         status=shown.status if failure is None else failure,
         iterations=sum(o.iterations for o in outcomes),
-        evaluations=sum(o.iterations for o in outcomes) + len(outcomes),
+        evaluations=sum(o.evaluations for o in outcomes),
         wall_time=time.perf_counter() - started,
-        build_time=problem.build_time,
+        build_time=nlp.build_time,
         solve_time=sum(o.solve_time for o in outcomes),
         function_time=sum(o.function_time for o in outcomes),
         history=[v for o in outcomes for v in o.history],
         refinements=verified,
-        compile_time=problem.compile_time,
-        verification_time=verification_time,
+        compile_time=nlp.compile_time,
+        verification_time=verification_time(),
     )
 
 
-def _nelder_mead_status(outcome, reason: str | None) -> str:
-    """The search's message, with the verification's failure where there is one."""
+def _nelder_mead_status(outcome: SolverOutcome, reason: str | None) -> str:
+    """The search's status, with the verification's failure where there is one."""
     if reason is None:
-        return outcome.message
+        return outcome.status
     failed = f"verification failed: {reason}"
-    return failed if outcome.success else f"{outcome.message}; {failed}"
+    return failed if outcome.success else f"{outcome.status}; {failed}"
 
 
-def optimize_nelder_mead(
-    scene,
-    settings: NelderMeadSettings | None = None,
+def solve_nelder_mead_verified(
+    problem: WinchProblem,
+    settings: NelderMeadSettings,
     quiet: bool = False,
     verbose: bool = False,
 ) -> OcpResult:
-    """The paper's Nelder-Mead over the spline knots, verified on the scene's model.
+    """The paper's Nelder-Mead on a problem, verified on the scene's model.
 
     Parameters
     ----------
-    scene : Scene
-    settings : NelderMeadSettings, optional
-        Defaults: a reduced model of 3 elements at h = 0.5 s.
+    problem : WinchProblem
+    settings : NelderMeadSettings
     quiet : bool
         No progress bar.
     verbose : bool
@@ -317,41 +293,74 @@ def optimize_nelder_mead(
     """
     check_verbosity(quiet, verbose)
     started = time.perf_counter()
-    settings = settings or NelderMeadSettings(elements=3, step=0.5)
-    outcome = solve_nelder_mead(scene, settings, quiet=quiet)
+    outcome = solve_nelder_mead(problem, settings, quiet=quiet)
     # A capped search is verified too (the paper's method usually stops at its cap); it stays
     # success = False.
-    trajectory, reason = _verify(scene, outcome.control, outcome.parameters, quiet)
+    verify, verification_time = _timed_verify(problem, quiet, compiled=False)
+    trajectory, reason = verify(outcome.parameters)
     omega = trajectory.omega if trajectory is not None else float("nan")
     return OcpResult(
         method="nelder-mead",
         parameters=outcome.parameters,
-        control=f"spline({outcome.control.size})",
+        control=f"spline({problem.control.size})",
         trajectory=trajectory,
         omega=omega,
-        omega_model=outcome.objective,
+        omega_model=outcome.omega,
         success=outcome.success and reason is None,
         status=_nelder_mead_status(outcome, reason),
         iterations=outcome.iterations,
         evaluations=outcome.evaluations,
         wall_time=time.perf_counter() - started,
-        build_time=0.0,
+        build_time=outcome.build_time,
         solve_time=outcome.solve_time,
-        function_time=outcome.solve_time,
+        function_time=outcome.function_time,
         history=outcome.history,
         refinements=[omega],
+        verification_time=verification_time(),
     )
+
+
+@dataclass(frozen=True)
+class Method:
+    """How ``optimize`` states and solves a problem with one method.
+
+    Attributes
+    ----------
+    default : IpoptSettings or NelderMeadSettings
+        Settings when none are given.
+    problem : callable
+        ``(scene, settings) -> WinchProblem``: the control, model and step the settings ask for.
+    solve : callable
+        ``(problem, settings, quiet=, verbose=, **kwargs) -> OcpResult``.
+    """
+
+    default: IpoptSettings | NelderMeadSettings
+    problem: Callable[..., WinchProblem]
+    solve: Callable[..., OcpResult]
+
+
+# A reduced model of 3 elements at h = 0.5 s optimises; the scene's own model verifies.
+METHODS = {
+    "ipopt": Method(IpoptSettings(elements=3, step=0.5), ipopt_problem, solve_ipopt),
+    "nelder-mead": Method(
+        NelderMeadSettings(elements=3, step=0.5), nelder_mead_problem, solve_nelder_mead_verified
+    ),
+}
 
 
 def optimize(
     scene,
     method: str = "ipopt",
-    settings=None,
+    settings: IpoptSettings | NelderMeadSettings | None = None,
     quiet: bool = False,
     verbose: bool = False,
     **kwargs,
 ) -> OcpResult:
     """Optimise the winch angle of a scene.
+
+    States the scene's :class:`~cable_ocp.problem.WinchProblem` once (with the control, model
+    and step of the settings), solves it with the method, and verifies the result on the scene's
+    own model.
 
     Parameters
     ----------
@@ -359,6 +368,8 @@ def optimize(
     method : str
         ``"ipopt"`` (direct shooting) or ``"nelder-mead"`` (the paper's method).
     settings : IpoptSettings or NelderMeadSettings, optional
+        Defaults: a reduced model of 3 elements at h = 0.5 s; IPOPT with single shooting and a
+        Hermite control on 42 intervals, Nelder-Mead over the scene's spline knots.
     quiet : bool
         Print nothing at all.
     verbose : bool
@@ -372,8 +383,14 @@ def optimize(
         Check ``success``: a failed solve is returned with ``success = False`` and the solver's
         status, never as an answer.
     """
-    if method == "ipopt":
-        return optimize_ipopt(scene, settings, quiet=quiet, verbose=verbose, **kwargs)
-    if method == "nelder-mead":
-        return optimize_nelder_mead(scene, settings, quiet=quiet, verbose=verbose)
-    raise ValueError(f"method = {method!r}: must be 'ipopt' or 'nelder-mead'")
+    if method not in METHODS:
+        raise ValueError(f"method = {method!r}: must be one of {', '.join(map(repr, METHODS))}")
+    chosen = METHODS[method]
+    settings = settings or chosen.default
+    if not isinstance(settings, type(chosen.default)):
+        raise ValueError(
+            f"settings: {type(settings).__name__} given for method {method!r}, which takes "
+            f"{type(chosen.default).__name__}"
+        )
+    problem = chosen.problem(scene, settings)
+    return chosen.solve(problem, settings, quiet=quiet, verbose=verbose, **kwargs)

@@ -6,7 +6,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from cable_ocp import optimization
+from cable_ocp import problem as problem_module
 from cable_ocp.bounds import (
     BOUND_TOLERANCE,
     LinearBounds,
@@ -127,7 +127,7 @@ def test_verification_failure_is_a_failed_result(short, monkeypatch):
     def broken(*args, **kwargs):
         raise SimulationError("the bonds tore at t = 3 s")
 
-    monkeypatch.setattr(optimization, "simulate", broken)
+    monkeypatch.setattr(problem_module, "simulate", broken)
     result = optimize(short, "ipopt", IpoptSettings(intervals=2), quiet=True)
     assert not result.success
     assert result.status.startswith("verification failed:")
@@ -140,7 +140,7 @@ def test_nelder_mead_verification_failure_is_a_failed_result(short, monkeypatch)
     def broken(*args, **kwargs):
         raise ValueError("top element too long")
 
-    monkeypatch.setattr(optimization, "simulate", broken)
+    monkeypatch.setattr(problem_module, "simulate", broken)
     result = optimize(short, "nelder-mead", NelderMeadSettings(max_evaluations=400), quiet=True)
     assert not result.success
     assert result.status == (

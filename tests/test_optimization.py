@@ -7,9 +7,10 @@ from dataclasses import replace
 import numpy as np
 import pytest
 
+from cable_ocp.bounds import angle_bounds
 from cable_ocp.controls import HermiteIntervals, KnotSpline
 from cable_ocp.nelder_mead import NelderMeadSettings
-from cable_ocp.ocp import IpoptSettings, angle_bounds
+from cable_ocp.ocp import IpoptSettings
 from cable_ocp.optimization import OcpResult, optimize
 from cable_ocp.scene import load_scene
 from cable_ocp.simulation import simulate

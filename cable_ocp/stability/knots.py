@@ -10,7 +10,7 @@ import numpy as np
 
 from cable_ocp.nelder_mead import NelderMeadSettings
 from cable_ocp.ocp import IpoptSettings
-from cable_ocp.optimization import optimize_ipopt, optimize_nelder_mead
+from cable_ocp.optimization import optimize
 from cable_ocp.stability.markdown import table_cell
 
 
@@ -219,7 +219,7 @@ def knots_comparison(
     Both optimise on a reduced model (``elements``, ``step``) as the front door's defaults do,
     and so minimise the same objective (methods ``"ipopt"``, ``"nelder-mead"``). With
     ``refinements > 0`` IPOPT is also run with that many model-correction solves against the
-    scene's model (``"ipopt + correction"``, see :func:`cable_ocp.optimization.optimize_ipopt`).
+    scene's model (``"ipopt + correction"``, see :func:`cable_ocp.optimization.solve_ipopt`).
     ``compiled``: the optimisers simulate with the RK4 step compiled to C (cached on disk). A
     failed solve is kept with its status.
     """
@@ -229,15 +229,16 @@ def knots_comparison(
         ipopt = IpoptSettings(
             elements=elements, step=step, control="spline", max_iter=max_iter, compiled=compiled
         )
-        plain = optimize_ipopt(local, ipopt, refinements=0, quiet=quiet)
+        plain = optimize(local, "ipopt", ipopt, refinements=0, quiet=quiet)
         runs.append(_knot_run(p, "ipopt", plain))
         if refinements > 0:
-            corrected = optimize_ipopt(local, ipopt, refinements=refinements, quiet=quiet)
+            corrected = optimize(local, "ipopt", ipopt, refinements=refinements, quiet=quiet)
             runs.append(_knot_run(p, "ipopt + correction", corrected))
         search = NelderMeadSettings(
             elements=elements, step=step, max_evaluations=max_evaluations, compiled=compiled
         )
-        runs.append(_knot_run(p, "nelder-mead", optimize_nelder_mead(local, search, quiet=quiet)))
+        searched = optimize(local, "nelder-mead", search, quiet=quiet)
+        runs.append(_knot_run(p, "nelder-mead", searched))
     return KnotsComparison(
         scene_name=scene.name,
         duration=scene.numerics.duration,
