@@ -130,3 +130,9 @@ def sweep_report(models_dir: Path) -> tuple[int, float, list[float]]:
     print(f"a library per scene would pay the first run's cost every time: about "
           f"{per_scene_libraries:.1f} s ({per_scene_libraries / per_scene:.1f}x)")  # fmt: skip
     return libraries, first, later
+
+
+def report(models_dir: Path, quick: bool = False) -> None:
+    """``cable-ocp bench --only simulate``: both tables (the sweep also with ``quick``)."""
+    simulate_report(models_dir, quick)
+    sweep_report(models_dir)

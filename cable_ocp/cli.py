@@ -94,6 +94,7 @@ def _ipopt_settings(args):
         elements=args.elements,
         step=args.step,
         intervals=args.intervals,
+        shooting=args.shooting,
         control=args.control,
         hessian=args.hessian,
         max_iter=args.max_iter,
@@ -246,6 +247,12 @@ def _add_optimiser_options(parser) -> None:
     )
     parser.add_argument("--intervals", type=_integer(1, 100_000), default=42,
                         help="shooting intervals (IPOPT)")  # fmt: skip
+    parser.add_argument(
+        "--shooting",
+        choices=["single", "multiple"],
+        default="single",
+        help="IPOPT: only the winch parameters as variables (single) or the interval states too",
+    )
     parser.add_argument("--control", choices=["hermite", "spline"], default="hermite")
     parser.add_argument(
         "--hessian",
@@ -293,7 +300,7 @@ def _validate(args) -> int:
 
 
 def _bench(args) -> int:
-    from cable_ocp import bench
+    from cable_ocp import bench, bench_simulate
     from cable_ocp.moordyn_compare import moordyn_report
 
     if args.hessian:
@@ -301,6 +308,7 @@ def _bench(args) -> int:
         return 0
     parts = {
         "rk4": bench.rk4_report,
+        "simulate": bench_simulate.report,
         "moordyn": moordyn_report,
         "ocp": bench.ocp_report,
         "ocp-speed": bench.ocp_speed_report,
@@ -416,7 +424,7 @@ def build_parser() -> argparse.ArgumentParser:
     bench.add_argument(
         "--only",
         nargs="+",
-        choices=["rk4", "moordyn", "ocp", "ocp-speed"],
+        choices=["rk4", "simulate", "moordyn", "ocp", "ocp-speed"],
         help="run only these parts",
     )
     bench.add_argument(

@@ -144,6 +144,21 @@ def test_quiet_and_verbose_reach_the_optimiser(
     assert calls[0]["quiet"] is quiet and calls[0]["verbose"] is verbose
 
 
+@pytest.mark.parametrize("shooting", ["single", "multiple"])
+def test_shooting_option_reaches_the_ipopt_settings(tmp_path, monkeypatch, capsys, shooting):
+    calls = []
+
+    def record(scene, method, settings, **kwargs):
+        calls.append(settings)
+        raise ValueError("stopped by the test")
+
+    monkeypatch.setattr(optimization, "optimize", record)
+    args = ["optimize", HANGING, "--out", tmp_path / "o", "--shooting", shooting, "--quiet"]
+    code, _, err = run_cli(args, capsys)
+    assert code == 2 and "stopped by the test" in err
+    assert calls[0].shooting == shooting
+
+
 @pytest.mark.parametrize(
     ("error", "code", "line"),
     [
