@@ -6,19 +6,19 @@ errata: ``cable_ocp/CONVENTIONS.md``.
 """
 
 from cable_ocp import plots
-from cable_ocp.catenary import catenary_shape
-from cable_ocp.closed_loop import MpcResult, mpc
-from cable_ocp.drive import Drive
-from cable_ocp.integrate import SimulationError, integrate, reference_solution
-from cable_ocp.model import INPUT_NAMES, CableModel
-from cable_ocp.nelder_mead import NelderMeadSettings
-from cable_ocp.ocp import IpoptSettings
-from cable_ocp.optimization import OcpResult, optimize
-from cable_ocp.scene import Scene, load_scene
-from cable_ocp.simulation import simulate
-from cable_ocp.statics import EquilibriumError, equilibrium
-from cable_ocp.trajectory import Trajectory
-from cable_ocp.validation import catenary_check
+from cable_ocp.control.closed_loop import MpcResult, mpc
+from cable_ocp.control.nelder_mead import NelderMeadSettings
+from cable_ocp.control.ocp import IpoptSettings
+from cable_ocp.control.optimization import OcpResult, optimize
+from cable_ocp.drive.drive import Drive
+from cable_ocp.model.cable import INPUT_NAMES, CableModel
+from cable_ocp.scene.schema import Scene, load_scene
+from cable_ocp.simulation.integrate import SimulationError, integrate, reference_solution
+from cable_ocp.simulation.run import simulate
+from cable_ocp.simulation.statics import EquilibriumError, equilibrium
+from cable_ocp.simulation.trajectory import Trajectory
+from cable_ocp.studies.catenary import catenary_shape
+from cable_ocp.studies.validation import catenary_check
 
 __all__ = [
     "INPUT_NAMES",

@@ -1,1 +1,4 @@
-"""Bundled scene files, installed as the data package ``cable_ocp.models`` (cable_ocp.bundled)."""
+"""Bundled scene files, installed as the data package ``cable_ocp.models``.
+
+Found by :mod:`cable_ocp.scene.bundled`.
+"""

@@ -2,8 +2,8 @@
 
 from __future__ import annotations
 
-from cable_ocp import bench
 from cable_ocp.cli import build_parser
+from cable_ocp.studies import bench
 
 
 def test_ocp_speed_case_reports_a_verified_solve(models_dir):

@@ -2,8 +2,8 @@
 
 from __future__ import annotations
 
-from cable_ocp import bench_simulate
 from cable_ocp.cli import build_parser
+from cable_ocp.studies import bench_simulate
 
 
 def test_simulate_report_times_each_part(models_dir, capsys):

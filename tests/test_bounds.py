@@ -6,22 +6,22 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from cable_ocp import problem as problem_module
-from cable_ocp.bounds import (
+from cable_ocp.control import problem as problem_module
+from cable_ocp.control.nelder_mead import NelderMeadSettings
+from cable_ocp.control.ocp import IpoptSettings
+from cable_ocp.control.optimization import optimize
+from cable_ocp.drive.bounds import (
     BOUND_TOLERANCE,
     LinearBounds,
     bernstein_rows,
     subintervals,
     violation,
 )
-from cable_ocp.controls import HermiteIntervals, KnotSpline
-from cable_ocp.drive import Drive
-from cable_ocp.integrate import SimulationError
-from cable_ocp.nelder_mead import NelderMeadSettings
-from cable_ocp.ocp import IpoptSettings
-from cable_ocp.optimization import optimize
-from cable_ocp.scene import load_scene
-from cable_ocp.simulation import check_top_length
+from cable_ocp.drive.controls import HermiteIntervals, KnotSpline
+from cable_ocp.drive.drive import Drive
+from cable_ocp.scene.schema import load_scene
+from cable_ocp.simulation.integrate import SimulationError
+from cable_ocp.simulation.run import check_top_length
 
 # small_tow cut to 20 s at h = 0.5 s, so that each IPOPT solve is short.
 SHORT = {"numerics.duration": 20.0, "numerics.step": 0.5}

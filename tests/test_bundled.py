@@ -4,7 +4,8 @@ from pathlib import Path
 
 import pytest
 
-from cable_ocp import bundled, load_scene
+from cable_ocp import load_scene
+from cable_ocp.scene import bundled
 
 if sys.version_info >= (3, 11):
     import tomllib

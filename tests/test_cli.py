@@ -14,10 +14,14 @@ from pathlib import Path
 
 import pytest
 
-from cable_ocp import cli, optimization, simulation, studies, validation
-from cable_ocp.output import MARKER
-from cable_ocp.scene import SceneError, load_scene
-from cable_ocp.trajectory import Trajectory
+from cable_ocp import cli
+from cable_ocp.control import optimization
+from cable_ocp.scene.output import MARKER
+from cable_ocp.scene.schema import SceneError, load_scene
+from cable_ocp.simulation import run as simulation
+from cable_ocp.simulation.trajectory import Trajectory
+from cable_ocp.studies import convergence as studies
+from cable_ocp.studies import validation
 
 MODELS = Path(__file__).resolve().parent.parent / "models"
 HANGING = str(MODELS / "hanging.toml")

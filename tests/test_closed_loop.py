@@ -1,19 +1,19 @@
-"""Closed-loop winch control (cable_ocp.closed_loop): arguments, projection, forecast, runs."""
+"""Closed-loop winch control (cable_ocp.control.closed_loop): arguments, projection, runs."""
 
 from __future__ import annotations
 
 import numpy as np
 import pytest
 
-from cable_ocp.closed_loop import mpc
-from cable_ocp.closed_loop.controller import hermite_basis
-from cable_ocp.closed_loop.forecast import BlendedHeight, HeightFilter, TopForecast
-from cable_ocp.closed_loop.projection import project_state
-from cable_ocp.drive import Drive
-from cable_ocp.layout import INPUTS
-from cable_ocp.model import CableModel
-from cable_ocp.scene import load_scene
-from cable_ocp.statics import equilibrium
+from cable_ocp.control.closed_loop import mpc
+from cable_ocp.control.closed_loop.controller import hermite_basis
+from cable_ocp.control.closed_loop.forecast import BlendedHeight, HeightFilter, TopForecast
+from cable_ocp.control.closed_loop.projection import project_state
+from cable_ocp.drive.drive import Drive
+from cable_ocp.model.cable import CableModel
+from cable_ocp.model.layout import INPUTS
+from cable_ocp.scene.schema import load_scene
+from cable_ocp.simulation.statics import equilibrium
 
 HEAVE = {"top.heave_amplitude": 1.0, "top.heave_period": 8.0}
 SHORT = dict(horizon=20.0, sample=5.0, elements=2, step=1.0)
@@ -113,7 +113,7 @@ def test_projection_keeps_the_reduced_bonds(models_dir):
     """Projected from a curved, moving plant state, the reduced bonds hold (position and rate)."""
     scene = load_scene(models_dir / "paper_hill.toml", {"numerics.duration": 20.0})
     full, reduced = CableModel.from_scene(scene), CableModel.from_scene(scene, 3)
-    from cable_ocp.simulation import simulate
+    from cable_ocp.simulation.run import simulate
 
     run = simulate(scene, compiled=True)
     u = run.inputs[-1]
@@ -218,7 +218,7 @@ def test_failed_solves_keep_the_previous_plan_and_are_reported(models_dir):
 def test_mpc_command_writes_results_and_figures(models_dir, tmp_path, capsys):
     import argparse
 
-    from cable_ocp.closed_loop.command import add_mpc_command
+    from cable_ocp.cli.mpc import add_mpc_command
 
     parser = argparse.ArgumentParser(prog="cable-ocp")
     add_mpc_command(parser.add_subparsers(dest="command", required=True))

@@ -7,11 +7,11 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from cable_ocp import compile as compile_module
-from cable_ocp.integrate import rk4_step
-from cable_ocp.layout import INPUTS
-from cable_ocp.model import CableModel
-from cable_ocp.scene import load_scene
+from cable_ocp.model import compile as compile_module
+from cable_ocp.model.cable import CableModel
+from cable_ocp.model.layout import INPUTS
+from cable_ocp.scene.schema import load_scene
+from cable_ocp.simulation.integrate import rk4_step
 
 
 @pytest.fixture(scope="module")
@@ -57,10 +57,10 @@ def test_without_a_compiler_falls_back_to_interpreted(tiny_step, monkeypatch):
 
 
 SECOND_PROCESS = """
-from cable_ocp.compile import compiled
-from cable_ocp.integrate import rk4_step
-from cable_ocp.model import CableModel
-from cable_ocp.scene import load_scene
+from cable_ocp.model.compile import compiled
+from cable_ocp.simulation.integrate import rk4_step
+from cable_ocp.model.cable import CableModel
+from cable_ocp.scene.schema import load_scene
 scene = load_scene({scene!r}, {{"model.elements": 2, "hydrodynamics.drag_normal": {drag}}})
 model = CableModel.from_scene(scene)
 print(compiled(rk4_step(model, 0.05), "step", derivatives=False)[1].cache_hit)
@@ -94,7 +94,7 @@ TINY_VALUE = np.sin(TINY_POINT) * np.square(TINY_POINT)
 TINY_PROCESS = """
 import json, warnings
 import casadi as ca
-from cable_ocp.compile import compiled
+from cable_ocp.model.compile import compiled
 x = ca.SX.sym("x", 3)
 tiny = ca.Function("tiny", [x], [ca.sin(x) * x**2])
 with warnings.catch_warnings(record=True) as caught:

@@ -5,11 +5,16 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from cable_ocp.drive import Drive
-from cable_ocp.integrate import SimulationError, integrate, reference_solution, step_count
-from cable_ocp.model import CableModel
-from cable_ocp.scene import load_scene
-from cable_ocp.statics import equilibrium, rest_inputs
+from cable_ocp.drive.drive import Drive
+from cable_ocp.model.cable import CableModel
+from cable_ocp.scene.schema import load_scene
+from cable_ocp.simulation.integrate import (
+    SimulationError,
+    integrate,
+    reference_solution,
+    step_count,
+)
+from cable_ocp.simulation.statics import equilibrium, rest_inputs
 
 
 def build(models_dir, overrides=None):

@@ -6,19 +6,19 @@ import casadi as ca
 import numpy as np
 import pytest
 
-from cable_ocp.drive import Drive
-from cable_ocp.kinematics import axis_direction, rotation_matrix
-from cable_ocp.layout import INPUTS
-from cable_ocp.model import INPUT_SIZE, CableModel
-from cable_ocp.rfe import (
+from cable_ocp.drive.drive import Drive
+from cable_ocp.model.cable import INPUT_SIZE, CableModel
+from cable_ocp.model.kinematics import axis_direction, rotation_matrix
+from cable_ocp.model.layout import INPUTS
+from cable_ocp.model.rfe import (
     ElementProperties,
     added_mass_energy,
     closed_form_kinetic_energy,
     element_functions,
     kinetic_energy,
 )
-from cable_ocp.scene import load_scene
-from cable_ocp.statics import equilibrium, rest_inputs
+from cable_ocp.scene.schema import load_scene
+from cable_ocp.simulation.statics import equilibrium, rest_inputs
 
 TORSION = pytest.mark.parametrize("torsion", [False, True], ids=["5dof", "6dof"])
 # Everything on: drag, anisotropic added mass (C_at != C_a, both non-zero) and a current.

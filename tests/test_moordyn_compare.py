@@ -7,7 +7,7 @@ import numpy as np
 import pytest
 
 import cable_ocp as co
-from cable_ocp import moordyn_compare as mc
+from cable_ocp.studies import moordyn_compare as mc
 
 MODELS = Path(__file__).resolve().parents[1] / "models"
 

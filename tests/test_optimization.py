@@ -7,14 +7,14 @@ from dataclasses import replace
 import numpy as np
 import pytest
 
-from cable_ocp.bounds import angle_bounds
-from cable_ocp.controls import HermiteIntervals, KnotSpline
-from cable_ocp.nelder_mead import NelderMeadSettings
-from cable_ocp.ocp import IpoptSettings
-from cable_ocp.optimization import OcpResult, optimize
-from cable_ocp.scene import load_scene
-from cable_ocp.simulation import simulate
-from cable_ocp.winch import spline_angle
+from cable_ocp.control.nelder_mead import NelderMeadSettings
+from cable_ocp.control.ocp import IpoptSettings
+from cable_ocp.control.optimization import OcpResult, optimize
+from cable_ocp.drive.bounds import angle_bounds
+from cable_ocp.drive.controls import HermiteIntervals, KnotSpline
+from cable_ocp.drive.winch import spline_angle
+from cable_ocp.scene.schema import load_scene
+from cable_ocp.simulation.run import simulate
 
 # small_tow: 100 m cable, n = 4, 40 s; the same model for optimisation and verification.
 SETTINGS = IpoptSettings(step=0.25, intervals=8)

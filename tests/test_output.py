@@ -7,7 +7,7 @@ import stat
 import numpy as np
 import pytest
 
-from cable_ocp.output import MARKER, OutputError, atomic_directory, check_target, json_text
+from cable_ocp.scene.output import MARKER, OutputError, atomic_directory, check_target, json_text
 
 
 def _listing(folder):

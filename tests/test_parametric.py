@@ -5,13 +5,13 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from cable_ocp import parametric
-from cable_ocp.drive import Drive
-from cable_ocp.model import CableModel, cached_model, spec_from_scene
-from cable_ocp.parameters import parameter_names, parameter_values, structure_of
-from cable_ocp.scene import load_scene
-from cable_ocp.simulation import simulate
-from cable_ocp.statics import rest_inputs
+from cable_ocp.drive.drive import Drive
+from cable_ocp.model import parametric
+from cable_ocp.model.cable import CableModel, cached_model, spec_from_scene
+from cable_ocp.model.parameters import parameter_names, parameter_values, structure_of
+from cable_ocp.scene.schema import load_scene
+from cable_ocp.simulation.run import simulate
+from cable_ocp.simulation.statics import rest_inputs
 
 SMALL = {"model.elements": 6, "numerics.duration": 2.0}
 

@@ -9,7 +9,7 @@ try:
 except ModuleNotFoundError:  # Python 3.10
     import tomli as tomllib
 
-from cable_ocp.scene import (
+from cable_ocp.scene.schema import (
     REQUIRED_TABLES,
     Cable,
     Hill,

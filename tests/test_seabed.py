@@ -1,4 +1,4 @@
-"""The seabed of eq. 40 and the objective of eq. 39 (cable_ocp.seabed).
+"""The seabed of eq. 40 and the objective of eq. 39 (cable_ocp.simulation.seabed).
 
 The clearance error is the integrand of eq. 39, with the seabed delta below the end's start.
 """
@@ -9,8 +9,8 @@ import casadi as ca
 import numpy as np
 import pytest
 
-from cable_ocp.scene import Hill
-from cable_ocp.seabed import clearance_error, rms_objective, seabed_height
+from cable_ocp.scene.schema import Hill
+from cable_ocp.simulation.seabed import clearance_error, rms_objective, seabed_height
 
 HILLS = (Hill(height=15.0, x0=70.0, y0=20.0, width_x=20.0, width_y=20.0),)
 

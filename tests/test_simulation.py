@@ -1,4 +1,4 @@
-"""Simulation of the bundled scenes end to end (cable_ocp.simulation).
+"""Simulation of the bundled scenes end to end (cable_ocp.simulation.run).
 
 The top moved by a table, the inputs checked before integrating, heave compensation.
 """
@@ -10,10 +10,10 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-import cable_ocp.simulation as simulation
-from cable_ocp import vessel
-from cable_ocp.scene import load_scene
-from cable_ocp.simulation import simulate
+import cable_ocp.simulation.run as simulation
+from cable_ocp.drive import vessel
+from cable_ocp.scene.schema import load_scene
+from cable_ocp.simulation.run import simulate
 
 MODELS = Path(__file__).resolve().parent.parent / "models"
 SHORT = {"numerics.duration": 100.0}  # paper_flat cut to 100 s: the tow ramp and the end's rise

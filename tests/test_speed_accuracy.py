@@ -1,4 +1,4 @@
-"""The speed-accuracy study (cable_ocp.speed_accuracy): its quick run and its Pareto front."""
+"""The speed-accuracy study (cable_ocp.studies.speed_accuracy): quick run and Pareto front."""
 
 from __future__ import annotations
 
@@ -7,7 +7,7 @@ import math
 import numpy as np
 import pytest
 
-from cable_ocp.speed_accuracy import QUICK_PLAN, pareto_front, run_speed_accuracy
+from cable_ocp.studies.speed_accuracy import QUICK_PLAN, pareto_front, run_speed_accuracy
 
 # DOP853 at rtol = atol = 1e-10 against RK4 at h = 1/64 s on the same model, over 10-20 s (m).
 REFERENCE_AGREEMENT = 1e-6

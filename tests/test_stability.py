@@ -5,12 +5,13 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from cable_ocp.drive import Drive
-from cable_ocp.integrate import SimulationError
-from cable_ocp.model import CableModel
-from cable_ocp.scene import load_scene
-from cable_ocp.simulation import simulate
-from cable_ocp.stability import (
+from cable_ocp.drive.drive import Drive
+from cable_ocp.model.cable import CableModel
+from cable_ocp.scene.schema import load_scene
+from cable_ocp.simulation.integrate import SimulationError
+from cable_ocp.simulation.run import simulate
+from cable_ocp.simulation.statics import equilibrium
+from cable_ocp.studies.stability import (
     baumgarte_drift,
     largest_stable_step,
     pushed_scene,
@@ -19,7 +20,6 @@ from cable_ocp.stability import (
     run_stability,
     singular_states,
 )
-from cable_ocp.statics import equilibrium
 
 # Small searches: short runs, a coarse bracket (ratio 1.5).
 QUICK = {"duration": 2.0, "min_steps": 50, "resolution": 1.5}

@@ -11,13 +11,13 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from cable_ocp import statics
-from cable_ocp.drive import Drive
-from cable_ocp.layout import INPUTS
-from cable_ocp.model import CableModel
-from cable_ocp.scene import load_scene
-from cable_ocp.statics import EquilibriumError, bond_tensions, equilibrium, rest_inputs
-from cable_ocp.validation import CatenaryCheck, catenary_check
+from cable_ocp.drive.drive import Drive
+from cable_ocp.model.cable import CableModel
+from cable_ocp.model.layout import INPUTS
+from cable_ocp.scene.schema import load_scene
+from cable_ocp.simulation import statics
+from cable_ocp.simulation.statics import EquilibriumError, bond_tensions, equilibrium, rest_inputs
+from cable_ocp.studies.validation import CatenaryCheck, catenary_check
 
 
 @pytest.fixture(scope="module")

@@ -6,10 +6,10 @@ import casadi as ca
 import numpy as np
 import pytest
 
-from cable_ocp.layout import INPUTS
-from cable_ocp.model import CableModel
-from cable_ocp.scene import load_scene
-from cable_ocp.structured import structured_outputs, structured_rhs, supports
+from cable_ocp.model.cable import CableModel
+from cable_ocp.model.layout import INPUTS
+from cable_ocp.model.structured import structured_outputs, structured_rhs, supports
+from cable_ocp.scene.schema import load_scene
 
 # Every force on: drag with a current, anisotropic added mass, bending damping and a payload.
 EVERYTHING = {

@@ -1,9 +1,9 @@
-"""Studies (cable_ocp.studies): the step-halving study of the locked winch on paper_flat."""
+"""Studies (cable_ocp.studies.convergence): step halving of the locked winch on paper_flat."""
 
 from __future__ import annotations
 
-from cable_ocp import studies
-from cable_ocp.scene import load_scene
+from cable_ocp.scene.schema import load_scene
+from cable_ocp.studies import convergence as studies
 
 
 def test_locked_winch_step_halving_on_paper_flat(models_dir, validation):

@@ -14,8 +14,8 @@ import numpy as np
 import pytest
 
 import cable_ocp as co
+from cable_ocp.cli.sweep import add_sweep_command
 from cable_ocp.sweep import load_sweep, open_sweep, run_sweep
-from cable_ocp.sweep.command import add_sweep_command
 from cable_ocp.sweep.store import case_path
 
 MODELS = Path(__file__).resolve().parent.parent / "models"

@@ -1,4 +1,4 @@
-"""Trajectory files (cable_ocp.trajectory): a run saved and loaded back is the same run.
+"""Trajectory files (cable_ocp.simulation.trajectory): a run saved and loaded back is the same run.
 
 Truncated, garbled or ill-fitting files are refused with the file named.
 """
@@ -11,9 +11,9 @@ import zipfile
 import numpy as np
 import pytest
 
-from cable_ocp.scene import load_scene
-from cable_ocp.simulation import simulate
-from cable_ocp.trajectory import Trajectory
+from cable_ocp.scene.schema import load_scene
+from cable_ocp.simulation.run import simulate
+from cable_ocp.simulation.trajectory import Trajectory
 
 
 def test_trajectory_round_trip(tmp_path, models_dir):

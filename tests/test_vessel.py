@@ -1,11 +1,11 @@
-"""Tabulated top motion (cable_ocp.vessel): the natural spline through a table, and its checks."""
+"""Tabulated top motion (cable_ocp.drive.vessel): the natural spline through a table, checks."""
 
 from __future__ import annotations
 
 import numpy as np
 import pytest
 
-from cable_ocp import vessel
+from cable_ocp.drive import vessel
 
 
 def good_table(count: int = 6) -> tuple[np.ndarray, np.ndarray]:

@@ -1,11 +1,11 @@
-"""The winch angle (cable_ocp.winch): the spline through the knots and tabulated series."""
+"""The winch angle (cable_ocp.drive.winch): the spline through the knots and tabulated series."""
 
 from __future__ import annotations
 
 import numpy as np
 import pytest
 
-from cable_ocp import winch
+from cable_ocp.drive import winch
 
 
 def test_spline_angle_through_knots_from_rest():

@@ -12,7 +12,7 @@ from typing import Any
 
 import numpy as np
 
-from cable_ocp.scene import Scene
+from cable_ocp.scene.schema import Scene
 
 # The time series each case returns (all on the case's output times, s).
 SERIES = ("winch_angle", "end_x", "end_y", "end_z", "clearance_error", "top_tension")
@@ -58,8 +58,8 @@ def run_case(scene: Scene, task: str, method: str, settings: Any) -> dict[str, A
         :data:`SERIES` with ``time`` (absent without a trajectory) and, for optimize,
         ``omega_model`` (m), ``iterations``, ``evaluations`` and ``solver_status``.
     """
-    from cable_ocp.optimization import optimize
-    from cable_ocp.simulation import simulate
+    from cable_ocp.control.optimization import optimize
+    from cable_ocp.simulation.run import simulate
 
     started = time.perf_counter()
     record: dict[str, Any] = {"success": False, "status": "failed", "reason": ""}

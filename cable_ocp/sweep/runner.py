@@ -15,7 +15,7 @@ from pathlib import Path
 
 import xarray as xr
 
-from cable_ocp.progress import Progress
+from cable_ocp.simulation.progress import Progress
 from cable_ocp.sweep import execute
 from cable_ocp.sweep.spec import SweepSpec
 from cable_ocp.sweep.store import (

@@ -40,10 +40,10 @@ from typing import Any
 
 import numpy as np
 
-from cable_ocp.integrate import step_count
-from cable_ocp.nelder_mead import NelderMeadSettings
-from cable_ocp.ocp import IpoptSettings
-from cable_ocp.scene import Scene, SceneError, load_scene
+from cable_ocp.control.nelder_mead import NelderMeadSettings
+from cable_ocp.control.ocp import IpoptSettings
+from cable_ocp.scene.schema import Scene, SceneError, load_scene
+from cable_ocp.simulation.integrate import step_count
 
 try:
     import tomllib

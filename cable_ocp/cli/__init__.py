@@ -1,0 +1,462 @@
+"""The command line: ``cable-ocp simulate|optimize|compare|mpc|sweep|validate|study|bench``.
+
+Every expected failure is one line ``cable-ocp COMMAND: error: ...`` on stderr and a non-zero exit
+code: 2 for bad input (arguments, scene files, a results folder that must not be replaced), 1 for
+a failing file system, 3 when the optimiser fails, 130 when interrupted. Bad input is refused
+before any simulation.
+"""
+
+from __future__ import annotations
+
+import argparse
+import math
+import sys
+from collections.abc import Callable
+from pathlib import Path
+
+from cable_ocp.cli.mpc import add_mpc_command
+from cable_ocp.cli.sweep import add_sweep_command
+from cable_ocp.scene.bundled import models_dir
+from cable_ocp.scene.output import atomic_directory, check_target, json_text
+from cable_ocp.scene.schema import load_scene
+
+try:
+    import tomllib
+except ModuleNotFoundError:  # Python 3.10
+    import tomli as tomllib
+
+
+def parse_overrides(pairs: list[str]) -> dict:
+    """``["model.elements=30", "top.motion='tow'"]`` -> ``{"model.elements": 30, ...}``.
+
+    Values are read as TOML, so numbers, booleans, strings and arrays keep their types; a bare
+    word is taken as a string.
+    """
+    overrides = {}
+    for pair in pairs:
+        key, sep, text = pair.partition("=")
+        if not sep:
+            raise ValueError(f"--set {pair!r}: expected KEY=VALUE, e.g. model.elements=30")
+        try:
+            value = tomllib.loads(f"v = {text}")["v"]
+        except (ValueError, RecursionError):  # not TOML: taken as a string
+            value = text
+        overrides[key.strip()] = value
+    return overrides
+
+
+def _simulate(args) -> int:
+    from cable_ocp import plots
+    from cable_ocp.simulation.run import simulate
+
+    scene = load_scene(args.scene, parse_overrides(args.set))
+    knots = args.knots
+    if knots is not None and len(knots) != scene.winch.knots:
+        raise ValueError(
+            f"--knots: {len(knots)} angles given; the scene has winch.knots = "
+            f"{scene.winch.knots} (one angle phi_1..phi_p per knot, rad)"
+        )
+    trajectory = simulate(scene, winch=knots, quiet=args.quiet)
+    hills = scene.seabed.hills
+    with atomic_directory(args.out) as folder:
+        trajectory.save(folder / "trajectory")
+        plots.end_trajectory(trajectory, path=folder / "end_trajectory.png")
+        plots.clearance(trajectory, scene.seabed.clearance, path=folder / "clearance.png")
+        plots.cable_shapes(trajectory, hills=hills, clearance_depth=scene.seabed.clearance,
+                           path=folder / "cable_shapes.png")  # fmt: skip
+        plots.winch_angle(trajectory, bounds=(scene.winch.angle_min, scene.winch.angle_max),
+                          path=folder / "winch_angle.png")  # fmt: skip
+        summary = {
+            "scene": scene.name,
+            "omega_m": trajectory.omega,
+            "end_rise_m": float(trajectory.end[:, 2].max() - trajectory.end[0, 2]),
+            "final_end_position_m": trajectory.end[-1].tolist(),
+            "max_top_tension_N": float(trajectory.top_tension.max()),
+        }
+        (folder / "summary.json").write_text(json_text(summary))
+    print(json_text(summary))
+    print(f"results and figures written to {Path(args.out).resolve()}")
+    return 0
+
+
+def _ipopt_settings(args):
+    """IPOPT settings from the options; ``--hessian exact`` needs the interpreted model."""
+    from cable_ocp.control.ocp import IpoptSettings
+
+    exact = args.hessian == "exact"
+    if exact and not args.quiet:
+        print(
+            f"cable-ocp {args.command}: note: --hessian exact runs the interpreted model "
+            "(compiled = False): the compiled step carries no second derivatives",
+            file=sys.stderr,
+        )
+    return IpoptSettings(
+        elements=args.elements,
+        step=args.step,
+        intervals=args.intervals,
+        shooting=args.shooting,
+        control=args.control,
+        hessian=args.hessian,
+        max_iter=args.max_iter,
+        compiled=not exact,
+    )
+
+
+def _nelder_mead_settings(args):
+    from cable_ocp.control.nelder_mead import NelderMeadSettings
+
+    return NelderMeadSettings(
+        elements=args.elements, step=args.step, max_evaluations=args.max_evaluations
+    )
+
+
+def _optimize(args) -> int:
+    from cable_ocp import plots
+    from cable_ocp.control.optimization import optimize
+    from cable_ocp.simulation.run import simulate
+
+    scene = load_scene(args.scene, parse_overrides(args.set))
+    output = {"quiet": args.quiet, "verbose": args.verbose}
+    if args.method == "ipopt":
+        settings = _ipopt_settings(args)
+        result = optimize(scene, "ipopt", settings, refinements=args.refinements, **output)
+    else:
+        result = optimize(scene, "nelder-mead", _nelder_mead_settings(args), **output)
+    locked = simulate(scene, quiet=True)
+    hills, bounds = scene.seabed.hills, (scene.winch.angle_min, scene.winch.angle_max)
+    labels = ["locked winch", f"optimised ({result.method})"]
+    with atomic_directory(args.out) as folder:
+        result.save(folder)
+        pair = [locked, result.trajectory] if result.trajectory is not None else [locked]
+        labels = labels[: len(pair)]
+        plots.end_trajectory(pair, labels, path=folder / "end_trajectory.png")
+        plots.clearance(pair, scene.seabed.clearance, labels, path=folder / "clearance.png")
+        plots.winch_angle(pair, labels, bounds, path=folder / "winch_angle.png")
+        plots.cable_shapes(pair[-1], hills=hills, clearance_depth=scene.seabed.clearance,
+                           path=folder / "cable_shapes.png")  # fmt: skip
+    n = scene.model.elements
+    omega = (
+        f"Omega = {result.omega:.3g} m verified on n = {n}"
+        if math.isfinite(result.omega)
+        else f"Omega not verified on n = {n}"
+    )
+    print(
+        f"{result.method}: success = {result.success} ({result.status}); {omega} (locked: "
+        f"{locked.omega:.3f} m); iterations {result.iterations}, evaluations "
+        f"{result.evaluations}, wall {result.wall_time:.1f} s (build {result.build_time:.1f} s, "
+        f"solver {result.solve_time:.1f} s of which functions {result.function_time:.1f} s)"
+    )
+    print(f"results and figures written to {Path(args.out).resolve()}")
+    if not result.success:
+        print(f"cable-ocp optimize: the optimiser failed: {result.status}", file=sys.stderr)
+        return 3
+    return 0
+
+
+def _compare(args) -> int:
+    from dataclasses import replace
+
+    from cable_ocp.control.optimization import optimize
+
+    overrides = parse_overrides(args.set)
+    scenes = [load_scene(path, overrides) for path in args.scenes]  # all checked before solving
+    base, simplex = _ipopt_settings(args), _nelder_mead_settings(args)
+    output = {"quiet": args.quiet, "verbose": args.verbose}
+    rows = []
+    for scene in scenes:
+        runs = [
+            ("ipopt, hermite", optimize(scene, "ipopt", base, **output)),
+            ("ipopt, spline", optimize(scene, "ipopt", replace(base, control="spline"), **output)),
+            ("nelder-mead, spline", optimize(scene, "nelder-mead", simplex, **output)),
+        ]
+        rows += [(scene.name, label, r) for label, r in runs]
+    lines = [
+        "| scene | method | control | Omega verified [m] | success | iterations | evaluations "
+        "| wall [s] | build [s] |",
+        "|---|---|---|---:|---|---:|---:|---:|---:|",
+    ]
+    for name, label, r in rows:
+        lines.append(
+            f"| {name} | {label} | {r.control} | {r.omega:.2e} | {r.success} | {r.iterations} "
+            f"| {r.evaluations} | {r.wall_time:.1f} | {r.build_time:.1f} |"
+        )
+    table = "\n".join(lines)
+    with atomic_directory(args.out) as folder:
+        (folder / "comparison.md").write_text(table + "\n")
+    print(table)
+    return 0
+
+
+def _integer(low: int, high: int) -> Callable[[str], int]:
+    """An argparse type: an integer from ``low`` to ``high``."""
+
+    def convert(text: str) -> int:
+        try:
+            value = int(text)
+        except ValueError:
+            raise argparse.ArgumentTypeError(f"expected an integer, got {text!r:.40}") from None
+        if not low <= value <= high:
+            raise argparse.ArgumentTypeError(f"{text:.40} is out of range: must be {low} to {high}")
+        return value
+
+    return convert
+
+
+def _positive(text: str) -> float:
+    """An argparse type: a finite number > 0."""
+    try:
+        value = float(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected a number, got {text!r:.40}") from None
+    if not (math.isfinite(value) and value > 0):
+        raise argparse.ArgumentTypeError(f"{text!r:.40} is out of range: must be finite and > 0")
+    return value
+
+
+def _knots(text: str) -> list[float]:
+    """An argparse type: comma-separated finite knot angles, rad."""
+    if not text.strip():
+        raise argparse.ArgumentTypeError(
+            "empty: give the angles phi_1..phi_p in rad, comma-separated, or leave --knots out "
+            "for a locked winch"
+        )
+    values = []
+    for k, item in enumerate(text.split(","), start=1):
+        try:
+            value = float(item)
+        except ValueError:
+            raise argparse.ArgumentTypeError(
+                f"knot {k} = {item.strip()!r:.40} is not a number; give the angles phi_1..phi_p "
+                "in rad, comma-separated, e.g. 0,0.5,1"
+            ) from None
+        if not math.isfinite(value):
+            raise argparse.ArgumentTypeError(f"knot {k} = {item.strip()!r}: must be finite")
+        values.append(value)
+    return values
+
+
+def _add_optimiser_options(parser) -> None:
+    parser.add_argument(
+        "--elements",
+        type=_integer(1, 1000),
+        default=3,
+        help="elements of the optimisation model (verification uses the scene's)",
+    )
+    parser.add_argument(
+        "--step", type=_positive, default=0.5, help="RK4 step of the optimisation [s]"
+    )
+    parser.add_argument("--intervals", type=_integer(1, 100_000), default=42,
+                        help="shooting intervals (IPOPT)")  # fmt: skip
+    parser.add_argument(
+        "--shooting",
+        choices=["single", "multiple"],
+        default="single",
+        help="IPOPT: only the winch parameters as variables (single) or the interval states too",
+    )
+    parser.add_argument("--control", choices=["hermite", "spline"], default="hermite")
+    parser.add_argument(
+        "--hessian",
+        choices=["limited-memory", "exact"],
+        default="limited-memory",
+        help="exact: second derivatives, on the interpreted (not compiled) model",
+    )
+    parser.add_argument("--max-iter", type=_integer(1, 10**6), default=300, help="IPOPT iterations")
+    parser.add_argument("--max-evaluations", type=_integer(1, 10**8), default=3000,
+                        help="Nelder-Mead runs")  # fmt: skip
+    parser.add_argument("--set", action="append", default=[], metavar="KEY=VALUE")
+    talk = parser.add_mutually_exclusive_group()
+    talk.add_argument("--quiet", action="store_true", help="print nothing while solving")
+    talk.add_argument("--verbose", action="store_true",
+                      help="IPOPT's full log instead of one line per iteration")  # fmt: skip
+
+
+def _validate(args) -> int:
+    import numpy as np
+
+    from cable_ocp import plots
+    from cable_ocp.studies.catenary import catenary_shape
+    from cable_ocp.studies.validation import catenary_check
+
+    scene = load_scene(args.scene or models_dir() / "catenary.toml")
+    print("catenary (paper 4.1): max relative errors eq. 35-36, in %")
+    print(f"{'n':>5}{'eps_x':>10}{'eps_z':>10}{'inextensible':>14}{'top tension':>13}")
+    checks = [catenary_check(scene, n) for n in args.elements]
+    for c in checks:
+        print(
+            f"{c.elements:>5}{100 * c.max_error_x:>10.4f}{100 * c.max_error_z:>10.4f}"
+            f"{100 * c.max_error_inextensible:>14.5f}{100 * c.top_tension_error:>13.2e}"
+        )
+    if args.out:
+        check = checks[0]
+        s = np.linspace(0, scene.cable.length, 300)
+        c, e = scene.cable, scene.end
+        x, z, _ = catenary_shape(s, c.length, c.mass_per_length * scene.environment.gravity,
+                                 float(np.hypot(*e.force[:2])), e.force[2],
+                                 c.youngs_modulus * c.cross_section_area)  # fmt: skip
+        with atomic_directory(args.out) as folder:
+            plots.catenary_comparison(check.joints, np.vstack([x, z]), folder / "catenary.png")
+        print(f"figure written to {Path(args.out).resolve() / 'catenary.png'}")
+    return 0
+
+
+def _bench(args) -> int:
+    from cable_ocp.studies import bench, bench_simulate
+    from cable_ocp.studies.moordyn_compare import moordyn_report
+
+    if args.hessian:
+        bench.hessian_report(models_dir())
+        return 0
+    parts = {
+        "rk4": bench.rk4_report,
+        "simulate": bench_simulate.report,
+        "moordyn": moordyn_report,
+        "ocp": bench.ocp_report,
+        "ocp-speed": bench.ocp_speed_report,
+    }
+    for name in args.only or list(parts):
+        parts[name](models_dir(), quick=args.quick)
+        print()
+    return 0
+
+
+def _study(args) -> int:
+    from cable_ocp.studies import convergence as studies
+
+    if args.name in ("speed-accuracy", "stability"):
+        if args.scene is not None:
+            raise ValueError(f"study {args.name} takes no scene: it runs its own (see --help)")
+        if args.name == "speed-accuracy":
+            from cable_ocp.studies.speed_accuracy import run_speed_accuracy as run
+        else:
+            from cable_ocp.studies.stability import run_stability as run
+        run(args.out, models_dir(), quick=args.quick, quiet=args.quiet)
+        print(f"written to {Path(args.out).resolve()}")
+        return 0
+    if args.scene is None:
+        raise ValueError(f"study {args.name} needs a scene file, e.g. models/paper_flat.toml")
+    scene = load_scene(args.scene, parse_overrides(args.set))
+    with atomic_directory(args.out) as folder:
+        if args.name == "step":
+            result = studies.step_halving(scene, quiet=args.quiet)
+        elif args.name == "elements":
+            result = studies.element_convergence(scene, quiet=args.quiet)
+            result.chart(folder / "element_convergence.png")
+        else:
+            result = studies.end_positions(
+                scene, studies.END_FORCE_SETTINGS, quiet=args.quiet, compiled=args.compiled
+            )
+        text = result.table()
+        (folder / f"{args.name}.md").write_text(f"# {args.name} study of {scene.name}\n\n{text}\n")
+    print(text)
+    print(f"written to {Path(args.out).resolve()}")
+    return 0
+
+
+OUT_HELP = (
+    "results folder, written atomically: a new or empty folder, or a previous results folder "
+    "(marked by .cable_ocp-results), which is replaced"
+)
+
+
+def build_parser() -> argparse.ArgumentParser:
+    """The argument parser of ``cable-ocp``."""
+    parser = argparse.ArgumentParser(prog="cable-ocp", description=__doc__)
+    commands = parser.add_subparsers(dest="command", required=True)
+
+    sim = commands.add_parser("simulate", help="simulate a scene and write results and figures")
+    sim.add_argument("scene", type=Path)
+    sim.add_argument("--out", type=Path, required=True, help=OUT_HELP)
+    sim.add_argument("--knots", type=_knots,
+                     help="winch knot angles phi_1..phi_p in rad, comma-separated (write "
+                     "--knots=-1,0.5 when the first is negative)")  # fmt: skip
+    sim.add_argument("--set", action="append", default=[], metavar="KEY=VALUE",
+                     help="override a scene field, e.g. --set model.elements=30")  # fmt: skip
+    sim.add_argument("--quiet", action="store_true", help="no progress bar")
+    sim.set_defaults(run=_simulate)
+
+    val = commands.add_parser("validate", help="statics check against the analytic catenary")
+    val.add_argument("scene", type=Path, nargs="?", help="default: the bundled catenary.toml")
+    val.add_argument("--elements", type=_integer(1, 1000), nargs="+", default=[15, 5, 30, 60])
+    val.add_argument("--out", type=Path, help="folder for the comparison figure; " + OUT_HELP)
+    val.set_defaults(run=_validate)
+
+    opt = commands.add_parser("optimize", help="optimise the winch angle of a scene")
+    opt.add_argument("scene", type=Path)
+    opt.add_argument("--method", choices=["ipopt", "nelder-mead"], default="ipopt")
+    opt.add_argument("--out", type=Path, required=True, help=OUT_HELP)
+    opt.add_argument("--refinements", type=_integer(0, 100), default=3,
+                     help="model-correction solves")  # fmt: skip
+    _add_optimiser_options(opt)
+    opt.set_defaults(run=_optimize)
+
+    cmp = commands.add_parser("compare", help="IPOPT against Nelder-Mead in one table")
+    cmp.add_argument("scenes", type=Path, nargs="+")
+    cmp.add_argument("--out", type=Path, required=True, help=OUT_HELP)
+    _add_optimiser_options(cmp)
+    cmp.set_defaults(run=_compare)
+    add_mpc_command(commands)
+    add_sweep_command(commands)
+
+    study = commands.add_parser(
+        "study",
+        help="convergence, validation, speed-accuracy and stability studies",
+        description="step, elements, end-force: studies of SCENE. speed-accuracy: error vs CPU "
+        "time on paper_flat and end_force, and the OCP's Omega vs wall time. stability: largest "
+        "stable step vs n, Baumgarte gains, Nelder-Mead vs IPOPT as the knots grow.",
+    )
+    study.add_argument(
+        "name", choices=["step", "elements", "end-force", "speed-accuracy", "stability"]
+    )
+    study.add_argument("scene", type=Path, nargs="?")
+    study.add_argument("--out", type=Path, required=True, help=OUT_HELP)
+    study.add_argument("--set", action="append", default=[], metavar="KEY=VALUE")
+    study.add_argument("--quiet", action="store_true")
+    study.add_argument("--compiled", action="store_true", help="end-force: model compiled to C")
+    study.add_argument(
+        "--quick", action="store_true", help="speed-accuracy, stability: a small version"
+    )
+    study.set_defaults(run=_study)
+
+    bench = commands.add_parser("bench", help="speed benchmarks against baselines")
+    bench.add_argument(
+        "--quick", action="store_true", help="scene steps only, short MoorDyn runs, small OCP"
+    )
+    bench.add_argument(
+        "--only",
+        nargs="+",
+        choices=["rk4", "simulate", "moordyn", "ocp", "ocp-speed"],
+        help="run only these parts",
+    )
+    bench.add_argument(
+        "--hessian", action="store_true", help="IPOPT exact vs limited-memory Hessian instead"
+    )
+    bench.set_defaults(run=_bench)
+    return parser
+
+
+def main(argv: list[str] | None = None) -> int:
+    """Entry point of ``cable-ocp``; returns the exit code (see the module docstring)."""
+    try:
+        args = build_parser().parse_args(argv)
+    except SystemExit as exit_:  # argparse: --help (0) or a usage error (2), already printed
+        return exit_.code if isinstance(exit_.code, int) else 0
+    prefix = f"cable-ocp {args.command}"
+    try:
+        # Before any work, so a bad --out costs nothing; a sweep folder is resumed, and
+        # cable_ocp.sweep checks it as its own.
+        if getattr(args, "out", None) is not None and args.command != "sweep":
+            check_target(args.out)
+        return args.run(args)
+    except KeyboardInterrupt:
+        print(f"{prefix}: interrupted", file=sys.stderr)
+        return 130
+    except (ValueError, OverflowError, RuntimeError) as error:  # SceneError, UnicodeDecodeError
+        print(f"{prefix}: error: {_one_line(error)}", file=sys.stderr)
+        return 2
+    except OSError as error:
+        print(f"{prefix}: error: {_one_line(error)}", file=sys.stderr)
+        return 1
+
+
+def _one_line(error: BaseException) -> str:
+    return " ".join(str(error).split()) or type(error).__name__

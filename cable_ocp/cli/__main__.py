@@ -1,0 +1,7 @@
+"""``python -m cable_ocp.cli``: the command line, as the ``cable-ocp`` script."""
+
+import sys
+
+from cable_ocp.cli import main
+
+sys.exit(main())

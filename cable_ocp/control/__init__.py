@@ -1,0 +1,1 @@
+"""Winch control: multiple shooting + IPOPT, Nelder-Mead, closed-loop MPC."""

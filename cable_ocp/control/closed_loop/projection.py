@@ -1,0 +1,165 @@
+"""The controller's state estimate: the plant's measured state projected onto the reduced model.
+
+The reduced model (fewer, longer elements) cannot take the plant's state as it is. Its joints
+below the top are placed on the plant's cable at the same arc length from the end ``E`` (a point
+between two plant joints lies on the straight plant element joining them, so linear interpolation
+along the polyline is exact), and each reduced element points along the chord to the next one; the
+top element points at the top point. The positions are then chained down from the top with the
+reduced model's own element lengths, so its bonds hold exactly, and the end of the chain differs
+from the measured end only by what the chords cut off the curved cable (the controller corrects
+its predictions by that offset, :func:`project_state`).
+
+Velocities likewise: the plant's joint velocities are interpolated at the same arc lengths (exact
+on a rigid element), each reduced element turns at the rate of its chord's normal velocity, and
+the joint velocities are chained down from the top with the winch's pay-out rate, so the bonds
+hold at velocity level too.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from cable_ocp.model.cable import CableModel
+
+
+@dataclass(frozen=True)
+class ProjectedState:
+    """A reduced-model state made from a plant state.
+
+    Attributes
+    ----------
+    state : array (reduced state_size,)
+    end_offset : array (3,), m
+        Measured end position minus the end of the reduced chain.
+    """
+
+    state: np.ndarray
+    end_offset: np.ndarray
+
+
+def axis(psi: np.ndarray, theta: np.ndarray) -> np.ndarray:
+    """Element direction ``e(psi, theta)`` of CONVENTIONS.md §3 (3, ...)."""
+    return np.array([np.cos(theta) * np.cos(psi), np.sin(theta), np.cos(theta) * np.sin(psi)])
+
+
+def chain_state(
+    model: CableModel,
+    top: np.ndarray,
+    top_velocity: np.ndarray,
+    top_length: float,
+    top_length_rate: float,
+    directions: np.ndarray,
+    direction_rates: np.ndarray,
+) -> np.ndarray:
+    """A state whose bonds hold exactly, chained down from the top point.
+
+    Parameters
+    ----------
+    model : CableModel
+        A 5-DOF model.
+    top, top_velocity : array (3,), m, m/s
+        The top point ``A_{n+1}`` and its velocity.
+    top_length, top_length_rate : float, m, m/s
+        ``l_n`` and its rate (the winch).
+    directions : array (n+1, 3)
+        Direction of each element (normalised here).
+    direction_rates : array (n+1, 3), 1/s
+        Rate of each direction; the part along the direction is dropped.
+
+    Returns
+    -------
+    array (state_size,)
+    """
+    if model.spec.element.torsion:
+        raise ValueError("the state projection supports 5-DOF models only (model.torsion = false)")
+    count = model.element_count
+    lengths = np.array([float(v) for v in model.element_lengths(top_length)])
+    rates = np.zeros(count)
+    rates[-1] = top_length_rate
+    q = np.zeros((count, 5))
+    qd = np.zeros((count, 5))
+    point = np.asarray(top, float).copy()
+    velocity = np.asarray(top_velocity, float).copy()
+    for i in reversed(range(count)):
+        e = directions[i] / np.linalg.norm(directions[i])
+        psi, theta = np.arctan2(e[2], e[0]), np.arcsin(np.clip(e[1], -1.0, 1.0))
+        d_psi = np.array([-np.cos(theta) * np.sin(psi), 0.0, np.cos(theta) * np.cos(psi)])
+        d_theta = np.array(
+            [-np.sin(theta) * np.cos(psi), np.cos(theta), -np.sin(theta) * np.sin(psi)]
+        )
+        e_rate = direction_rates[i] - np.dot(direction_rates[i], e) * e
+        psi_rate = np.dot(e_rate, d_psi) / np.cos(theta) ** 2
+        theta_rate = np.dot(e_rate, d_theta)
+        e_rate = psi_rate * d_psi + theta_rate * d_theta
+        point = point - lengths[i] * e
+        velocity = velocity - rates[i] * e - lengths[i] * e_rate
+        q[i] = [*point, psi, theta]
+        qd[i] = [*velocity, psi_rate, theta_rate]
+    return np.concatenate([q.ravel(), qd.ravel()])
+
+
+def joint_arcs(model: CableModel, top_length: float) -> np.ndarray:
+    """Arc length (m) from the end ``E`` to each joint ``A_0 .. A_{n+1}``."""
+    lengths = [float(v) for v in model.element_lengths(top_length)]
+    return np.concatenate([[0.0], np.cumsum(lengths)])
+
+
+def plant_joints(model: CableModel, x: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Joints ``A_0 .. A_n`` (n+1, 3) and their velocities of a 5-DOF state (the top excluded)."""
+    q, qd = model.coordinates(np.asarray(x, float))
+    return np.array([qi[:3] for qi in q]), np.array([qdi[:3] for qdi in qd])
+
+
+def project_state(
+    plant: CableModel,
+    x: np.ndarray,
+    plant_top_length: float,
+    reduced: CableModel,
+    top: np.ndarray,
+    top_velocity: np.ndarray,
+    top_length: float,
+    top_length_rate: float,
+) -> ProjectedState:
+    """Project a plant state onto the reduced model (see the module docstring).
+
+    Parameters
+    ----------
+    plant : CableModel
+        The plant's (full) model.
+    x : array (plant state_size,)
+        The measured plant state.
+    plant_top_length : float, m
+        The plant's top-element length at the moment of the measurement.
+    reduced : CableModel
+        The controller's model.
+    top, top_velocity : array (3,), m, m/s
+        The top point (and velocity) the reduced state hangs from.
+    top_length, top_length_rate : float, m, m/s
+        The reduced model's top-element length and its rate.
+    """
+    joints, velocities = plant_joints(plant, x)
+    arcs = joint_arcs(plant, plant_top_length)[:-1]
+    wanted = joint_arcs(reduced, top_length)[:-1]
+    if wanted[-1] > arcs[-1]:
+        raise ValueError(
+            f"the reduced model's top joint lies {wanted[-1]:.4g} m from the end, beyond the "
+            f"plant's top joint ({arcs[-1]:.4g} m): use fewer reduced elements"
+        )
+    points = np.column_stack([np.interp(wanted, arcs, joints[:, k]) for k in range(3)])
+    rates = np.column_stack([np.interp(wanted, arcs, velocities[:, k]) for k in range(3)])
+    upper = np.vstack([points[1:], np.asarray(top, float)])
+    upper_rates = np.vstack([rates[1:], np.asarray(top_velocity, float)])
+    chords = upper - points
+    chord_lengths = np.linalg.norm(chords, axis=1, keepdims=True)
+    state = chain_state(
+        reduced,
+        top,
+        top_velocity,
+        top_length,
+        top_length_rate,
+        chords,
+        (upper_rates - rates) / chord_lengths,
+    )
+    return ProjectedState(state=state, end_offset=joints[0] - state[:3])

@@ -1,0 +1,134 @@
+"""The paper's method: Nelder-Mead over the spline knots, one RK4 run per evaluation.
+
+The winch bounds (angle, and ``winch.rate_max`` / ``winch.acceleration_max`` when set) are held on
+the whole spline, between the knots too, by the linear constraints of :mod:`cable_ocp.drive.bounds`:
+a profile that breaks them is not simulated but scored worse than any run (an extreme barrier that
+grows with the violation, so the simplex is pushed back), and the search starts from a profile
+that keeps them. The returned profile is checked again; a violation makes the search a failure.
+"""
+
+from __future__ import annotations
+
+import time
+from dataclasses import dataclass
+
+import numpy as np
+from scipy.optimize import minimize
+
+from cable_ocp.control.problem import SolverOutcome, WinchProblem
+from cable_ocp.drive.bounds import violation
+from cable_ocp.drive.controls import KnotSpline
+from cable_ocp.simulation.integrate import SimulationError
+from cable_ocp.simulation.progress import Progress
+
+# Objective given to Nelder-Mead for a winch whose simulation fails (m): worse than any real run.
+FAILED_RUN_OBJECTIVE = 1e3
+# Objective for a winch that breaks its bounds (m): this plus FAILED_RUN_OBJECTIVE per unit of the
+# largest violation (rad, rad/s or rad/s^2), worse than a failed run.
+INFEASIBLE_OBJECTIVE = 2 * FAILED_RUN_OBJECTIVE
+
+
+@dataclass(frozen=True)
+class NelderMeadSettings:
+    """Settings of the Nelder-Mead search.
+
+    Attributes
+    ----------
+    elements : int or None
+        Elements of the model each evaluation simulates (None: the scene's).
+    step : float or None, s
+        RK4 step of the evaluations (None: the scene's).
+    max_evaluations : int
+    xatol : float, rad
+    fatol : float, m
+    compiled : bool
+        Simulate with the RK4 step compiled to C (cached on disk).
+    """
+
+    elements: int | None = None
+    step: float | None = None
+    max_evaluations: int = 3000
+    xatol: float = 1e-3
+    fatol: float = 1e-5
+    compiled: bool = True
+
+    def __post_init__(self):
+        if self.max_evaluations < 1:
+            raise ValueError(f"max_evaluations = {self.max_evaluations}: must be >= 1")
+        if self.elements is not None and self.elements < 1:
+            raise ValueError(f"elements = {self.elements}: must be >= 1")
+        if self.step is not None and self.step <= 0:
+            raise ValueError(f"step = {self.step}: must be > 0 s")
+
+
+def nelder_mead_problem(scene, settings: NelderMeadSettings) -> WinchProblem:
+    """The scene's problem as the paper states it: the winch angle a spline through its knots."""
+    control = KnotSpline(scene.numerics.duration, scene.winch.knots)
+    return WinchProblem.from_scene(scene, control, settings.elements, settings.step)
+
+
+def solve_nelder_mead(
+    problem: WinchProblem, settings: NelderMeadSettings, quiet: bool = False
+) -> SolverOutcome:
+    """Minimise Omega over the parameters of ``problem`` with SciPy's bounded Nelder-Mead.
+
+    ``success`` is False, with the reason in ``status``, when SciPy reports a failure (e.g. the
+    evaluation limit), when no evaluated profile both kept the winch bounds and simulated, or when
+    the returned profile breaks a bound by more than :data:`cable_ocp.drive.bounds.BOUND_TOLERANCE`.
+    """
+    started = time.perf_counter()
+    constraints, low, high = problem.bounds, problem.low, problem.high
+
+    def omega(parameters: np.ndarray) -> float:
+        excess = constraints.excess(parameters)
+        if excess > 0:
+            return INFEASIBLE_OBJECTIVE + FAILED_RUN_OBJECTIVE * excess
+        try:
+            return problem.omega(problem.simulate(parameters, compiled=settings.compiled))
+        except SimulationError:
+            return FAILED_RUN_OBJECTIVE
+
+    guess = constraints.scale_into(np.clip(problem.first_guess(settings.compiled), low, high))
+    history: list[float] = []
+    progress = Progress("nelder-mead", settings.max_evaluations, quiet)
+
+    def tracked(parameters: np.ndarray) -> float:
+        value = omega(parameters)
+        history.append(min(value, history[-1]) if history else value)
+        progress.update(len(history), f"Omega = {history[-1]:.4f} m")
+        return value
+
+    result = minimize(
+        tracked,
+        guess,
+        method="Nelder-Mead",
+        bounds=[(low, high)] * problem.control.size,
+        options={
+            "maxfev": settings.max_evaluations,
+            "xatol": settings.xatol,
+            "fatol": settings.fatol,
+            "adaptive": True,
+        },
+    )
+    progress.close()
+    parameters = np.asarray(result.x)
+    success, status = bool(result.success), str(result.message)
+    reason = violation(problem.scene, problem.control, parameters)
+    if reason is not None:
+        success, status = False, f"no profile within the winch bounds found: {reason}"
+    elif result.fun >= FAILED_RUN_OBJECTIVE:
+        success, status = False, "no winch profile with a successful simulation found"
+    solve_time = time.perf_counter() - started
+    return SolverOutcome(
+        parameters=parameters,
+        status=status,
+        success=success,
+        iterations=int(result.nit),
+        evaluations=int(result.nfev),
+        omega=float(result.fun),
+        build_time=0.0,
+        compile_time=0.0,
+        solve_time=solve_time,
+        function_time=solve_time,
+        history=history,
+    )

@@ -1,0 +1,396 @@
+"""The front door for optimal winch control: ``optimize(scene, method="ipopt" | "nelder-mead")``.
+
+Whatever model the optimiser works on, the result's Omega comes from a simulation of the scene's
+own model with the optimised winch angle. With a reduced optimisation model, IPOPT's answer is
+refined by model correction: the NLP is solved again with the bias ``b = e_full - e_reduced`` of the
+last winch profile added to its clearance error, so the reduced model steers while the full model
+keeps score (CONVENTIONS.md §5, "reduced models for optimisation").
+"""
+
+from __future__ import annotations
+
+import json
+import time
+import zipfile
+from collections.abc import Callable
+from dataclasses import asdict, dataclass, field, fields
+from pathlib import Path
+
+import numpy as np
+
+from cable_ocp.control.nelder_mead import NelderMeadSettings, nelder_mead_problem, solve_nelder_mead
+from cable_ocp.control.ocp import IpoptSettings, ShootingProblem, ipopt_problem
+from cable_ocp.control.problem import SolverOutcome, WinchProblem
+from cable_ocp.simulation.progress import check_verbosity
+from cable_ocp.simulation.trajectory import Trajectory
+
+# Model correction stops once a solve improves the verified Omega by less than this factor.
+SMALL_GAIN = 0.5
+
+
+@dataclass(frozen=True, eq=False)
+class OcpResult:
+    """An optimised winch profile, verified on the scene's full model.
+
+    Attributes
+    ----------
+    method : str
+        ``"ipopt"`` or ``"nelder-mead"``.
+    parameters : array
+        Winch parameters of the control (rad, rad/s).
+    control : str
+        ``"spline"`` or ``"hermite"`` with its size, e.g. ``"spline(14)"``.
+    trajectory : Trajectory or None
+        The scene's full model driven by the optimised winch; None when no profile passed
+        verification.
+    omega : float, m
+        Omega (eq. 39) of ``trajectory`` (NaN without one).
+    omega_model : float, m
+        Omega on the optimisation model, as the optimiser saw it.
+    success : bool
+        False when the solver did not converge (or ran out of evaluations), or when its profile
+        failed verification: a winch bound broken by more than
+        :data:`cable_ocp.drive.bounds.BOUND_TOLERANCE`, or the full-model simulation raised.
+    status : str
+        The solver's own status message, or ``"verification failed: <reason>"``.
+    iterations : int
+    evaluations : int
+        Objective evaluations (Nelder-Mead) or NLP objective evaluations (IPOPT).
+    wall_time : float, s
+        Everything, including building and verification.
+    build_time : float, s
+        Building the NLP (symbolic work and compiling), reported apart.
+    solve_time : float, s
+        Time inside the solver(s).
+    function_time : float, s
+        Of ``solve_time``, the part spent evaluating NLP functions and derivatives (IPOPT).
+    history : list of float
+        Objective per iteration (IPOPT: Omega^2 on the optimisation model, m^2) or best Omega per
+        evaluation (Nelder-Mead, m).
+    refinements : list of float
+        Verified Omega after each solve (m); more than one entry with model correction.
+    compile_time : float, s
+        Of ``build_time``, compiling C (0 when the libraries came from the disk cache).
+    verification_time : float, s
+        Checking the bounds and simulating the scene's model with the optimised winch.
+    """
+
+    method: str
+    parameters: np.ndarray
+    control: str
+    trajectory: Trajectory | None
+    omega: float
+    omega_model: float
+    success: bool
+    status: str
+    iterations: int
+    evaluations: int
+    wall_time: float
+    build_time: float
+    solve_time: float
+    function_time: float
+    history: list[float] = field(default_factory=list)
+    refinements: list[float] = field(default_factory=list)
+    compile_time: float = 0.0
+    verification_time: float = 0.0
+
+    def save(self, folder: str | Path) -> None:
+        """Write ``result.json``, ``result.npz`` and the trajectory into ``folder``.
+
+        NaN (Omega of a profile that could not be verified) is written as JSON ``null``.
+        """
+        folder = Path(folder)
+        folder.mkdir(parents=True, exist_ok=True)
+        if self.trajectory is not None:
+            self.trajectory.save(folder / "trajectory")
+        meta = {
+            k: _json_value(v)
+            for k, v in asdict(self).items()
+            if k not in ("parameters", "trajectory")
+        }
+        (folder / "result.json").write_text(json.dumps(meta, indent=1, allow_nan=False))
+        np.savez(folder / "result.npz", parameters=self.parameters)
+
+    @classmethod
+    def load(cls, folder: str | Path) -> OcpResult:
+        """Read a result written by :meth:`save`.
+
+        Raises
+        ------
+        ValueError
+            Naming the file, if a file of the result is missing, truncated or garbled.
+        """
+        folder = Path(folder)
+        path = folder / "result.json"
+        try:
+            meta = json.loads(path.read_text())
+            names = {f.name for f in fields(cls)} - {"parameters", "trajectory"}
+            if not isinstance(meta, dict) or not names - _OPTIONAL_FIELDS <= set(meta) <= names:
+                raise ValueError(f"fields {sorted(meta) if isinstance(meta, dict) else meta!r}")
+            meta = {k: _from_json(k, v) for k, v in meta.items()}
+            path = folder / "result.npz"
+            with np.load(path) as data:
+                parameters = np.asarray(data["parameters"], dtype=float)
+            path, trajectory = folder / "trajectory.npz", None
+            if path.exists():
+                try:
+                    trajectory = Trajectory.load(folder / "trajectory")
+                except json.JSONDecodeError:
+                    path = folder / "trajectory.json"
+                    raise
+        except (OSError, ValueError, KeyError, TypeError, zipfile.BadZipFile, EOFError) as error:
+            raise ValueError(
+                f"{path}: not a readable optimisation result ({type(error).__name__}: {error})"
+            ) from error
+        return cls(parameters=parameters, trajectory=trajectory, **meta)
+
+
+# Fields of OcpResult that results written before them lack (their defaults are used).
+_OPTIONAL_FIELDS = {"compile_time", "verification_time"}
+# Fields of OcpResult that hold floats which may be NaN.
+_FLOAT_FIELDS = ("omega", "omega_model", "history", "refinements")
+
+
+def _json_value(value):
+    """A value for JSON: NaN and infinities as None, inside lists too."""
+    if isinstance(value, list):
+        return [_json_value(v) for v in value]
+    if isinstance(value, float) and not np.isfinite(value):
+        return None
+    return value
+
+
+def _from_json(name: str, value):
+    """Undo :func:`_json_value` for the field ``name`` (None back to NaN)."""
+    if name not in _FLOAT_FIELDS:
+        return value
+    if isinstance(value, list):
+        return [float("nan") if v is None else float(v) for v in value]
+    return float("nan") if value is None else float(value)
+
+
+def _timed_verify(problem: WinchProblem, quiet: bool, compiled: bool):
+    """``problem.verify`` that adds up its wall time: returns (verify, elapsed) callables."""
+    elapsed = [0.0]
+
+    def verify(parameters: np.ndarray) -> tuple[Trajectory | None, str | None]:
+        begun = time.perf_counter()
+        checked = problem.verify(parameters, quiet=quiet, compiled=compiled)
+        elapsed[0] += time.perf_counter() - begun
+        return checked
+
+    return verify, lambda: elapsed[0]
+
+
+def solve_ipopt(
+    problem: WinchProblem,
+    settings: IpoptSettings,
+    refinements: int = 3,
+    quiet: bool = False,
+    verbose: bool = False,
+) -> OcpResult:
+    """Direct shooting + IPOPT on a problem, verified (and refined) on the scene's model.
+
+    Parameters
+    ----------
+    problem : WinchProblem
+    settings : IpoptSettings
+    refinements : int
+        Model-correction solves after the first (0 disables them); they stop early when the
+        verified Omega stops improving. Ignored when the optimisation model is the scene's own.
+    quiet : bool
+        Print nothing.
+    verbose : bool
+        IPOPT's full log instead of one progress line per iteration.
+
+    Returns
+    -------
+    OcpResult
+        ``success`` is False, with the reason in ``status``, when a solve fails (IPOPT's status)
+        or its profile fails verification (``"verification failed: ..."``); the result then holds
+        the best verified profile, if any.
+    """
+    started = time.perf_counter()
+    nlp = ShootingProblem(problem, settings, quiet=quiet, verbose=verbose)
+    verify, verification_time = _timed_verify(problem, quiet, settings.compiled)
+    outcomes: list[SolverOutcome] = []
+    verified: list[float] = []
+    best_outcome, best, failure = None, None, None
+    parameters, bias = problem.first_guess(), None
+    for _ in range(1 + (refinements if problem.reduced else 0)):
+        if best is not None:
+            full_error = np.interp(problem.grid, best.time, best.clearance_error)
+            model_error = problem.clearance(problem.simulate(best_outcome.parameters))
+            parameters, bias = best_outcome.parameters, full_error - model_error
+        outcome = nlp.solve(parameters, bias)
+        outcomes.append(outcome)
+        if not outcome.success:
+            failure = outcome.status
+            if best is None:  # show where the failed solve got to, still marked as failed
+                best, _ = verify(outcome.parameters)
+                best_outcome = outcome if best is not None else None
+                verified.append(best.omega if best is not None else float("nan"))
+            break
+        trial, reason = verify(outcome.parameters)
+        if trial is None:
+            verified.append(float("nan"))
+            failure = f"verification failed: {reason}"
+            break
+        verified.append(trial.omega)
+        if best is not None and trial.omega >= best.omega:
+            break
+        gain = trial.omega / best.omega if best is not None else 0.0
+        best_outcome, best = outcome, trial
+        if gain > SMALL_GAIN:
+            break
+    shown = best_outcome or outcomes[-1]
+    return OcpResult(
+        method="ipopt",
+        parameters=shown.parameters,
+        control=f"{settings.control}({problem.control.size})",
+        trajectory=best,
+        omega=best.omega if best is not None else float("nan"),
+        omega_model=shown.omega,
+        success=failure is None,
+        status=shown.status if failure is None else failure,
+        iterations=sum(o.iterations for o in outcomes),
+        evaluations=sum(o.evaluations for o in outcomes),
+        wall_time=time.perf_counter() - started,
+        build_time=nlp.build_time,
+        solve_time=sum(o.solve_time for o in outcomes),
+        function_time=sum(o.function_time for o in outcomes),
+        history=[v for o in outcomes for v in o.history],
+        refinements=verified,
+        compile_time=nlp.compile_time,
+        verification_time=verification_time(),
+    )
+
+
+def _nelder_mead_status(outcome: SolverOutcome, reason: str | None) -> str:
+    """The search's status, with the verification's failure where there is one."""
+    if reason is None:
+        return outcome.status
+    failed = f"verification failed: {reason}"
+    return failed if outcome.success else f"{outcome.status}; {failed}"
+
+
+def solve_nelder_mead_verified(
+    problem: WinchProblem,
+    settings: NelderMeadSettings,
+    quiet: bool = False,
+    verbose: bool = False,
+) -> OcpResult:
+    """The paper's Nelder-Mead on a problem, verified on the scene's model.
+
+    Parameters
+    ----------
+    problem : WinchProblem
+    settings : NelderMeadSettings
+    quiet : bool
+        No progress bar.
+    verbose : bool
+        Accepted for a uniform interface: Nelder-Mead has no log beyond its progress bar.
+    """
+    check_verbosity(quiet, verbose)
+    started = time.perf_counter()
+    outcome = solve_nelder_mead(problem, settings, quiet=quiet)
+    # A capped search is verified too (the paper's method usually stops at its cap); it stays
+    # success = False.
+    verify, verification_time = _timed_verify(problem, quiet, compiled=False)
+    trajectory, reason = verify(outcome.parameters)
+    omega = trajectory.omega if trajectory is not None else float("nan")
+    return OcpResult(
+        method="nelder-mead",
+        parameters=outcome.parameters,
+        control=f"spline({problem.control.size})",
+        trajectory=trajectory,
+        omega=omega,
+        omega_model=outcome.omega,
+        success=outcome.success and reason is None,
+        status=_nelder_mead_status(outcome, reason),
+        iterations=outcome.iterations,
+        evaluations=outcome.evaluations,
+        wall_time=time.perf_counter() - started,
+        build_time=outcome.build_time,
+        solve_time=outcome.solve_time,
+        function_time=outcome.function_time,
+        history=outcome.history,
+        refinements=[omega],
+        verification_time=verification_time(),
+    )
+
+
+@dataclass(frozen=True)
+class Method:
+    """How ``optimize`` states and solves a problem with one method.
+
+    Attributes
+    ----------
+    default : IpoptSettings or NelderMeadSettings
+        Settings when none are given.
+    problem : callable
+        ``(scene, settings) -> WinchProblem``: the control, model and step the settings ask for.
+    solve : callable
+        ``(problem, settings, quiet=, verbose=, **kwargs) -> OcpResult``.
+    """
+
+    default: IpoptSettings | NelderMeadSettings
+    problem: Callable[..., WinchProblem]
+    solve: Callable[..., OcpResult]
+
+
+# A reduced model of 3 elements at h = 0.5 s optimises; the scene's own model verifies.
+METHODS = {
+    "ipopt": Method(IpoptSettings(elements=3, step=0.5), ipopt_problem, solve_ipopt),
+    "nelder-mead": Method(
+        NelderMeadSettings(elements=3, step=0.5), nelder_mead_problem, solve_nelder_mead_verified
+    ),
+}
+
+
+def optimize(
+    scene,
+    method: str = "ipopt",
+    settings: IpoptSettings | NelderMeadSettings | None = None,
+    quiet: bool = False,
+    verbose: bool = False,
+    **kwargs,
+) -> OcpResult:
+    """Optimise the winch angle of a scene.
+
+    States the scene's :class:`~cable_ocp.control.problem.WinchProblem` once (with the control,
+    model and step of the settings), solves it with the method, and verifies the result on the
+    scene's own model.
+
+    Parameters
+    ----------
+    scene : Scene
+    method : str
+        ``"ipopt"`` (direct shooting) or ``"nelder-mead"`` (the paper's method).
+    settings : IpoptSettings or NelderMeadSettings, optional
+        Defaults: a reduced model of 3 elements at h = 0.5 s; IPOPT with single shooting and a
+        Hermite control on 42 intervals, Nelder-Mead over the scene's spline knots.
+    quiet : bool
+        Print nothing at all.
+    verbose : bool
+        IPOPT's full log (by default, one progress line per iteration); not with ``quiet``.
+    **kwargs
+        Passed on (``refinements`` for IPOPT).
+
+    Returns
+    -------
+    OcpResult
+        Check ``success``: a failed solve is returned with ``success = False`` and the solver's
+        status, never as an answer.
+    """
+    if method not in METHODS:
+        raise ValueError(f"method = {method!r}: must be one of {', '.join(map(repr, METHODS))}")
+    chosen = METHODS[method]
+    settings = settings or chosen.default
+    if not isinstance(settings, type(chosen.default)):
+        raise ValueError(
+            f"settings: {type(settings).__name__} given for method {method!r}, which takes "
+            f"{type(chosen.default).__name__}"
+        )
+    problem = chosen.problem(scene, settings)
+    return chosen.solve(problem, settings, quiet=quiet, verbose=verbose, **kwargs)

@@ -1,0 +1,217 @@
+"""The winch-control problem of a scene, stated once and independent of how it is solved.
+
+A :class:`WinchProblem` holds what every solver and the verification share: the optimisation
+model (the scene's, or a reduced one), its RK4 step and grid, the drive with the winch locked, the
+initial equilibrium, the winch parametrisation with its bounds, and the objective Omega (eq. 39:
+the RMS of the clearance error, CONVENTIONS.md §5). IPOPT (:mod:`cable_ocp.control.ocp`) transcribes
+it into an NLP, Nelder-Mead (:mod:`cable_ocp.control.nelder_mead`) searches it directly, and
+:meth:`WinchProblem.verify` scores a profile on the scene's own model. Every solver reports a
+:class:`SolverOutcome`.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from cable_ocp.drive import winch
+from cable_ocp.drive.bounds import LinearBounds, angle_bounds, violation
+from cable_ocp.drive.controls import HermiteIntervals, KnotSpline
+from cable_ocp.drive.drive import Drive
+from cable_ocp.model.cable import CableModel
+from cable_ocp.simulation.integrate import integrate, step_count
+from cable_ocp.simulation.run import simulate
+from cable_ocp.simulation.seabed import clearance_error, rms_objective
+from cable_ocp.simulation.statics import equilibrium
+from cable_ocp.simulation.trajectory import Trajectory
+
+# Bond residual allowed in the runs of the optimisation model (m): a coarse model only has to be
+# close, not exact.
+GUESS_TOLERANCE = 1e-3
+Control = KnotSpline | HermiteIntervals
+
+
+@dataclass(frozen=True, eq=False)
+class WinchProblem:
+    """Minimise Omega of a scene over the parameters of a winch-angle profile.
+
+    Attributes
+    ----------
+    scene : Scene
+        Its own model scores the result (:meth:`verify`).
+    model : CableModel
+        The optimisation model: the scene's or one with fewer elements.
+    step : float, s
+        RK4 step of the optimisation model.
+    grid : array, s
+        The RK4 times ``0, h, ..., T``.
+    drive : Drive
+        The optimisation model's drive with the winch locked.
+    x0 : array
+        Its equilibrium at t = 0, where every run starts.
+    control : KnotSpline or HermiteIntervals
+        The winch angle as a linear function of the parameters.
+    low, high : float, rad
+        Bounds of the angle (and of each parameter that is an angle).
+    bounds : LinearBounds
+        The winch bounds (angle, rate, acceleration, top-element length) as linear constraints on
+        the parameters, held between the RK4 samples too.
+    """
+
+    scene: object
+    model: CableModel
+    step: float
+    grid: np.ndarray
+    drive: Drive
+    x0: np.ndarray
+    control: Control
+    low: float
+    high: float
+    bounds: LinearBounds
+
+    @classmethod
+    def from_scene(
+        cls, scene, control: Control, elements: int | None = None, step: float | None = None
+    ) -> WinchProblem:
+        """The problem of a scene with a winch parametrisation, on a model of ``elements``.
+
+        Parameters
+        ----------
+        scene : Scene
+        control : KnotSpline or HermiteIntervals
+        elements : int, optional
+            Elements of the optimisation model (None: the scene's).
+        step : float, optional, s
+            Its RK4 step (None: the scene's); it must divide ``numerics.duration``.
+        """
+        step = step or scene.numerics.step
+        grid = np.arange(step_count(scene.numerics.duration, step) + 1) * step
+        model = CableModel.from_scene(scene, elements)
+        drive = Drive.from_scene(scene, winch.locked, elements=model.spec.elements)
+        low, high = angle_bounds(scene, scene.segment_length)
+        return cls(
+            scene=scene,
+            model=model,
+            step=step,
+            grid=grid,
+            drive=drive,
+            x0=equilibrium(model, drive),
+            control=control,
+            low=low,
+            high=high,
+            bounds=LinearBounds.build(scene, control, grid),
+        )
+
+    @property
+    def duration(self) -> float:
+        """``T`` (s), the scene's ``numerics.duration``."""
+        return self.scene.numerics.duration
+
+    @property
+    def reduced(self) -> bool:
+        """Whether the optimisation model differs from the scene's (elements or step)."""
+        return (
+            self.model.spec.elements != self.scene.model.elements
+            or self.step != self.scene.numerics.step
+        )
+
+    def drive_with(self, parameters: np.ndarray) -> Drive:
+        """The optimisation model's drive under the winch profile of ``parameters``."""
+        return Drive.from_scene(
+            self.scene, self.control.angle_function(parameters), elements=self.model.spec.elements
+        )
+
+    def simulate(self, parameters: np.ndarray, compiled: bool = False) -> np.ndarray:
+        """States of the optimisation model on the grid under a winch profile (array (k, nx)).
+
+        Raises :class:`cable_ocp.simulation.integrate.SimulationError` when the run blows up or
+        leaves its bonds by more than :data:`GUESS_TOLERANCE`.
+        """
+        run = integrate(
+            self.model,
+            self.x0,
+            self.drive_with(parameters),
+            self.duration,
+            self.step,
+            tolerance=GUESS_TOLERANCE,
+            compiled=compiled,
+        )
+        return run.states
+
+    def clearance(self, states: np.ndarray) -> np.ndarray:
+        """Clearance error e(t) (m) of states of the optimisation model."""
+        return clearance_error(self.scene.seabed.hills, states[:, :3])
+
+    def omega(self, states: np.ndarray) -> float:
+        """Omega (eq. 39, m) of states of the optimisation model on the grid."""
+        return rms_objective(self.grid, self.clearance(states))
+
+    def first_guess(self, compiled: bool = False) -> np.ndarray:
+        """Parameters that pay out what the locked winch lets the end rise (rad).
+
+        A least-squares fit of ``phi = e_locked(t) / r_D`` (clipped to the angle bounds) by the
+        control; ``compiled`` runs the locked winch on the compiled model.
+        """
+        rise = self.clearance(self.simulate(np.zeros(self.control.size), compiled))
+        target = np.clip(rise / self.scene.winch.drum_radius, self.low, self.high)
+        basis = self.control.basis(self.grid)[0]
+        guess, *_ = np.linalg.lstsq(basis, target, rcond=None)
+        return guess
+
+    def verify(
+        self, parameters: np.ndarray, quiet: bool = True, compiled: bool = False
+    ) -> tuple[Trajectory | None, str | None]:
+        """Check the winch bounds and simulate the scene's own model under the profile.
+
+        Returns
+        -------
+        (trajectory, None), or (None, reason) when the profile breaks a winch bound beyond
+        :data:`cable_ocp.drive.bounds.BOUND_TOLERANCE` or the simulation raises (any exception).
+        """
+        reason = violation(self.scene, self.control, parameters)
+        if reason is not None:
+            return None, reason
+        try:
+            angle = self.control.angle_function(parameters)
+            return simulate(self.scene, winch=angle, quiet=quiet, compiled=compiled), None
+        except Exception as error:  # noqa: BLE001 - any failure of the check is a failed result
+            return None, f"the full-model simulation raised {type(error).__name__}: {error}"
+
+
+@dataclass(frozen=True)
+class SolverOutcome:
+    """What a solver returned for a :class:`WinchProblem`, before verification.
+
+    Attributes
+    ----------
+    parameters : array
+        Winch parameters (rad, rad/s).
+    status : str
+        The solver's own status (IPOPT's return status, SciPy's message) or why it failed.
+    success : bool
+        Whether the solver reports convergence (and, for Nelder-Mead, a profile within bounds
+        that simulated).
+    iterations, evaluations : int
+        Iterations, and objective evaluations (IPOPT: one per iteration and one to start).
+    omega : float, m
+        Omega on the optimisation model, as the solver saw it.
+    build_time, compile_time, solve_time, function_time : float, s
+        Building the transcription (compiling included), compiling C alone (0 on a cache hit),
+        inside the solver, and of that evaluating the objective and its derivatives.
+    history : list of float
+        IPOPT: Omega^2 (m^2) at each iteration; Nelder-Mead: the best Omega (m) after each
+        evaluation.
+    """
+
+    parameters: np.ndarray
+    status: str
+    success: bool
+    iterations: int
+    evaluations: int
+    omega: float
+    build_time: float
+    compile_time: float
+    solve_time: float
+    function_time: float
+    history: list[float]

@@ -1,0 +1,118 @@
+"""Parametrisations of the winch angle ``phi(t)`` that are linear in their parameters.
+
+Each maps a parameter vector ``p`` to ``phi(t) = B0(t) p`` with ``phi' = B1(t) p`` and
+``phi'' = B2(t) p``, so the optimiser sees the winch input as an affine function of its decision
+variables and the angle bounds as linear constraints.
+
+- :class:`KnotSpline`: the paper's cubic spline through ``phi(t_i)``, ``t_i = i T / p`` (eq. 41),
+  ``phi(0) = 0``; it starts at rest and ends free (as :func:`cable_ocp.drive.winch.spline_angle`).
+- :class:`HermiteIntervals`: a piecewise cubic per interval of a grid, with the angle and its rate
+  at the grid nodes as parameters (C1); ``phi(0) = phi'(0) = 0`` are held fixed.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+from scipy.interpolate import CubicSpline
+
+from cable_ocp.drive.winch import knot_times, spline_angle
+
+
+def hermite_polynomials(s: np.ndarray) -> tuple[np.ndarray, ...]:
+    """The cubic Hermite basis ``h00, h10, h01, h11`` at ``s`` in [0, 1], each (3, len(s)).
+
+    Rows: the value and its first and second derivatives with respect to ``s``.
+    """
+    return (
+        np.vstack([2 * s**3 - 3 * s**2 + 1, 6 * s**2 - 6 * s, 12 * s - 6]),
+        np.vstack([s**3 - 2 * s**2 + s, 3 * s**2 - 4 * s + 1, 6 * s - 4]),
+        np.vstack([-2 * s**3 + 3 * s**2, -6 * s**2 + 6 * s, -12 * s + 6]),
+        np.vstack([s**3 - s**2, 3 * s**2 - 2 * s, 6 * s - 2]),
+    )
+
+
+@dataclass(frozen=True)
+class KnotSpline:
+    """The paper's cubic spline through ``knots`` values (rad) on ``[0, duration]`` (s)."""
+
+    duration: float
+    knots: int
+
+    @property
+    def size(self) -> int:
+        """Number of parameters."""
+        return self.knots
+
+    @property
+    def breakpoints(self) -> np.ndarray:
+        """Times (s) between which the angle is one cubic polynomial: the knots."""
+        return knot_times(self.duration, self.knots)
+
+    def basis(self, t: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """``B0, B1, B2`` at the times ``t``: arrays (len(t), size)."""
+        t = np.clip(np.atleast_1d(np.asarray(t, dtype=float)), 0.0, self.duration)
+        values = np.vstack([np.zeros(self.knots), np.eye(self.knots)])
+        zeros = np.zeros(self.knots)
+        spline = CubicSpline(
+            knot_times(self.duration, self.knots), values, bc_type=((1, zeros), (2, zeros))
+        )
+        return spline(t), spline(t, 1), spline(t, 2)
+
+    def angle_function(self, parameters: np.ndarray):
+        """The winch angle history of a parameter vector."""
+        return spline_angle(self.duration, parameters)
+
+
+@dataclass(frozen=True)
+class HermiteIntervals:
+    """Piecewise cubic Hermite angle on ``intervals`` equal intervals of ``[0, duration]``.
+
+    Parameters are ``[phi_1..phi_N, phi'_1..phi'_N]`` at the nodes ``t_k = k T / N``.
+    """
+
+    duration: float
+    intervals: int
+
+    @property
+    def size(self) -> int:
+        """Number of parameters."""
+        return 2 * self.intervals
+
+    @property
+    def breakpoints(self) -> np.ndarray:
+        """Times (s) between which the angle is one cubic polynomial: the nodes."""
+        return np.linspace(0.0, self.duration, self.intervals + 1)
+
+    def basis(self, t: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """``B0, B1, B2`` at the times ``t``: arrays (len(t), size).
+
+        A time on a node belongs to the interval that starts there (the last node to the last
+        interval).
+        """
+        t = np.clip(np.atleast_1d(np.asarray(t, dtype=float)), 0.0, self.duration)
+        width = self.duration / self.intervals
+        k = np.minimum((t / width + 1e-9).astype(int), self.intervals - 1)
+        s = t / width - k
+        h00, h10, h01, h11 = hermite_polynomials(s)
+        scale = np.array([1.0, 1.0 / width, 1.0 / width**2])[:, None]
+        out = np.zeros((3, t.size, self.size))
+        rows = np.arange(t.size)
+        n = self.intervals
+        for left, (value_basis, rate_basis) in ((k - 1, (h00, h10)), (k, (h01, h11))):
+            valid = left >= 0  # node 0 is fixed at phi = phi' = 0
+            for d in range(3):
+                out[d, rows[valid], left[valid]] += scale[d] * value_basis[d][valid]
+                out[d, rows[valid], n + left[valid]] += scale[d] * width * rate_basis[d][valid]
+        return out[0], out[1], out[2]
+
+    def angle_function(self, parameters: np.ndarray):
+        """The winch angle history of a parameter vector."""
+        parameters = np.asarray(parameters, dtype=float).ravel()
+
+        def angle(t):
+            b0, b1, b2 = self.basis(t)
+            return b0 @ parameters, b1 @ parameters, b2 @ parameters
+
+        return angle

@@ -1,0 +1,90 @@
+"""Inputs of the model over time: top motion, top-element length (winch) and end force.
+
+:class:`Drive` turns a scene and a winch-angle history into the input vector ``u(t)`` of
+:data:`cable_ocp.model.cable.INPUT_NAMES`, vectorised over time.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from cable_ocp.drive import winch
+from cable_ocp.drive.vessel import TopMotionFunction, smoothstep, top_motion
+
+
+def end_force(end, t: np.ndarray) -> np.ndarray:
+    """External force at the free end (3, len(t)), N.
+
+    ``F = force + amplitude * S((t - t0) / T_r) * (sin(2 pi (t - t0) / P) or 1 where P = 0)``
+    (CONVENTIONS.md §6, the end_force scene).
+    """
+    t = np.atleast_1d(np.asarray(t, dtype=float))
+    since = t - end.force_start
+    ramp = smoothstep(since / end.force_ramp)[0] if end.force_ramp > 0 else (since >= 0) * 1.0
+    force = np.tile(np.reshape(end.force, (3, 1)), (1, t.size))
+    for k in range(3):
+        period = end.force_period[k]
+        wave = np.sin(2 * np.pi * since / period) if period > 0 else 1.0
+        force[k] += end.force_amplitude[k] * ramp * wave
+    return force
+
+
+@dataclass(frozen=True)
+class Drive:
+    """Everything prescribed over time for one run.
+
+    Attributes
+    ----------
+    top : callable
+        Top motion ``t -> (position, velocity, acceleration)``.
+    angle : callable
+        Winch angle ``t -> (phi, phi', phi'')`` (rad), before heave compensation.
+    end : EndLoad
+        The scene's ``[end]`` section.
+    segment_length : float, m
+    drum_radius : float, m
+    heave_compensation : bool
+        Add ``z_A / r_D`` to the winch angle (eq. 38).
+    """
+
+    top: TopMotionFunction
+    angle: winch.WinchAngleFunction
+    end: object
+    segment_length: float
+    drum_radius: float
+    heave_compensation: bool = False
+
+    @classmethod
+    def from_scene(
+        cls, scene, angle: winch.WinchAngleFunction | None = None, elements: int | None = None
+    ) -> Drive:
+        """Drive of a scene; ``angle`` defaults to the locked winch."""
+        n = elements or scene.model.elements
+        return cls(
+            top=top_motion(scene.top),
+            angle=angle or winch.locked,
+            end=scene.end,
+            segment_length=scene.cable.length / n,
+            drum_radius=scene.winch.drum_radius,
+            heave_compensation=scene.top.heave_compensation,
+        )
+
+    def winch_angle(self, t: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """Winch angle with its rates (rad, rad/s, rad/s^2), heave compensation included."""
+        phi, rate, acc = self.angle(t)
+        if self.heave_compensation:
+            position, velocity, acceleration = self.top(t)
+            start = self.top(np.zeros(1))[0][2]
+            phi = phi + (position[2] - start) / self.drum_radius
+            rate = rate + velocity[2] / self.drum_radius
+            acc = acc + acceleration[2] / self.drum_radius
+        return phi, rate, acc
+
+    def inputs(self, t: np.ndarray) -> np.ndarray:
+        """Input vector ``u`` at the times ``t`` (s): array (15, len(t)), see ``INPUT_NAMES``."""
+        t = np.atleast_1d(np.asarray(t, dtype=float))
+        position, velocity, acceleration = self.top(t)
+        length = winch.top_length(self.winch_angle, t, self.segment_length, self.drum_radius)
+        return np.vstack([position, velocity, acceleration, length, end_force(self.end, t)])

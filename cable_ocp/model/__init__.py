@@ -1,0 +1,1 @@
+"""The rfe cable model: parameters, symbolic equations, compiled Functions."""

@@ -1,0 +1,284 @@
+"""The right-hand side as loops over small per-element Functions, for compiling to C.
+
+:attr:`CableModel.rhs` is one flat SX expression: right for inspection and symbolic Jacobians, but
+compiled to C it is straight-line code that grows with ``n`` (about 1 MB of machine code and
+minutes of gcc at n = 100). :func:`structured_rhs` computes the same ``x'`` from four small SX
+Functions evaluated in loops (CasADi ``map`` and ``mapaccum`` in an MX graph): the element terms,
+the bending joints, the bond blocks and one step of each sweep of the block Thomas solve
+(:mod:`cable_ocp.model.kkt`). The generated C holds each of them once, so it compiles in seconds at
+any ``n`` and stays in the processor's caches. 5-DOF models only (torsion couples neighbouring
+rotations, which these Functions do not carry); :func:`supports` tells.
+
+The Functions are built on a :class:`~cable_ocp.model.parametric.ParametricModel` and take its
+numbers as the last input ``p``; :func:`compiled_structured` binds a scene's numbers to the compiled
+library.
+"""
+
+from __future__ import annotations
+
+import casadi as ca
+
+from cable_ocp.model.cable import CableModel
+from cable_ocp.model.compile import compiled as compile_function
+from cable_ocp.model.kinematics import POSITION
+from cable_ocp.model.kkt import cholesky_solve, inverse_3x3
+from cable_ocp.model.layout import INPUT_SIZE, INPUTS
+from cable_ocp.model.parametric import ModelLayout, ParametricModel, baumgarte, bending_energies
+from cable_ocp.model.rfe import element_functions
+
+
+def supports(model: ModelLayout) -> bool:
+    """Whether :func:`structured_rhs` can build this model's right-hand side (5 DOF, n >= 2)."""
+    return not model.spec.element.torsion and model.spec.elements >= 2
+
+
+def _element_solve(model: ParametricModel, end: bool) -> ca.Function:
+    """Element terms with ``M^-1`` applied: ``q, q', l, spring force (, end force), p`` -> blocks.
+
+    Outputs ``free = M^-1 f``, ``along_p = M^-1 P^T``, ``along_d = M^-1 D^T``, ``D``, the upper
+    point ``A_i + l e`` and its rate, ``l e''`` (the quadratic part), ``e`` and ``e'``.
+    """
+    dofs, p = model.dofs, model.p
+    element, _ = element_functions(model.spec.element, p)
+    q, qd = ca.SX.sym("q", dofs), ca.SX.sym("qd", dofs)
+    length, spring = ca.SX.sym("length"), ca.SX.sym("spring", dofs)
+    mass, force, axis, axis_rate, quadratic, top = element(q, qd, length, p)
+    force = force + spring
+    inputs = [q, qd, length, spring]
+    if end:
+        end_force = ca.SX.sym("end_force", 3)
+        mass, force = model.end_loads(mass, force, qd, end_force)
+        inputs.append(end_force)
+    inputs.append(p)
+    select = ca.SX(ca.DM.eye(dofs)[:3, :])
+    solved = cholesky_solve(mass, ca.horzcat(force, select.T, top.T))
+    outputs = [
+        solved[:, 0],
+        solved[:, 1:4],
+        solved[:, 4:7],
+        top,
+        q[POSITION] + length * axis,
+        qd[POSITION] + length * axis_rate,
+        length * quadratic,
+        axis,
+        axis_rate,
+    ]
+    return ca.Function("element_end" if end else "element", inputs, outputs, {"cse": True})
+
+
+def _joint_forces(model: ParametricModel) -> ca.Function:
+    """Generalised bending forces on the two elements of a joint (from its energy, as the model)."""
+    dofs, p = model.dofs, model.p
+    element, _ = element_functions(model.spec.element, p)
+    q = [ca.SX.sym(f"q{k}", dofs) for k in range(2)]
+    qd = [ca.SX.sym(f"qd{k}", dofs) for k in range(2)]
+    unit = ca.SX(1.0)  # the axis and its rate do not depend on the length
+    axes, rates = zip(*[element(q[k], qd[k], unit, p)[2:4] for k in range(2)], strict=True)
+    potential, dissipation = bending_energies(axes[0], axes[1], rates[0], rates[1], model.spec)
+    forces = [-ca.gradient(potential, q[k]) - ca.gradient(dissipation, qd[k]) for k in range(2)]
+    return ca.Function("joint", [*q, *qd, p], forces, {"cse": True})
+
+
+def _bond_blocks(model: ParametricModel) -> ca.Function:
+    """Blocks of bond ``j`` between elements ``j-1`` (below) and ``j`` (above), with Baumgarte."""
+    dofs = model.dofs
+    select = ca.SX(ca.DM.eye(dofs)[:3, :])
+    free_b, free_a = ca.SX.sym("free_b", dofs), ca.SX.sym("free_a", dofs)
+    along_d_b, along_p_a = ca.SX.sym("along_d_b", dofs, 3), ca.SX.sym("along_p_a", dofs, 3)
+    along_d_a = ca.SX.sym("along_d_a", dofs, 3)
+    top_b, top_a = ca.SX.sym("top_b", 3, dofs), ca.SX.sym("top_a", 3, dofs)
+    point_b, rate_b, quad_b = (ca.SX.sym(name, 3) for name in ("point_b", "rate_b", "quad_b"))
+    position_a, velocity_a = ca.SX.sym("position_a", 3), ca.SX.sym("velocity_a", 3)
+    bond_rhs = baumgarte(quad_b, velocity_a - rate_b, position_a - point_b, model.spec)
+    inputs = [free_b, along_d_b, top_b, point_b, rate_b, quad_b]
+    inputs += [free_a, along_p_a, along_d_a, top_a, position_a, velocity_a, model.p]
+    outputs = [
+        top_b @ along_d_b + select @ along_p_a,
+        bond_rhs + top_b @ free_b - select @ free_a,
+        -select @ along_d_a,
+        -top_a @ along_p_a,
+    ]
+    return ca.Function("bond", inputs, outputs, {"cse": True})
+
+
+def _top_bond(model: ParametricModel) -> ca.Function:
+    """Right-hand side of the top bond from its quadratic part, rate and residual (Baumgarte)."""
+    quadratic, rate, residual = (ca.SX.sym(name, 3) for name in ("quadratic", "rate", "residual"))
+    return ca.Function(
+        "top_bond",
+        [quadratic, rate, residual, model.p],
+        [baumgarte(quadratic, rate, residual, model.spec)],
+    )
+
+
+def _forward_sweep() -> ca.Function:
+    """One forward step of the block Thomas elimination; accumulator ``[vec(S^-1); reduced]``."""
+    previous = ca.SX.sym("previous", 12)
+    inverse, reduced = ca.reshape(previous[:9], 3, 3), previous[9:]
+    lower, upper = ca.SX.sym("lower", 3, 3), ca.SX.sym("upper", 3, 3)
+    diag, rhs = ca.SX.sym("diag", 3, 3), ca.SX.sym("rhs", 3)
+    factor = lower @ inverse
+    new_inverse = inverse_3x3(diag - factor @ upper)
+    new_reduced = rhs - factor @ reduced
+    return ca.Function(
+        "forward",
+        [previous, lower, upper, diag, rhs],
+        [ca.vertcat(ca.vec(new_inverse), new_reduced)],
+    )
+
+
+def _backward_sweep() -> ca.Function:
+    """One back substitution: ``lambda_j = S_j^-1 (reduced_j - U_j lambda_{j+1})``."""
+    above = ca.SX.sym("above", 3)
+    packed, upper = ca.SX.sym("packed", 12), ca.SX.sym("upper", 3, 3)
+    inverse, reduced = ca.reshape(packed[:9], 3, 3), packed[9:]
+    return ca.Function("backward", [above, packed, upper], [inverse @ (reduced - upper @ above)])
+
+
+def _accelerations(dofs: int) -> ca.Function:
+    free, along_p, along_d = (
+        ca.SX.sym("free", dofs),
+        ca.SX.sym("p", dofs, 3),
+        ca.SX.sym("d", dofs, 3),
+    )
+    own, below = ca.SX.sym("own", 3), ca.SX.sym("below", 3)
+    return ca.Function(
+        "acc", [free, along_p, along_d, own, below], [free - along_d @ own + along_p @ below]
+    )
+
+
+def structured_rhs(model: ParametricModel) -> ca.Function:
+    """``(x, u, p) -> x'``, equal to ``model.rhs``, as loops over per-element Functions (MX).
+
+    Raises
+    ------
+    ValueError
+        For a model :func:`supports` rejects.
+    """
+
+    def build() -> ca.Function:
+        x, u, p, xdot, _, _ = _structured_graph(model)
+        return ca.Function("rhs", [x, u, p], [xdot], ["x", "u", "p"], ["xdot"])
+
+    return model.memo(("structured", "rhs"), build)
+
+
+def structured_outputs(model: ParametricModel) -> ca.Function:
+    """``(x, u, p) ->`` joints (3 x n+2, m) and bond tensions (n+1, N), as ``model.outputs``.
+
+    What a :class:`~cable_ocp.simulation.trajectory.Trajectory` keeps of every sample, computed by
+    the same loops as :func:`structured_rhs` so that it compiles in seconds at any ``n``.
+    """
+
+    def build() -> ca.Function:
+        x, u, p, _, forces, joints = _structured_graph(model)
+        tensions = ca.sqrt(ca.sum1(forces**2)).T
+        return ca.Function(
+            "joints_tensions",
+            [x, u, p],
+            [joints, tensions],
+            ["x", "u", "p"],
+            ["joints", "tensions"],
+        )
+
+    return model.memo(("structured", "outputs"), build)
+
+
+def compiled_structured(model: CableModel, which: str, count: int | None = None) -> ca.Function:
+    """A structured Function of ``(x, u)`` with the model's numbers bound, compiled to C.
+
+    ``which`` is ``"rhs"`` (:func:`structured_rhs`) or ``"outputs"`` (:func:`structured_outputs`);
+    with ``count``, it is mapped over that many states and inputs (columns). The library, without
+    derivatives, is compiled (or loaded from the disk cache) once per structure and process; the
+    bound Function once per model.
+    """
+    parametric = model.parametric
+
+    def compile_library() -> ca.Function:
+        build = {"rhs": structured_rhs, "outputs": structured_outputs}[which]
+        description = repr(parametric.structure)
+        return compile_function(build(parametric), description, derivatives=False)[0]
+
+    library = parametric.memo(("structured", which, "compiled"), compile_library)
+    mapped = parametric.memo(
+        ("structured", which, "compiled", count),
+        lambda: library if count is None else library.map(count),
+    )
+    return model.memo(("structured", which, "compiled", count), lambda: model.bind(mapped))
+
+
+def _structured_graph(model: ParametricModel) -> tuple[ca.MX, ...]:
+    """Inputs ``x, u, p`` and the MX expressions of ``x'``, the bond forces and the joints."""
+    if not supports(model):
+        raise ValueError("the structured right-hand side needs 5-DOF elements and n >= 2")
+    dofs, count = model.dofs, model.element_count
+    size = dofs * count
+    x, u = ca.MX.sym("x", model.state_size), ca.MX.sym("u", INPUT_SIZE)
+    p = ca.MX.sym("p", model.p.numel())
+    q = ca.reshape(x[:size], dofs, count)
+    qd = ca.reshape(x[size:], dofs, count)
+    top, top_velocity = u[INPUTS.top], u[INPUTS.top_velocity]
+    top_acceleration = u[INPUTS.top_acceleration]
+    top_length, top_length_rate = u[INPUTS.top_length], u[INPUTS.top_length_rate]
+    top_length_acc = u[INPUTS.top_length_acceleration]
+    delta = ca.Function("segment_length", [model.p], [model.spec.segment_length])(p)
+
+    lower_forces, upper_forces = _joint_forces(model).map(count - 1)(
+        q[:, :-1], q[:, 1:], qd[:, :-1], qd[:, 1:], p
+    )
+    zero = ca.MX.zeros(dofs, 1)
+    spring = ca.horzcat(lower_forces, zero) + ca.horzcat(zero, upper_forces)
+
+    lengths = ca.horzcat(ca.repmat(delta, 1, count - 2), top_length)
+    rest = _element_solve(model, end=False).map(count - 1)(
+        q[:, 1:], qd[:, 1:], lengths, spring[:, 1:], p
+    )
+    first = _element_solve(model, end=True)(
+        q[:, 0], qd[:, 0], delta / 2, spring[:, 0], u[INPUTS.end_force], p
+    )
+    free, along_p, along_d, top_jac, point, rate, quad, axis, axis_rate = (
+        ca.horzcat(a, b) for a, b in zip(first, rest, strict=True)
+    )
+
+    def column(matrix, k, width=1):
+        return matrix[:, k * width : (k + 1) * width]
+
+    interior = _bond_blocks(model).map(count - 1)(
+        free[:, :-1], along_d[:, : 3 * (count - 1)], top_jac[:, : dofs * (count - 1)],
+        point[:, :-1], rate[:, :-1], quad[:, :-1],
+        free[:, 1:], along_p[:, 3:], along_d[:, 3:], top_jac[:, dofs:],
+        q[0:3, 1:], qd[0:3, 1:], p,
+    )  # fmt: skip
+    diag_in, rhs_in, upper, lower = interior
+    last = count - 1
+    top_rate = column(rate, last) + top_length_rate * column(axis, last)
+    top_quad = (
+        column(quad, last)
+        + top_length_acc * column(axis, last)
+        + 2 * top_length_rate * column(axis_rate, last)
+        - top_acceleration
+    )
+    top_rhs = _top_bond(model)(
+        top_quad, top_velocity - top_rate, top - column(point, last), p
+    ) + column(top_jac, last, dofs) @ column(free, last)
+    diag = ca.horzcat(diag_in, column(top_jac, last, dofs) @ column(along_d, last, 3))
+    rhs = ca.horzcat(rhs_in, top_rhs)
+
+    start = ca.vertcat(ca.vec(_inverse_mx(diag[:, 0:3])), rhs[:, 0])
+    sweep = _forward_sweep().mapaccum(count - 1)(start, lower, upper, diag[:, 3:], rhs[:, 1:])
+    packed = ca.horzcat(start, sweep)
+    final = ca.reshape(packed[:9, last], 3, 3) @ packed[9:, last]
+    backwards = list(range(last - 1, -1, -1))
+    reverse_upper = ca.horzcat(*[upper[:, 3 * j : 3 * j + 3] for j in backwards])
+    reverse_packed = ca.horzcat(*[packed[:, j] for j in backwards])
+    solved = _backward_sweep().mapaccum(last)(final, reverse_packed, reverse_upper)
+    forces = ca.horzcat(*[solved[:, k] for k in range(last - 1, -1, -1)], final)
+    below = ca.horzcat(ca.MX.zeros(3, 1), forces[:, :-1])
+    qdd = _accelerations(dofs).map(count)(free, along_p, along_d, forces, below)
+    joints = ca.horzcat(q[0:3, :], column(point, last))
+    return x, u, p, ca.vertcat(x[size:], ca.vec(qdd)), forces, joints
+
+
+def _inverse_mx(block: ca.MX) -> ca.MX:
+    matrix = ca.SX.sym("m", 3, 3)
+    return ca.Function("inverse", [matrix], [inverse_3x3(matrix)])(block)

@@ -1,0 +1,89 @@
+"""Figures of a closed-loop run (matplotlib), by the rules of :mod:`cable_ocp.plots`.
+
+Each function returns the figure; with ``path`` it is saved there and closed. Importing this module
+selects no matplotlib backend.
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import matplotlib.pyplot as plt
+import numpy as np
+from matplotlib.figure import Figure
+
+from cable_ocp.control.closed_loop.result import MpcResult
+from cable_ocp.plots import finish_figure
+
+
+def clearance(result: MpcResult, path: str | Path | None = None) -> Figure:
+    """Clearance error e(t) (eq. 39) of the closed loop against the reference runs.
+
+    The upper panel shows every run; the lower one zooms on the runs within 10 times the closed
+    loop's largest error (the locked winch is metres off).
+    """
+    fig, axes = plt.subplots(2, 1, figsize=(10, 6.5), sharex=True)
+    runs = [(f"closed loop (Omega = {result.omega:.3g} m)", result.clearance_error)]
+    runs += [
+        (f"{name} (Omega = {result.reference_omegas[name]:.3g} m)", error)
+        for name, error in result.references.items()
+    ]
+    scale = 10 * np.max(np.abs(result.clearance_error))
+    for index, (label, error) in enumerate(runs):
+        style = {
+            "lw": 1.6 if index == 0 else 1.0,
+            "zorder": 3 if index == 0 else 2,
+            "color": f"C{index}",
+        }
+        axes[0].plot(result.time, error, label=label, **style)
+        if np.max(np.abs(error)) <= scale:
+            axes[1].plot(result.time, error, label=label, **style)
+    axes[0].set_ylabel("e [m]")
+    axes[0].set_title("clearance error of the end E, e = z_E - z_E(0) - z_hill")
+    axes[0].legend(fontsize=8)
+    axes[1].set_ylabel("e [m] (zoom)")
+    axes[1].set_xlabel("t [s]")
+    axes[1].legend(fontsize=8)
+    for ax in axes:
+        ax.grid(alpha=0.3)
+    return finish_figure(fig, path)
+
+
+def solve_times(result: MpcResult, path: str | Path | None = None) -> Figure:
+    """Wall time and IPOPT iterations of each solve, against the sample time (real time)."""
+    fig, ax = plt.subplots(figsize=(10, 3.8))
+    sample = result.settings["sample_s"]
+    ax.bar(result.sample_times, result.solve_times, width=0.8 * sample, align="edge", label="solve")
+    ax.axhline(sample, color="k", ls="--", lw=1, label=f"sample = {sample:g} s (real time)")
+    failed = ~np.isin(np.array(result.statuses), ["Solve_Succeeded", "Solved_To_Acceptable_Level"])
+    if failed.any():
+        ax.plot(result.sample_times[failed], result.solve_times[failed], "rx", label="failed")
+    ax.set_ylim(0, 1.35 * max(sample, result.worst_solve_time))
+    ax.set_xlabel("t [s]")
+    ax.set_ylabel("wall time [s]")
+    ax.set_title(
+        f"solve time per sample: worst {result.worst_solve_time:.2f} s, real-time factor "
+        f"{result.real_time_factor:.1f}"
+    )
+    twin = ax.twinx()
+    twin.plot(result.sample_times + 0.4 * sample, result.iterations, "C1.", label="iterations")
+    twin.set_ylabel("IPOPT iterations")
+    lines, labels = ax.get_legend_handles_labels()
+    more, more_labels = twin.get_legend_handles_labels()
+    ax.legend(lines + more, labels + more_labels, fontsize=8, loc="upper right")
+    return finish_figure(fig, path)
+
+
+def winch_angle(result: MpcResult, path: str | Path | None = None) -> Figure:
+    """Winch angle applied (with the heave feedback) and planned, with the bounds."""
+    fig, ax = plt.subplots(figsize=(10, 3.8))
+    ax.plot(result.time, result.winch_angle, lw=0.9, label="applied")
+    ax.plot(result.time, result.planned_angle, lw=1.6, label="planned (controller)")
+    for bound in result.angle_range:
+        ax.axhline(bound, color="k", ls=":", lw=1)
+    ax.set_xlabel("t [s]")
+    ax.set_ylabel("winch angle phi [rad]")
+    ax.set_title("winch angle; dotted: the winch range")
+    ax.legend(fontsize=8)
+    ax.grid(alpha=0.3)
+    return finish_figure(fig, path)

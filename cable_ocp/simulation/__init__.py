@@ -1,0 +1,1 @@
+"""Runs of the model: statics, RK4 integration, trajectories, clearance."""

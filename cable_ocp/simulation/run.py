@@ -1,0 +1,194 @@
+"""The front door for simulation: ``simulate(scene, winch=...)`` returns a :class:`Trajectory`."""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+
+import casadi as ca
+import numpy as np
+
+from cable_ocp.drive import winch as winch_angles
+from cable_ocp.drive.bounds import BOUND_TOLERANCE
+from cable_ocp.drive.drive import Drive
+from cable_ocp.model import structured
+from cable_ocp.model.cable import CableModel
+from cable_ocp.model.layout import INPUTS
+from cable_ocp.simulation.integrate import evaluate_into, integrate
+from cable_ocp.simulation.seabed import clearance_error, rms_objective
+from cable_ocp.simulation.statics import equilibrium
+from cable_ocp.simulation.trajectory import Trajectory
+
+WinchSpec = None | np.ndarray | Callable
+
+
+def winch_function(scene, winch: WinchSpec) -> winch_angles.WinchAngleFunction:
+    """Turn a winch specification into an angle history.
+
+    Parameters
+    ----------
+    winch : None, array or callable
+        None: locked. An array of ``scene.winch.knots`` values: the cubic spline through them
+        (rad, ``phi(0) = 0``). A callable ``t -> (phi, phi', phi'')``: used as it is.
+    """
+    if winch is None:
+        return winch_angles.locked
+    if callable(winch):
+        return winch
+    try:
+        values = np.asarray(winch, dtype=float).ravel()
+    except (TypeError, ValueError):
+        raise ValueError(f"winch: expected {scene.winch.knots} knot angles in rad") from None
+    if values.size != scene.winch.knots:
+        raise ValueError(
+            f"winch: {values.size} knot values given; the scene has winch.knots = "
+            f"{scene.winch.knots}"
+        )
+    if not np.isfinite(values).all():
+        k = int(np.argmin(np.isfinite(values)))
+        raise ValueError(f"winch: knot value {k + 1} is {values[k]}: must be finite (rad)")
+    return winch_angles.spline_angle(scene.numerics.duration, values)
+
+
+def check_top_length(scene, drive: Drive, times: np.ndarray) -> None:
+    """Raise before integrating if the winch takes the top element out of its length range.
+
+    A length outside by at most ``winch.drum_radius * BOUND_TOLERANCE`` (the angle tolerance of
+    :mod:`cable_ocp.drive.bounds` as a length, m) counts as within it.
+    """
+    length = drive.inputs(times)[INPUTS.top_length]
+    low, high = scene.winch.top_length_min, scene.winch.top_length_max
+    tolerance = scene.winch.drum_radius * BOUND_TOLERANCE
+    outside = (length < low - tolerance) | (length > high + tolerance)
+    if outside.any():
+        k = int(np.argmax(outside))
+        raise ValueError(
+            f"the winch sets the top-element length to {length[k]:.4g} m at t = {times[k]:.6g} s, "
+            f"outside [winch.top_length_min, winch.top_length_max] = [{low}, {high}] m by more "
+            f"than the tolerance {tolerance:.3g} m"
+        )
+
+
+def checked_state(state, size: int) -> np.ndarray:
+    """``state`` as a float vector of ``size`` finite values, or ValueError naming what is wrong."""
+    try:
+        values = np.asarray(state, dtype=float)
+    except (TypeError, ValueError):
+        raise ValueError(
+            f"initial_state: expected {size} numbers, got {type(state).__name__}"
+        ) from None
+    if values.shape != (size,):
+        raise ValueError(
+            f"initial_state: expected shape ({size},) (the model's state_size), got {values.shape}"
+        )
+    if not np.isfinite(values).all():
+        k = int(np.argmin(np.isfinite(values)))
+        raise ValueError(f"initial_state[{k}] = {values[k]}: must be finite")
+    return values
+
+
+def joints_and_tensions(
+    model: CableModel, states: np.ndarray, inputs: np.ndarray, compiled: bool = False
+) -> tuple[np.ndarray, np.ndarray]:
+    """Joint positions (k, 3, n+2; m) and bond tensions (k, n+1; N) of k states.
+
+    Compiled, a 5-DOF model evaluates them with the structured loops compiled to C (cached):
+    at n = 100 the interpreted outputs cost twice the whole compiled integration.
+    """
+    count, joint_count = len(states), model.element_count + 1
+    if compiled and structured.supports(model):
+        function = structured.compiled_structured(model, "outputs", count)
+    else:
+        function = model.memo(("joints_tensions", count), lambda: _joints_tensions(model, count))
+    # Column-major CasADi results, written as their C-ordered transposes.
+    joints = np.empty((count * joint_count, 3))
+    tensions = np.empty((count, model.element_count))
+    evaluate_into(function, [states, inputs], [joints, tensions])
+    return joints.reshape(count, joint_count, 3).transpose(0, 2, 1), tensions
+
+
+def _joints_tensions(model: CableModel, count: int):
+    """``count`` states and inputs -> joints and tensions, from the model's own outputs."""
+    outputs = model.outputs
+    x, u = outputs.mx_in("x"), outputs.mx_in("u")
+    results = outputs(x=x, u=u)
+    single = ca.Function(
+        "joints_tensions",
+        [x, u],
+        [results["joints"], results["tensions"]],
+        ["x", "u"],
+        ["joints", "tensions"],
+    )
+    return single.map(count)
+
+
+def simulate(
+    scene,
+    winch: WinchSpec = None,
+    model: CableModel | None = None,
+    initial_state: np.ndarray | None = None,
+    quiet: bool = True,
+    compiled: bool = False,
+) -> Trajectory:
+    """Simulate a scene by RK4 from its static equilibrium.
+
+    Parameters
+    ----------
+    scene : Scene
+    winch : None, array or callable
+        See :func:`winch_function`; locked by default.
+    model : CableModel, optional
+        A model built for the scene (built here if not given); it may have another number of
+        elements than the scene.
+    initial_state : array (model.state_size,), optional
+        Defaults to the static equilibrium under the inputs at t = 0; must be finite.
+    quiet : bool
+        No progress bar when true.
+    compiled : bool
+        Integrate with the model compiled to C (cached on disk; the first build compiles).
+
+    Returns
+    -------
+    Trajectory
+
+    Raises
+    ------
+    ValueError
+        Before integrating: a winch of the wrong length or not finite, a winch that takes the top
+        element out of its length range, an ``initial_state`` of the wrong shape or not finite.
+    """
+    numerics = scene.numerics
+    angle = winch_function(scene, winch)
+    model = model or CableModel.from_scene(scene)
+    drive = Drive.from_scene(scene, angle, elements=model.spec.elements)
+    sample_times = np.linspace(
+        0.0, numerics.duration, 1 + int(round(numerics.duration / numerics.step))
+    )
+    check_top_length(scene, drive, sample_times)
+    if initial_state is not None:
+        initial_state = checked_state(initial_state, model.state_size)
+    x0 = equilibrium(model, drive, compiled=compiled) if initial_state is None else initial_state
+    run = integrate(
+        model,
+        x0,
+        drive,
+        numerics.duration,
+        numerics.step,
+        output_every=numerics.output_every,
+        tolerance=numerics.constraint_tolerance,
+        quiet=quiet,
+        compiled=compiled,
+    )
+    joints, tensions = joints_and_tensions(model, run.states, run.inputs, compiled)
+    error = clearance_error(scene.seabed.hills, joints[:, :, 0])
+    return Trajectory(
+        time=run.time,
+        states=run.states,
+        inputs=run.inputs,
+        joints=joints,
+        tensions=tensions,
+        winch_angle=drive.winch_angle(run.time)[0],
+        clearance_error=error,
+        omega=rms_objective(run.time, error),
+        scene_name=scene.name,
+        state_names=model.state_names,
+    )

@@ -1,0 +1,170 @@
+"""Results of a simulation: the :class:`Trajectory`, with saving to npz + json and loading."""
+
+from __future__ import annotations
+
+import json
+import zipfile
+import zlib
+from dataclasses import dataclass, fields
+from pathlib import Path
+
+import numpy as np
+
+from cable_ocp.model.layout import INPUTS
+from cable_ocp.scene.output import json_text
+
+ARRAY_FIELDS = (
+    "time", "states", "inputs", "joints", "tensions", "winch_angle", "clearance_error",
+)  # fmt: skip
+
+
+@dataclass(frozen=True, eq=False)
+class Trajectory:
+    """A simulated run, sampled at its output times.
+
+    Attributes
+    ----------
+    time : array (k,), s
+    states : array (k, state_size)
+        ``x = [q; q']`` (see ``state_names``).
+    inputs : array (k, 15)
+        Model inputs (see :data:`cable_ocp.model.cable.INPUT_NAMES`).
+    joints : array (k, 3, n+2), m
+        Joint positions ``A_0`` (the end E) .. ``A_{n+1}`` (the top).
+    tensions : array (k, n+1), N
+        Bond forces ``|lambda_j|`` at ``A_1 .. A_{n+1}``; the last is the top tension.
+    winch_angle : array (k,), rad
+    clearance_error : array (k,), m
+        ``e(t)`` of eq. 39.
+    omega : float, m
+        ``Omega`` of eq. 39.
+    scene_name : str
+    state_names : list of str
+    """
+
+    time: np.ndarray
+    states: np.ndarray
+    inputs: np.ndarray
+    joints: np.ndarray
+    tensions: np.ndarray
+    winch_angle: np.ndarray
+    clearance_error: np.ndarray
+    omega: float
+    scene_name: str
+    state_names: list[str]
+
+    @property
+    def end(self) -> np.ndarray:
+        """Position of the end E over time (k, 3), m."""
+        return self.joints[:, :, 0]
+
+    @property
+    def top(self) -> np.ndarray:
+        """Position of the top point over time (k, 3), m."""
+        return self.joints[:, :, -1]
+
+    @property
+    def top_length(self) -> np.ndarray:
+        """Length of the top element over time (k,), m."""
+        return self.inputs[:, INPUTS.top_length]
+
+    @property
+    def top_tension(self) -> np.ndarray:
+        """Tension at the top (k,), N."""
+        return self.tensions[:, -1]
+
+    def save(self, path: str | Path) -> tuple[Path, Path]:
+        """Write ``path.npz`` (arrays) and ``path.json`` (scalars and names).
+
+        A NaN ``omega`` is written as JSON ``null`` (the file is strict JSON).
+
+        Returns
+        -------
+        the two paths written
+        """
+        path = Path(path)
+        arrays = path.with_suffix(".npz")
+        meta = path.with_suffix(".json")
+        np.savez_compressed(arrays, **{name: getattr(self, name) for name in ARRAY_FIELDS})
+        meta.write_text(
+            json_text(
+                {
+                    "omega": self.omega,
+                    "scene_name": self.scene_name,
+                    "state_names": self.state_names,
+                }
+            )
+        )
+        return arrays, meta
+
+    @classmethod
+    def load(cls, path: str | Path) -> Trajectory:
+        """Read a trajectory written by :meth:`save` (``path.npz`` and ``path.json``).
+
+        Raises
+        ------
+        ValueError
+            Naming the file, if it is missing, truncated or garbled, or the arrays do not fit
+            together.
+        """
+        path = Path(path)
+        arrays_path, meta_path = path.with_suffix(".npz"), path.with_suffix(".json")
+        try:
+            with np.load(arrays_path) as data:
+                arrays = {name: np.asarray(data[name], dtype=float) for name in ARRAY_FIELDS}
+            _check_shapes(arrays)
+        except (OSError, ValueError, KeyError, EOFError, zipfile.BadZipFile, zlib.error) as error:
+            raise ValueError(
+                f"{arrays_path}: not a readable trajectory ({type(error).__name__}: {error})"
+            ) from None
+        try:
+            meta = _meta_from_json(json.loads(meta_path.read_text()), arrays["states"].shape[1])
+        except (OSError, ValueError) as error:
+            raise ValueError(
+                f"{meta_path}: not a readable trajectory ({type(error).__name__}: {error})"
+            ) from None
+        return cls(**arrays, **meta)
+
+    def equals(self, other: Trajectory) -> bool:
+        """Whether every array and value is identical (NaN equal to NaN)."""
+        for f in fields(self):
+            a, b = getattr(self, f.name), getattr(other, f.name)
+            if isinstance(a, np.ndarray | float):
+                same = np.array_equal(a, b, equal_nan=True)
+            else:
+                same = a == b
+            if not same:
+                return False
+        return True
+
+
+def _check_shapes(arrays: dict[str, np.ndarray]) -> None:
+    """Raise ValueError unless the arrays of a trajectory have matching shapes."""
+    count = arrays["time"].shape[0] if arrays["time"].ndim == 1 else -1
+    ndim = {"states": 2, "inputs": 2, "joints": 3, "tensions": 2}
+    for name in ARRAY_FIELDS:
+        a = arrays[name]
+        if a.ndim != ndim.get(name, 1) or a.shape[0] != count:
+            raise ValueError(
+                f"array {name} of shape {a.shape} does not fit time {arrays['time'].shape}"
+            )
+    joints, tensions = arrays["joints"].shape, arrays["tensions"].shape
+    if joints[1] != 3 or joints[2] != tensions[1] + 1:
+        raise ValueError(f"joints of shape {joints} do not fit tensions of shape {tensions}")
+
+
+def _meta_from_json(meta, state_size: int) -> dict:
+    """The scalars of a trajectory from its JSON (``null`` omega back to NaN); ValueError if bad."""
+    if not isinstance(meta, dict) or set(meta) != {"omega", "scene_name", "state_names"}:
+        raise ValueError(f"expected the keys omega, scene_name, state_names, got {meta!r:.80}")
+    omega, name, names = meta["omega"], meta["scene_name"], meta["state_names"]
+    if omega is not None and (isinstance(omega, bool) or not isinstance(omega, int | float)):
+        raise ValueError(f"omega = {omega!r:.40}: expected a number or null")
+    if not isinstance(name, str):
+        raise ValueError(f"scene_name = {name!r:.40}: expected a string")
+    if not isinstance(names, list) or not all(isinstance(n, str) for n in names):
+        raise ValueError("state_names: expected a list of strings")
+    if len(names) != state_size:
+        raise ValueError(f"{len(names)} state_names for {state_size} states")
+    return {"omega": float("nan") if omega is None else float(omega), "scene_name": name,
+            "state_names": names}  # fmt: skip

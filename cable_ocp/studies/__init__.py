@@ -1,0 +1,1 @@
+"""Studies and benchmarks (nothing in the core imports them)."""

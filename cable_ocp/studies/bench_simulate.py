@@ -1,0 +1,138 @@
+"""Benchmark of many simulations: end-to-end ``simulate`` against its integration, and a sweep.
+
+``cable-ocp bench --part simulate`` prints two tables:
+
+- ``simulate`` end to end (statics, integration with its bond checks, joints and tensions) with a
+  warm cache, against the integration alone in the same run, and against ``simulate`` with the
+  per-process caches emptied before each call (the model rebuilt, its library loaded from disk:
+  what every call cost before the caches);
+- a sweep over 20 currents in a fresh compile cache: the libraries compiled, the first run (which
+  compiles) and the later ones, against the first run's compile time paid once per scene (what a
+  library per scene, the numbers built in, would cost).
+"""
+
+from __future__ import annotations
+
+import os
+import tempfile
+import time
+from collections.abc import Callable
+from pathlib import Path
+
+import numpy as np
+
+from cable_ocp.drive.drive import Drive
+from cable_ocp.model import parametric
+from cable_ocp.model.cable import CableModel, cached_model
+from cable_ocp.scene.schema import load_scene
+from cable_ocp.simulation.integrate import integrate
+from cable_ocp.simulation.run import simulate
+from cable_ocp.simulation.statics import equilibrium
+
+# (scene file, overrides): a model of n = 15 over 210 s and one of n = 100 over 20 s.
+SIMULATE_CASES = (("paper_flat.toml", {}), ("end_force.toml", {}))
+SWEEP_SCENE = "paper_flat.toml"
+SWEEP_CURRENTS = np.linspace(0.0, 0.95, 20)  # m/s, across the tow (y)
+REPEATS = 3
+
+
+def _best(run: Callable[[], object], repeats: int = REPEATS) -> float:
+    """Shortest wall time (s) of ``repeats`` calls."""
+    times = []
+    for _ in range(repeats):
+        started = time.perf_counter()
+        run()
+        times.append(time.perf_counter() - started)
+    return min(times)
+
+
+def _forget_models() -> None:
+    """Empty the per-process model caches (the disk cache of compiled libraries stays)."""
+    cached_model.cache_clear()
+    parametric.parametric_model.cache_clear()
+
+
+def _time_case(scene) -> tuple[float, float, float]:
+    """``simulate`` end to end, the integration alone and ``simulate`` with no model cache (s)."""
+    numerics = scene.numerics
+    simulate(scene, compiled=True)  # compile or load once: the cache is warm from here on
+    model = CableModel.from_scene(scene)
+    drive = Drive.from_scene(scene)
+    x0 = equilibrium(model, drive, compiled=True)
+    integration = _best(
+        lambda: integrate(
+            model, x0, drive, numerics.duration, numerics.step, numerics.output_every,
+            tolerance=numerics.constraint_tolerance, compiled=True,
+        )
+    )  # fmt: skip
+    end_to_end = _best(lambda: simulate(scene, compiled=True))
+
+    def uncached() -> None:
+        _forget_models()
+        simulate(scene, compiled=True)
+
+    return end_to_end, integration, _best(uncached)
+
+
+def simulate_report(models_dir: Path, quick: bool = False) -> list[tuple[str, float, float, float]]:
+    """Print ``simulate`` end to end against the integration alone and against no model cache.
+
+    Returns rows ``(scene, simulate, integrate, uncached)`` in seconds.
+    """
+    cases = SIMULATE_CASES[:1] if quick else SIMULATE_CASES
+    print("simulate() end to end, compiled, warm disk cache (best of 3, same run)")
+    print(f"{'scene':<18}{'n':>5}{'simulate [s]':>14}{'integrate [s]':>15}{'ratio':>8}"
+          f"{'no model cache [s]':>20}{'ratio':>8}")  # fmt: skip
+    rows = []
+    for name, overrides in cases:
+        scene = load_scene(models_dir / name, overrides)
+        end_to_end, integration, rebuilt = _time_case(scene)
+        rows.append((name, end_to_end, integration, rebuilt))
+        print(
+            f"{name:<18}{scene.model.elements:>5}{end_to_end:>14.3f}{integration:>15.3f}"
+            f"{end_to_end / integration:>7.2f}x{rebuilt:>20.3f}{rebuilt / integration:>7.2f}x"
+        )
+    return rows
+
+
+def sweep_report(models_dir: Path) -> tuple[int, float, list[float]]:
+    """Print a sweep over 20 currents in a fresh compile cache: libraries and time per run.
+
+    Returns ``(libraries compiled, first run in s, later runs in s)``.
+    """
+    scene = load_scene(models_dir / SWEEP_SCENE)
+    previous = os.environ.get("CABLE_OCP_CACHE")
+    with tempfile.TemporaryDirectory() as cache:
+        os.environ["CABLE_OCP_CACHE"] = cache
+        _forget_models()
+        try:
+            times = []
+            for speed in SWEEP_CURRENTS:
+                case = scene.updated({"environment.current": [0.0, float(speed), 0.0]})
+                started = time.perf_counter()
+                simulate(case, compiled=True)
+                times.append(time.perf_counter() - started)
+            libraries = len(list(Path(cache).glob("*.so")))
+        finally:
+            if previous is None:
+                del os.environ["CABLE_OCP_CACHE"]
+            else:
+                os.environ["CABLE_OCP_CACHE"] = previous
+            _forget_models()
+    first, later = times[0], times[1:]
+    per_scene = first + sum(later)
+    per_scene_libraries = len(SWEEP_CURRENTS) * first
+    print(f"\nSweep: {len(SWEEP_CURRENTS)} currents (0 to {SWEEP_CURRENTS[-1]:g} m/s across the "
+          f"tow) on {scene.name}, n = {scene.model.elements}, fresh compile cache")  # fmt: skip
+    print(f"libraries compiled: {libraries} (one set for the structure)")
+    print(f"first run (compiles): {first:.2f} s; later runs: mean {np.mean(later):.3f} s, "
+          f"max {max(later):.3f} s; whole sweep {per_scene:.2f} s")  # fmt: skip
+    print(f"a library per scene would pay the first run's cost every time: about "
+          f"{per_scene_libraries:.1f} s ({per_scene_libraries / per_scene:.1f}x)")  # fmt: skip
+    return libraries, first, later
+
+
+def report(models_dir: Path, quick: bool = False) -> None:
+    """``cable-ocp bench --only simulate``: both tables (the sweep also with ``quick``)."""
+    simulate_report(models_dir, quick)
+    sweep_report(models_dir)
