@@ -82,7 +82,7 @@ def test_projection_of_the_hanging_equilibrium_is_the_reduced_equilibrium(models
     u, u_reduced = drive.inputs(np.zeros(1))[:, 0], drive_reduced.inputs(np.zeros(1))[:, 0]
     projected = project_state(
         full,
-        equilibrium(full, drive),
+        equilibrium(full, drive).state,
         u[INPUTS.top_length],
         reduced,
         u[INPUTS.top],
@@ -90,7 +90,7 @@ def test_projection_of_the_hanging_equilibrium_is_the_reduced_equilibrium(models
         u_reduced[INPUTS.top_length],
         0.0,
     )
-    expected = equilibrium(reduced, drive_reduced)
+    expected = equilibrium(reduced, drive_reduced).state
     np.testing.assert_allclose(projected.state, expected, atol=1e-9)
     np.testing.assert_allclose(projected.end_offset, 0.0, atol=1e-9)
 

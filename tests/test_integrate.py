@@ -34,7 +34,7 @@ def positions(model: CableModel, states: np.ndarray) -> np.ndarray:
 def in_water(models_dir):
     """hanging.toml as it is: in water, n = 10, top fixed, with its equilibrium."""
     scene, model, drive, u = build(models_dir)
-    return scene, model, drive, u, equilibrium(model, drive)
+    return scene, model, drive, u, equilibrium(model, drive).state
 
 
 # ----------------------------------------------------------------------------------------------
@@ -49,7 +49,7 @@ def test_energy_conserved_in_air(models_dir, tilted, validation):
     assert model.spec.element.hydro is None and model.spec.bending_damping == 0.0
     assert model.spec.elements == 10
     x0 = tilted(model, u)
-    x_eq = equilibrium(model, drive)
+    x_eq = equilibrium(model, drive).state
     run = integrate(model, x0, drive, 20.0, 0.01, tolerance=1e-6)
     count = len(run.time)
     assert count == 2001 and run.time[-1] == pytest.approx(20.0)
@@ -170,7 +170,7 @@ def test_energy_conserved_in_water_with_anisotropic_added_mass(models_dir, tilte
     x0 = tilted(model, u)
     run = integrate(model, x0, drive, 20.0, 0.01, tolerance=1e-6)
     energy = np.array(model.energy.map(len(run.time))(run.states.T, run.inputs.T)).ravel()
-    released = energy[0] - float(model.energy(equilibrium(model, drive), u))
+    released = energy[0] - float(model.energy(equilibrium(model, drive).state, u))
     drift = np.abs(energy - energy[0]).max() / released
     validation("energy in water, added mass C_a = 1, C_at = 0, payload, no drag, 20 s",
                "conservation", "E(t) = E(0) (cable + entrained water)",
@@ -182,7 +182,7 @@ def test_torsional_instability_is_caught(models_dir):
     """Beyond the torsion step limit (about 0.12 s / n) the twist explodes with the bonds intact
     and the state finite; the run must still stop, naming the twist and the remedy."""
     scene, model, drive, u = build(models_dir, {"model.torsion": True})
-    x0 = equilibrium(model, drive)
+    x0 = equilibrium(model, drive).state
     twist = model.twist_angle_index()
     x0[twist] += 1e-6 * np.random.default_rng(1).normal(size=model.element_count)
     with pytest.raises(SimulationError, match="twisted apart") as info:

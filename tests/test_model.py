@@ -235,7 +235,7 @@ def test_translational_mass_of_hanging_chain(models_dir, submerged):
     scene = load_scene(models_dir / "hanging.toml", {"environment.submerged": submerged})
     model = CableModel.from_scene(scene)
     drive = Drive.from_scene(scene)
-    x, u = equilibrium(model, drive), rest_inputs(drive)
+    x, u = equilibrium(model, drive).state, rest_inputs(drive)
     element, _ = element_functions(model.spec.element)
     q, qd = model.coordinates(x)
     blocks = [

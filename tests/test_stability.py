@@ -41,7 +41,9 @@ def pushed_run(scene, elements: int, step: float, duration: float, min_steps: in
         }
     )
     model = CableModel.from_scene(local)
-    return simulate(local, model=model, initial_state=equilibrium(model, Drive.from_scene(local)))
+    return simulate(
+        local, model=model, initial_state=equilibrium(model, Drive.from_scene(local)).state
+    )
 
 
 def test_rk4_growth_on_the_imaginary_axis():

@@ -16,7 +16,13 @@ from cable_ocp.model.cable import CableModel
 from cable_ocp.model.layout import INPUTS
 from cable_ocp.scene.schema import load_scene
 from cable_ocp.simulation import statics
-from cable_ocp.simulation.statics import EquilibriumError, bond_tensions, equilibrium, rest_inputs
+from cable_ocp.simulation.statics import (
+    RESIDUAL_TOLERANCE,
+    EquilibriumError,
+    bond_tensions,
+    equilibrium,
+    rest_inputs,
+)
 from cable_ocp.studies.validation import CatenaryCheck, catenary_check
 
 
@@ -101,7 +107,7 @@ def hanging_case(models_dir):
             scene = load_scene(models_dir / "hanging.toml", {"model.torsion": torsion})
             model = CableModel.from_scene(scene)
             drive = Drive.from_scene(scene)
-            cache[torsion] = scene, model, equilibrium(model, drive), rest_inputs(drive)
+            cache[torsion] = scene, model, equilibrium(model, drive).state, rest_inputs(drive)
         return cache[torsion]
 
     return get
@@ -158,8 +164,8 @@ def test_compiled_equilibrium_matches_the_symbolic_one(models_dir, validation):
     scene = load_scene(models_dir / "hanging.toml", {"environment.current": [0.4, -0.2, 0.05]})
     model = CableModel.from_scene(scene)
     drive = Drive.from_scene(scene)
-    compiled = equilibrium(model, drive, compiled=True)
-    symbolic = equilibrium(model, drive)
+    compiled = equilibrium(model, drive, compiled=True).state
+    symbolic = equilibrium(model, drive).state
     difference = float(np.abs(compiled - symbolic).max())
     validation("hanging in a current, n = 10, compiled statics", "second formulation",
                "CasADi Newton on the symbolic equations", "max state difference",
@@ -234,7 +240,7 @@ def test_equilibrium_in_a_current_is_the_trailing_shape(models_dir, current, val
     in weak currents, from the smoothed |v| of the model's drag.
     """
     scene, model, drive, u = in_current(models_dir, current)
-    x = equilibrium(model, drive)
+    x = equilibrium(model, drive).state
     tensions = bond_tensions(model, x, u)
     joints = model.output_values(x, u)["joints"]
     end = joints[:, 0] - joints[:, -1]
@@ -273,7 +279,7 @@ def test_top_force_balances_weight_drag_and_end_loads(models_dir, current, overr
     the scene's coefficients); the end force and the payload's weight and drag are added by hand.
     """
     scene, model, drive, u = in_current(models_dir, current, **overrides)
-    x = equilibrium(model, drive, compiled=True)
+    x = equilibrium(model, drive, compiled=True).state
     out = model.output_values(x, u)
     joints, top_force = out["joints"], out["bond_forces"][:, -1]
     env, end = scene.environment, scene.end
@@ -310,7 +316,7 @@ def test_compiled_newton_line_search_at_n100(models_dir, validation):
     drive = Drive.from_scene(scene)
     u = rest_inputs(drive)
     assert model.spec.elements == 100
-    x = equilibrium(model, drive, compiled=True)
+    x = equilibrium(model, drive, compiled=True).state
     out = model.output_values(x, u)
     joints, top_force = out["joints"], out["bond_forces"][:, -1]
     env = scene.environment
@@ -335,7 +341,7 @@ def test_compiled_newton_line_search_at_n100(models_dir, validation):
 def test_string_guess_is_the_straight_cable_in_a_current(models_dir):
     """With no end load the drag-aware string guess is already the equilibrium (1e-6 rad)."""
     _, model, drive, u = in_current(models_dir, (0.0, 5.0, 0.0))
-    x = equilibrium(model, drive)
+    x = equilibrium(model, drive).state
     q, _ = model.coordinates(x)
     angles = np.array([qi[3:5] for qi in q])
     np.testing.assert_allclose(statics.string_guess(model, u), angles, rtol=0, atol=1e-6)
@@ -344,8 +350,8 @@ def test_string_guess_is_the_straight_cable_in_a_current(models_dir):
 def test_compiled_equilibrium_in_a_strong_current_matches_the_symbolic_one(models_dir):
     """At 10 m/s both Newton's methods find the same trailing state (1e-7)."""
     _, model, drive, _ = in_current(models_dir, (0.0, 10.0, 0.0))
-    compiled = equilibrium(model, drive, compiled=True)
-    symbolic = equilibrium(model, drive)
+    compiled = equilibrium(model, drive, compiled=True).state
+    symbolic = equilibrium(model, drive).state
     assert float(np.abs(compiled - symbolic).max()) <= 1e-7
 
 
@@ -384,6 +390,19 @@ def test_weaker_current_equilibrium_is_a_good_guess(models_dir):
     """The remedy the error suggests works: the 2 m/s equilibrium leads Newton to the 10 m/s one."""
     _, weak, weak_drive, _ = in_current(models_dir, (0.0, 2.0, 0.0))
     _, model, drive, u = in_current(models_dir, (0.0, 10.0, 0.0))
-    x = equilibrium(model, drive, guess=equilibrium(weak, weak_drive))
-    assert float(np.abs(x - equilibrium(model, drive)).max()) <= 1e-7
+    x = equilibrium(model, drive, guess=equilibrium(weak, weak_drive)).state  # a guess object
+    assert float(np.abs(x - equilibrium(model, drive).state).max()) <= 1e-7
     assert bond_tensions(model, x, u).min() > 0
+
+
+def test_equilibrium_reports_its_shape_and_pulling_tensions(models_dir):
+    """Hanging straight down, the bond forces lie along the elements: the signed tensions equal
+    the bond-force norms (1e-9 relative) and the end hangs a cable length below the top (1 mm)."""
+    scene = load_scene(models_dir / "hanging.toml")
+    model = CableModel.from_scene(scene)
+    found = equilibrium(model, Drive.from_scene(scene))
+    norms = model.output_values(found.state, found.inputs)["tensions"].ravel()
+    np.testing.assert_allclose(found.tensions, norms, rtol=1e-9)
+    drop = found.joints[2, -1] - found.end[2]
+    assert drop == pytest.approx(scene.cable.length, abs=1e-3)
+    assert found.residual <= RESIDUAL_TOLERANCE

@@ -96,7 +96,7 @@ class WinchProblem:
             step=step,
             grid=grid,
             drive=drive,
-            x0=equilibrium(model, drive),
+            x0=equilibrium(model, drive).state,
             control=control,
             low=low,
             high=high,

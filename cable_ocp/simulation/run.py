@@ -166,7 +166,11 @@ def simulate(
     check_top_length(scene, drive, sample_times)
     if initial_state is not None:
         initial_state = checked_state(initial_state, model.state_size)
-    x0 = equilibrium(model, drive, compiled=compiled) if initial_state is None else initial_state
+    x0 = (
+        equilibrium(model, drive, compiled=compiled).state
+        if initial_state is None
+        else initial_state
+    )
     run = integrate(
         model,
         x0,

@@ -12,6 +12,8 @@ top.
 
 from __future__ import annotations
 
+from dataclasses import dataclass
+
 import casadi as ca
 import numpy as np
 
@@ -128,17 +130,51 @@ def _state_from_angles(model: CableModel, angles: ca.SX, u: np.ndarray) -> ca.SX
     return ca.vertcat(*q, ca.SX.zeros(count * model.dofs))
 
 
+@dataclass(frozen=True, eq=False)
+class Equilibrium:
+    """A static equilibrium: the state at rest and what it looks like.
+
+    Attributes
+    ----------
+    state : array (state_size,)
+        Coordinates of the elements, all rates zero: where a run starts.
+    inputs : array (15,)
+        The inputs it holds under: the top and the winch at rest (:mod:`cable_ocp.model.layout`).
+    joints : array (3, n+2), m
+        ``A_0`` (the free end) .. ``A_{n+1}`` (the top).
+    tensions : array (n+1,), N
+        Signed bond tensions, positive pulling (:func:`bond_tensions`).
+    residual : float, rad/s^2
+        Largest angular acceleration left by Newton's method.
+    """
+
+    state: np.ndarray
+    inputs: np.ndarray
+    joints: np.ndarray
+    tensions: np.ndarray
+    residual: float
+
+    @property
+    def end(self) -> np.ndarray:
+        """Position of the free end ``E = A_0`` (3,), m."""
+        return self.joints[:, 0]
+
+
 def equilibrium(
-    model: CableModel, drive: Drive, guess: np.ndarray | None = None, compiled: bool = False
-) -> np.ndarray:
+    model: CableModel,
+    drive: Drive,
+    guess: np.ndarray | Equilibrium | None = None,
+    compiled: bool = False,
+) -> Equilibrium:
     """Static equilibrium of the model under the drive's inputs at t = 0.
 
     Parameters
     ----------
     model : CableModel
     drive : Drive
-    guess : array (state_size,), optional
-        A starting state; the string solution with the current's drag by default.
+    guess : array (state_size,) or Equilibrium, optional
+        A starting state (e.g. the equilibrium of the scene in a weaker current); the string
+        solution with the current's drag by default.
     compiled : bool
         For a 5-DOF model, Newton's method on the structured right-hand side compiled to C, with
         a finite-difference Jacobian (one mapped call): at n = 100, 0.05 s instead of the 5 s it
@@ -146,8 +182,8 @@ def equilibrium(
 
     Returns
     -------
-    array (state_size,)
-        The state at rest (all rates zero).
+    Equilibrium
+        The state at rest (``.state``, all rates zero) with its joints and bond tensions.
 
     Raises
     ------
@@ -167,6 +203,8 @@ def equilibrium(
         # A common spin of all elements stores no energy: hold the top element's twist at 0.
         unknowns = angles[: count * rotational - 1]
         x = ca.substitute(x, angles[-1], 0.0)
+    if isinstance(guess, Equilibrium):
+        guess = guess.state
     if guess is None:
         start = np.zeros((count, rotational))
         start[:, :2] = string_guess(model, u)
@@ -188,7 +226,9 @@ def equilibrium(
     state = np.array(state_of(solution)).ravel()
     model.check_regular(state)
     check_physical(model, state, u)
-    return state
+    outputs = model.output_values(state, u)
+    tensions = _signed_tensions(outputs["joints"], outputs["bond_forces"])
+    return Equilibrium(state, u, outputs["joints"], tensions, float(left))
 
 
 def bond_tensions(model: CableModel, state: np.ndarray, u: np.ndarray) -> np.ndarray:

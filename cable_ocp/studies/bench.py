@@ -137,7 +137,7 @@ def time_simulation(
     model, build, report = _build(scene, compiled, step)
     reload = _build(scene, compiled, step)[1] if compiled else 0.0
     drive = Drive.from_scene(scene)
-    x0 = equilibrium(model, drive)
+    x0 = equilibrium(model, drive).state
     count = round(duration / step)
     kernel = step_function(model, step, compiled).mapaccum(count)
     inputs = stage_inputs(drive, np.arange(count) * step, step)

@@ -58,7 +58,7 @@ def _time_case(scene) -> tuple[float, float, float]:
     simulate(scene, compiled=True)  # compile or load once: the cache is warm from here on
     model = CableModel.from_scene(scene)
     drive = Drive.from_scene(scene)
-    x0 = equilibrium(model, drive, compiled=True)
+    x0 = equilibrium(model, drive, compiled=True).state
     integration = _best(
         lambda: integrate(
             model, x0, drive, numerics.duration, numerics.step, numerics.output_every,

@@ -415,7 +415,7 @@ def compare(scene: Scene, elements: int, duration: float | None = None) -> Compa
     duration = scene.numerics.duration if duration is None else duration
     model = CableModel.from_scene(scene, elements=elements)
     drive = Drive.from_scene(scene, elements=elements)
-    x0 = equilibrium(model, drive)
+    x0 = equilibrium(model, drive).state
 
     def ours_at(step: float) -> EndRun:
         return run_cable_ocp(model, drive, x0, step, duration)

@@ -75,7 +75,7 @@ def catenary_check(scene, elements: int | None = None) -> CatenaryCheck:
         raise ValueError(f"elements = {elements!r}: must be an integer from 1 to {MAX_ELEMENTS}")
     model = CableModel.from_scene(scene, elements)
     drive = Drive.from_scene(scene, elements=model.spec.elements)
-    state = equilibrium(model, drive)
+    state = equilibrium(model, drive).state
     u = drive.inputs(np.zeros(1))[:, 0]
     outputs = model.output_values(state, u)
     joints = outputs["joints"] - u[INPUTS.top, None]

@@ -111,7 +111,7 @@ class Plant:
         the winch is moving at t = 0.
         """
         model = self.model
-        x = equilibrium(model, Drive.from_scene(self.scene), compiled=True)
+        x = equilibrium(model, Drive.from_scene(self.scene), compiled=True).state
         u = self.inputs(applied, np.zeros(1))[:, 0]
         joints, _ = plant_joints(model, x)
         top, velocity = u[INPUTS.top], u[INPUTS.top_velocity]

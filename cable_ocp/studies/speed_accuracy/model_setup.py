@@ -46,7 +46,7 @@ class Setup:
         local = scene.updated({"model.elements": elements, "model.torsion": torsion})
         model = CableModel.from_scene(local)
         drive = Drive.from_scene(local, winch.locked, elements=elements)
-        return cls(local, model, drive, equilibrium(model, drive))
+        return cls(local, model, drive, equilibrium(model, drive).state)
 
     def run(
         self, step: float, output_interval: float, compiled: bool, duration: float | None = None

@@ -38,7 +38,7 @@ def singular_states(scene, element: int = 2) -> tuple[SingularCase, ...]:
         One per sign; ``rejected`` is False if the run went ahead (it must not).
     """
     model = CableModel.from_scene(scene)
-    x0 = equilibrium(model, Drive.from_scene(scene))
+    x0 = equilibrium(model, Drive.from_scene(scene)).state
     cases = []
     for sign, name in ((1, "+"), (-1, "-")):
         x = x0.copy()

@@ -90,7 +90,7 @@ class _Runner:
         self.scene, self.compiled, self.quiet = scene, compiled, quiet
         self.model = CableModel.from_scene(scene)
         self.drive = Drive.from_scene(scene)
-        self.x0 = equilibrium(self.model, self.drive)
+        self.x0 = equilibrium(self.model, self.drive).state
         if scene.model.torsion:
             twist = self.model.twist_angle_index()
             rng = np.random.default_rng(0)
