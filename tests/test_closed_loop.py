@@ -15,7 +15,7 @@ from cable_ocp.model.layout import INPUTS
 from cable_ocp.scene.schema import load_scene
 from cable_ocp.simulation.statics import equilibrium
 
-HEAVE = {"top.heave_amplitude": 1.0, "top.heave_period": 8.0}
+HEAVE = {"top.heave.amplitude": 1.0, "top.heave.period": 8.0}
 SHORT = dict(horizon=20.0, sample=5.0, elements=2, step=1.0)
 
 
@@ -53,8 +53,9 @@ def test_arguments_are_checked_with_their_range(short_hill, change, named):
 
 
 def test_heave_compensated_scene_is_refused(models_dir):
-    scene = load_scene(models_dir / "paper_hill.toml", {"top.heave_compensation": True})
-    with pytest.raises(ValueError, match="top.heave_compensation"):
+    heave = {"top.heave.amplitude": 1.0, "top.heave.compensation": True}
+    scene = load_scene(models_dir / "paper_hill.toml", heave)
+    with pytest.raises(ValueError, match="top.heave.compensation"):
         mpc(scene, quiet=True, **SHORT)
 
 

@@ -65,9 +65,9 @@ def test_infeasible_bounds_fail_loudly(small):
     """A heave the rate-limited winch cannot compensate within its angle range: IPOPT says so."""
     scene = small.updated(
         {
-            "top.heave_amplitude": 6.0,
-            "top.heave_period": 10.0,
-            "top.heave_compensation": True,
+            "top.heave.amplitude": 6.0,
+            "top.heave.period": 10.0,
+            "top.heave.compensation": True,
             "winch.rate_max": 0.1,
         }
     )

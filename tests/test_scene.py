@@ -97,12 +97,12 @@ def test_direct_construction_is_validated(flat):
 def test_table_motion(tmp_path, flat):
     (tmp_path / "vessel.csv").write_text("t,x,y,z\n0,0,0,0\n")
     data = flat.to_dict()
-    data["top"].update(motion="table", table="vessel.csv")
+    data["top"] = {"motion": "table", "table": {"file": "vessel.csv"}}
     scene = scene_from_dict(data, base_dir=tmp_path)
-    assert scene.top.table == str((tmp_path / "vessel.csv").resolve())
+    assert scene.top.table.file == str((tmp_path / "vessel.csv").resolve())
     assert scene_from_dict(scene.to_dict()) == scene
     (tmp_path / "s.toml").write_text(
-        '[model]\n[numerics]\n[top]\nmotion = "table"\ntable = "vessel.csv"\n'
+        '[model]\n[numerics]\n[top]\nmotion = "table"\n[top.table]\nfile = "vessel.csv"\n'
     )
     assert load_scene(tmp_path / "s.toml").top.table == scene.top.table
 
@@ -168,7 +168,16 @@ BAD = [
     # top motion
     ({"top.motion": "towing"}, r"^top\.motion = 'towing' is not allowed: must be one of 'fixed'"),
     ({"top.motion": "table"}, r"^top\.table: required when top\.motion = 'table'"),
-    ({"top.motion": "table", "top.table": "missing.csv"}, r"^top\.table = '.*missing\.csv'"),
+    (
+        {"top.motion": "table", "top.table.file": "missing.csv"},
+        r"^top\.table\.file = '.*missing\.csv'",
+    ),
+    (
+        {"top.motion": "fixed", "top.tow.surge_speed": 1.0},
+        r"^top\.tow: given, but top\.motion = 'fixed' does not use it",
+    ),
+    ({"top.surge_speed": 1.0}, r"^top\.surge_speed: unknown key; allowed keys: motion, start, tow"),
+    ({"top.heave.period": 8.0}, r"^top\.heave\.amplitude: missing required key"),
 ]
 
 

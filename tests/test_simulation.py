@@ -27,9 +27,9 @@ def flat_short():
 
 
 def tow_of(scene) -> vessel.TopMotionFunction:
-    top = scene.top
+    top, tow = scene.top, scene.top.tow_profile
     return vessel.tow_profile(
-        top.start, top.surge_speed, top.sway_speed, top.ramp_time, top.sway_period
+        top.start, tow.surge_speed, tow.sway_speed, tow.ramp_time, tow.sway_period
     )
 
 
@@ -44,7 +44,7 @@ def test_table_motion_reproduces_the_tow_profile(tmp_path, flat_short, validatio
     path = tmp_path / "tow.csv"
     np.savetxt(path, np.column_stack([times, tow_of(scene)(times)[0].T]), delimiter=",",
                header="t,x,y,z", comments="")  # fmt: skip
-    table = scene.updated({"top.motion": "table", "top.table": str(path)})
+    table = scene.updated({"top.motion": "table", "top.table.file": str(path)})
     run = simulate(table)
     np.testing.assert_array_equal(run.time, parametric.time)
     difference = np.linalg.norm(run.end - parametric.end, axis=1).max()
@@ -113,9 +113,9 @@ def test_library_entry_points_reject_bad_numbers_before_integrating(monkeypatch)
 def test_heave_compensation_keeps_the_end_still(validation):
     heave = {
         "numerics.duration": 20.0,
-        "top.heave_amplitude": 1.0,
-        "top.heave_period": 10.0,
-        "top.heave_compensation": True,
+        "top.heave.amplitude": 1.0,
+        "top.heave.period": 10.0,
+        "top.heave.compensation": True,
     }
     compensated = simulate(load_scene(MODELS / "hanging.toml", heave))
     # The heave starts at full speed (a omega = 0.63 m/s) while the cable starts at rest; without
@@ -124,7 +124,7 @@ def test_heave_compensation_keeps_the_end_still(validation):
     free = simulate(
         load_scene(
             MODELS / "hanging.toml",
-            {**heave, "top.heave_compensation": False, "numerics.constraint_tolerance": 1.0},
+            {**heave, "top.heave.compensation": False, "numerics.constraint_tolerance": 1.0},
         )
     )
     still = np.linalg.norm(compensated.end - compensated.end[0], axis=1).max()

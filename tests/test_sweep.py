@@ -28,13 +28,13 @@ task = "simulate"
 "numerics.step" = 0.1
 "model.elements" = 5
 "top.motion" = "tow"
-"top.ramp_time" = 5.0
+"top.tow.ramp_time" = 5.0
 """
 GRID = (
     HEADER
     + """
 [grid]
-"top.surge_speed" = [0.5, 1.0]
+"top.tow.surge_speed" = [0.5, 1.0]
 "environment.current" = [[0.0, 0.0, 0.0], [0.3, 0.1, 0.0]]
 """
 )
@@ -49,7 +49,7 @@ def write(tmp_path: Path, text: str, name: str = "sweep.toml") -> Path:
 def sample_text(n=6, seed=3, design="latin-hypercube", extra="") -> str:
     return HEADER + (
         f'[sample]\nn = {n}\nseed = {seed}\ndesign = "{design}"\n[sample.ranges]\n'
-        '"top.surge_speed" = [0.4, 1.2]\n'
+        '"top.tow.surge_speed" = [0.4, 1.2]\n'
         '"environment.current" = [[0.0, 0.0, 0.0], [0.5, 0.0, 0.0]]\n' + extra
     )
 
@@ -59,21 +59,21 @@ def sample_text(n=6, seed=3, design="latin-hypercube", extra="") -> str:
 
 def test_grid_expands_to_the_full_factorial(tmp_path):
     spec = load_sweep(write(tmp_path, GRID))
-    assert spec.swept == ("top.surge_speed", "environment.current")
+    assert spec.swept == ("top.tow.surge_speed", "environment.current")
     assert [c.overrides for c in spec.cases] == [
-        {"top.surge_speed": s, "environment.current": c}
+        {"top.tow.surge_speed": s, "environment.current": c}
         for s in (0.5, 1.0)
         for c in ([0.0, 0.0, 0.0], [0.3, 0.1, 0.0])
     ]
     scene = spec.cases[3].scene
-    assert scene.top.surge_speed == 1.0 and scene.environment.current == (0.3, 0.1, 0.0)
+    assert scene.top.tow.surge_speed == 1.0 and scene.environment.current == (0.3, 0.1, 0.0)
     assert scene.numerics.duration == 10.0 and scene.model.elements == 5  # [set] applied
     assert len({c.fingerprint for c in spec.cases}) == 4
 
 
 def test_latin_hypercube_sample_is_stratified_and_reproducible(tmp_path):
     spec = load_sweep(write(tmp_path, sample_text(n=6, seed=3, extra='"model.elements" = [5, 8]')))
-    speeds = np.array([c.overrides["top.surge_speed"] for c in spec.cases])
+    speeds = np.array([c.overrides["top.tow.surge_speed"] for c in spec.cases])
     current = np.array([c.overrides["environment.current"] for c in spec.cases])
     elements = [c.overrides["model.elements"] for c in spec.cases]
     assert len(spec.cases) == 6 and spec.design == "latin-hypercube"
@@ -91,7 +91,7 @@ def test_latin_hypercube_sample_is_stratified_and_reproducible(tmp_path):
 
 def test_uniform_sample_stays_in_range(tmp_path):
     spec = load_sweep(write(tmp_path, sample_text(n=20, seed=0, design="uniform")))
-    speeds = np.array([c.overrides["top.surge_speed"] for c in spec.cases])
+    speeds = np.array([c.overrides["top.tow.surge_speed"] for c in spec.cases])
     assert len(speeds) == 20 and speeds.min() >= 0.4 and speeds.max() <= 1.2
     assert np.unique(speeds).size == 20
 
@@ -99,23 +99,24 @@ def test_uniform_sample_stays_in_range(tmp_path):
 @pytest.mark.parametrize(
     "body, message",
     [
-        ('[grid]\n"top.ramp_time" = [2.0, -1.0]',
-         "grid.top.ramp_time[1] = -1.0 (case 1): top.ramp_time = -1.0 is out of range: "
+        ('[grid]\n"top.tow.ramp_time" = [2.0, -1.0]',
+         "grid.top.tow.ramp_time[1] = -1.0 (case 1): top.tow.ramp_time = -1.0 is out of range: "
          "must be > 0"),
         ('[grid]\n"top.surge_sped" = [1.0]', "grid.top.surge_sped[0] = 1.0 (case 0): top.surge_sped"
          ": unknown key"),
         ('[grid]\n"environment.current" = [[0, 0, 0], [1, 0]]',
          "grid.environment.current[1] = [1, 0] (case 1): environment.current: expected 3 numbers"),
-        ('[grid]\n"top.surge_speed" = []', "grid.top.surge_speed: expected a non-empty list"),
-        ('[sample]\nn = 0\n[sample.ranges]\n"top.surge_speed" = [1, 2]',
+        ('[grid]\n"top.tow.surge_speed" = []',
+         "grid.top.tow.surge_speed: expected a non-empty list"),
+        ('[sample]\nn = 0\n[sample.ranges]\n"top.tow.surge_speed" = [1, 2]',
          "sample.n = 0: must be an integer in [1, 100000]"),
-        ('[sample]\nn = 3\n[sample.ranges]\n"top.surge_speed" = [2, 1]',
-         "sample.ranges.top.surge_speed = [2, 1]: low must be <= high"),
-        ('[sample]\nn = 3\n[sample.ranges]\n"top.ramp_time" = [-2.0, -1.0]',
-         "sample.ranges.top.ramp_time: drawn value"),
-        ('[sample]\nn = 3\ndesign = "sobol"\n[sample.ranges]\n"top.surge_speed" = [1, 2]',
+        ('[sample]\nn = 3\n[sample.ranges]\n"top.tow.surge_speed" = [2, 1]',
+         "sample.ranges.top.tow.surge_speed = [2, 1]: low must be <= high"),
+        ('[sample]\nn = 3\n[sample.ranges]\n"top.tow.ramp_time" = [-2.0, -1.0]',
+         "sample.ranges.top.tow.ramp_time: drawn value"),
+        ('[sample]\nn = 3\ndesign = "sobol"\n[sample.ranges]\n"top.tow.surge_speed" = [1, 2]',
          "sample.design = 'sobol': must be one of latin-hypercube, uniform"),
-        ('[grid]\n"top.surge_speed" = [1.0]\n[sample]\nn = 2', "sample: give either [grid] or"),
+        ('[grid]\n"top.tow.surge_speed" = [1.0]\n[sample]\nn = 2', "sample: give either [grid] or"),
         ('[optimizer]\nelements = 3', "optimizer: only allowed with task = 'optimize'"),
     ],
 )  # fmt: skip
@@ -164,7 +165,7 @@ def test_sweep_dataset_matches_a_direct_simulation(grid_run):
     ds = open_sweep(out)
     assert sorted(report.ran) == [0, 1, 2, 3] and report.skipped == []
     assert dict(ds.sizes) == {"case": 4, "time": 101}
-    np.testing.assert_array_equal(ds["top.surge_speed"], [0.5, 0.5, 1.0, 1.0])
+    np.testing.assert_array_equal(ds["top.tow.surge_speed"], [0.5, 0.5, 1.0, 1.0])
     np.testing.assert_array_equal(ds["environment.current[0]"], [0.0, 0.3, 0.0, 0.3])
     np.testing.assert_array_equal(ds["environment.current[1]"], [0.0, 0.1, 0.0, 0.1])
     assert list(ds["status"].values) == ["ok"] * 4 and bool(ds["success"].all())
@@ -173,7 +174,7 @@ def test_sweep_dataset_matches_a_direct_simulation(grid_run):
     scene = co.load_scene(
         MODELS / "hanging.toml",
         {"numerics.duration": 10.0, "numerics.step": 0.1, "model.elements": 5,
-         "top.motion": "tow", "top.ramp_time": 5.0, "top.surge_speed": 1.0,
+         "top.motion": "tow", "top.tow.ramp_time": 5.0, "top.tow.surge_speed": 1.0,
          "environment.current": [0.3, 0.1, 0.0]},
     )  # fmt: skip
     direct = co.simulate(scene)
@@ -189,7 +190,7 @@ def test_sweep_dataset_matches_a_direct_simulation(grid_run):
 
 def test_open_sweep_indexes_the_swept_keys(grid_run):
     ds = open_sweep(grid_run[2], index=True)
-    picked = ds.sel({"top.surge_speed": 1.0, "environment.current[0]": 0.3})
+    picked = ds.sel({"top.tow.surge_speed": 1.0, "environment.current[0]": 0.3})
     assert picked["omega"].values.ravel()[0] == pytest.approx(
         open_sweep(grid_run[2])["omega"].values[3], rel=0
     )
@@ -269,7 +270,7 @@ def test_optimize_sweep_and_durations_padded_with_nan(tmp_path):
 def test_existing_scheduler_is_used_and_left_running(tmp_path):
     from dask.distributed import Client, LocalCluster
 
-    text = HEADER + '[grid]\n"top.surge_speed" = [0.5, 1.0]\n'
+    text = HEADER + '[grid]\n"top.tow.surge_speed" = [0.5, 1.0]\n'
     with LocalCluster(n_workers=1, processes=False, dashboard_address=None) as cluster:
         report = run_sweep(
             load_sweep(write(tmp_path, text)),

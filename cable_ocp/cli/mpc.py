@@ -14,7 +14,7 @@ def add_mpc_command(subparsers) -> None:
         help="closed-loop winch control: receding-horizon IPOPT driving the scene's model",
         description="Closed-loop winch control of SCENE: every --sample seconds a receding-"
         "horizon OCP on a reduced model is solved from the measured state; the scene's own model "
-        "(with its heave, e.g. --set top.heave_amplitude=1 --set top.heave_period=8) is the "
+        "(with its heave, e.g. --set top.heave.amplitude=1 --set top.heave.period=8) is the "
         "plant. Writes mpc.json, mpc.npz and figures to --out.",
     )
     parser.add_argument("scene", type=Path)
@@ -48,7 +48,7 @@ def add_mpc_command(subparsers) -> None:
         action="append",
         default=[],
         metavar="KEY=VALUE",
-        help="override a scene field, e.g. --set top.heave_amplitude=1",
+        help="override a scene field, e.g. --set top.heave.amplitude=1",
     )
     parser.add_argument("--quiet", action="store_true", help="no progress bar")
     parser.set_defaults(run=run_mpc_command)

@@ -184,7 +184,7 @@ def violation(scene, control, parameters, grid: np.ndarray | None = None) -> str
     starts, ends = subintervals(control, np.zeros(0) if grid is None else grid)
     for derivative, low, high, fields in winch_limits(scene):
         times, values = _piece_extrema(control, parameters, starts, ends, derivative)
-        if derivative == 0 and scene.top.heave_compensation:
+        if derivative == 0 and scene.top.heave_compensated:
             dense = starts[:, None] + np.linspace(0, 1, HEAVE_SAMPLES) * (ends - starts)[:, None]
             dense = dense.ravel()
             times = np.concatenate([times, dense])

@@ -68,7 +68,7 @@ class Drive:
             end=scene.end,
             segment_length=scene.cable.length / n,
             drum_radius=scene.winch.drum_radius,
-            heave_compensation=scene.top.heave_compensation,
+            heave_compensation=scene.top.heave_compensated,
         )
 
     def winch_angle(self, t: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:

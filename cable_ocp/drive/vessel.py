@@ -160,15 +160,16 @@ def top_motion(top) -> TopMotionFunction:
     if top.motion == "fixed":
         base = fixed_top(top.start)
     elif top.motion == "tow":
+        tow = top.tow_profile
         base = tow_profile(
-            top.start, top.surge_speed, top.sway_speed, top.ramp_time, top.sway_period
+            top.start, tow.surge_speed, tow.sway_speed, tow.ramp_time, tow.sway_period
         )
     else:
-        time, points = read_table(top.table)
+        time, points = read_table(top.table.file)
         base = tabulated_top(time, points)
-    if top.heave_amplitude == 0:
+    if top.heave is None or top.heave.amplitude == 0:
         return base
-    vertical = heave(top.heave_amplitude, top.heave_period)
+    vertical = heave(top.heave.amplitude, top.heave.period)
 
     def motion(t):
         return tuple(a + b for a, b in zip(base(t), vertical(t), strict=True))

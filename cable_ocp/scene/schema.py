@@ -32,10 +32,13 @@ __all__ = [
     "Hydrodynamics",
     "ModelOptions",
     "Numerics",
+    "Heave",
     "Scene",
     "SceneError",
     "Seabed",
+    "TableProfile",
     "TopMotion",
+    "TowProfile",
     "Winch",
     "load_scene",
     "scene_from_dict",
@@ -91,7 +94,7 @@ class _Spec:
 def _param(default: Any = MISSING, kind: str = "float", doc: str = "", **spec: Any) -> Any:
     """Declare a scene field: default, kind, meaning and constraints (see ``_Spec``)."""
     meta = {"spec": _Spec(kind, doc, **spec)}
-    if kind == "section":
+    if kind == "section" and not spec.get("optional"):
         return field(default_factory=spec["item"], metadata=meta)
     return field(default=default, metadata=meta)
 
@@ -318,29 +321,77 @@ class ModelOptions(_Validated):
     bending: bool = _param(True, "bool", "Bending springs on.")
 
 
+@_section("top.tow")
+@dataclass(frozen=True)
+class TowProfile(_Validated):
+    """The tow of ``top.motion = "tow"``: v_x = U S(t/T_r), v_y = W sin^2(pi t/T).
+
+    CONVENTIONS.md §6.
+    The defaults are the reconstruction of the paper's vessel motion.
+    """
+
+    surge_speed: float = _param(1.16, doc="Final surge speed U.", unit="m/s")
+    sway_speed: float = _param(0.40, doc="Sway speed amplitude W.", unit="m/s")
+    ramp_time: float = _param(30.0, doc="Surge ramp time T_r.", gt=0, unit="s")
+    sway_period: float = _param(210.0, doc="Sway period T.", gt=0, unit="s")
+
+
+@_section("top.table")
+@dataclass(frozen=True)
+class TableProfile(_Validated):
+    """The table of ``top.motion = "table"``: top positions at given times, splined."""
+
+    file: str = _param(kind="path", doc="CSV with columns t, x, y, z (s, m); absolute path.")
+
+
+@_section("top.heave")
+@dataclass(frozen=True)
+class Heave(_Validated):
+    """A sinusoidal heave of the vessel added to the top motion (the section switches it on)."""
+
+    amplitude: float = _param(doc="Heave amplitude.", ge=0, unit="m")
+    period: float = _param(10.0, doc="Heave period.", gt=0, unit="s")
+    compensation: bool = _param(False, "bool", "Heave compensated at the top by the winch.")
+
+
 @_section("top")
 @dataclass(frozen=True)
 class TopMotion(_Validated):
-    """Prescribed motion of the top point A_{n+1}, carried by the vessel (CONVENTIONS.md §6)."""
+    """Prescribed motion of the top point A_{n+1}, carried by the vessel (CONVENTIONS.md §6).
+
+    The profile's own numbers are in the sub-table of its name (``[top.tow]``, ``[top.table]``),
+    which only that profile may have; ``[top.tow]`` may be left out for the paper's tow. A
+    ``[top.heave]`` table adds heave to any profile.
+    """
 
     motion: str = _param("fixed", "choice", "Profile.", choices=("fixed", "tow", "table"))
     start: Vector3 = _param((0.0, 0.0, 0.0), "vec3", "Position at t = 0.", unit="m")
-    surge_speed: float = _param(1.16, doc="Tow: final surge speed U.", unit="m/s")
-    sway_speed: float = _param(0.40, doc="Tow: sway speed amplitude W.", unit="m/s")
-    ramp_time: float = _param(30.0, doc="Tow: surge ramp time T_r.", gt=0, unit="s")
-    sway_period: float = _param(
-        210.0, doc="Tow: sway period T, v_y = W sin^2(pi t/T).", gt=0, unit="s"
+    tow: TowProfile | None = _param(None, "section", "[top.tow]", item=TowProfile, optional=True)
+    table: TableProfile | None = _param(
+        None, "section", "[top.table]", item=TableProfile, optional=True
     )
-    table: str | None = _param(
-        None, "path", "CSV (t,x,y,z) for motion 'table'; absolute path.", optional=True
-    )
-    heave_amplitude: float = _param(0.0, doc="Heave amplitude.", ge=0, unit="m")
-    heave_period: float = _param(10.0, doc="Heave period.", gt=0, unit="s")
-    heave_compensation: bool = _param(False, "bool", "Heave compensated at the top.")
+    heave: Heave | None = _param(None, "section", "[top.heave]", item=Heave, optional=True)
+
+    @property
+    def heave_compensated(self) -> bool:
+        """Whether the winch compensates a heave of the top."""
+        return self.heave is not None and self.heave.compensation
+
+    @property
+    def tow_profile(self) -> TowProfile:
+        """The tow's numbers: ``[top.tow]``, or the paper's tow where that table is left out."""
+        return self.tow if self.tow is not None else TowProfile()
 
     def _check_relations(self) -> None:
         if self.motion == "table" and self.table is None:
             raise SceneError(self._path("table"), ": required when top.motion = 'table'")
+        for profile in ("tow", "table"):
+            if profile != self.motion and getattr(self, profile) is not None:
+                raise SceneError(
+                    self._path(profile),
+                    f": given, but top.motion = {self.motion!r} does not use it: remove "
+                    f"[top.{profile}] or set top.motion = {profile!r}",
+                )
 
 
 @_section("end")
@@ -523,7 +574,7 @@ def _build(cls: type, data: Any, path: str, base_dir: Path | None, **extra: Any)
     kwargs = dict(extra)
     for name, value in data.items():
         spec = specs[name].metadata["spec"]
-        if spec.kind == "section":
+        if spec.kind == "section" and not (value is None and spec.optional):
             value = _build(spec.item, value, join(name), base_dir)
         elif spec.kind == "tuple" and isinstance(value, list):
             value = [

@@ -40,8 +40,10 @@ class EquilibriumError(RuntimeError):
 def rest_inputs(drive: Drive) -> np.ndarray:
     """Inputs at t = 0 with the top and the winch at rest (15,)."""
     u = drive.inputs(np.zeros(1))[:, 0].copy()
-    u[3:9] = 0.0
-    u[10:12] = 0.0
+    u[INPUTS.top_velocity] = 0.0
+    u[INPUTS.top_acceleration] = 0.0
+    u[INPUTS.top_length_rate] = 0.0
+    u[INPUTS.top_length_acceleration] = 0.0
     return u
 
 
@@ -286,7 +288,7 @@ def check_physical(model: CableModel, state: np.ndarray, u: np.ndarray) -> None:
     hangs = (
         spec.element.submerged_weight_per_length > 0
         and payload >= 0
-        and u[14] <= 0
+        and u[INPUTS.end_force][2] <= 0
         and (hydro is None or hydro.current[2] <= 0)
     )
     if hangs and joints[2, 0] >= joints[2, -1]:

@@ -20,7 +20,7 @@ task = "{task}"
 [set]
 "numerics.duration" = 20.0
 [grid]
-"top.surge_speed" = {speeds}
+"top.tow.surge_speed" = {speeds}
 """
 OPTIMIZER = 'method = "ipopt"\n[optimizer]\nstep = 0.25\nintervals = 8'
 

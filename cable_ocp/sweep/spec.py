@@ -11,7 +11,7 @@ A sweep file names a scene, a task and the overrides of each case::
     "numerics.duration" = 60.0
     [grid]                         # full factorial: one list of values per dotted key
     "environment.current" = [[0, 0, 0], [0.5, 0, 0]]
-    "top.surge_speed" = [0.8, 1.16]
+    "top.tow.surge_speed" = [0.8, 1.16]
 
 or, instead of ``[grid]``, a random design::
 
@@ -20,7 +20,7 @@ or, instead of ``[grid]``, a random design::
     seed = 1
     design = "latin-hypercube"     # or "uniform"
     [sample.ranges]
-    "top.surge_speed" = [0.8, 1.4]            # [low, high]
+    "top.tow.surge_speed" = [0.8, 1.4]            # [low, high]
     "environment.current" = [[0, 0, 0], [1, 0.5, 0]]   # componentwise [low, high] vectors
 
 Every error is a ``ValueError`` naming the sweep file key (and the case), raised before any

@@ -8,12 +8,12 @@ Layout of ``DIR``::
     DIR/sweep.nc              all cases in one xarray Dataset (assembled from the case files)
 
 The Dataset has dimensions ``case`` and ``time``. Each swept key is a coordinate along ``case``
-named by its dotted key (``"top.surge_speed"``); a vector is one coordinate per component,
+named by its dotted key (``"top.tow.surge_speed"``); a vector is one coordinate per component,
 ``"environment.current[0]"`` .. ``[2]``. Select with a boolean mask, e.g.
-``ds.where(ds["top.surge_speed"] == 0.8, drop=True)``, or open with ``open_sweep(path,
+``ds.where(ds["top.tow.surge_speed"] == 0.8, drop=True)``, or open with ``open_sweep(path,
 index=True)`` to make ``case`` a multi-index of the swept coordinates and use
-``ds.sel({"top.surge_speed": 0.8})``. Cases of different durations share the union of the output
-times, padded with NaN.
+``ds.sel({"top.tow.surge_speed": 0.8})``. Cases of different durations share the union of the
+output times, padded with NaN.
 """
 
 from __future__ import annotations
@@ -241,7 +241,7 @@ def open_sweep(path: str | Path, index: bool = False) -> xr.Dataset:
         The file or the sweep folder.
     index : bool
         Make ``case`` a multi-index of the swept coordinates, so that
-        ``ds.sel({"top.surge_speed": 0.8})`` works.
+        ``ds.sel({"top.tow.surge_speed": 0.8})`` works.
     """
     path = Path(path)
     if path.is_dir():

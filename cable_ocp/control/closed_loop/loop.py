@@ -81,9 +81,9 @@ def check_arguments(
         raise ValueError(f"rate_weight = {rate_weight} s^2: must be >= 0")
     if scene.model.torsion:
         raise ValueError("model.torsion = true: the MPC supports 5-DOF models only")
-    if scene.top.heave_compensation:
+    if scene.top.heave_compensated:
         raise ValueError(
-            "top.heave_compensation = true: the MPC compensates heave from measurements itself; "
+            "top.heave.compensation = true: the MPC compensates heave from measurements itself; "
             "set it to false"
         )
 
@@ -335,7 +335,7 @@ def _references(scene, plant: Plant, names, time_grid) -> dict[str, np.ndarray]:
         from cable_ocp.control.ocp import IpoptSettings, make_control
         from cable_ocp.control.optimization import optimize
 
-        calm = scene.updated({"top.heave_amplitude": 0.0})
+        calm = scene.updated({"top.heave.amplitude": 0.0})
         settings = IpoptSettings(elements=3, step=0.5, intervals=_intervals(scene, 0.5))
         result = optimize(calm, "ipopt", settings, quiet=True)
         profile = make_control(calm, settings).angle_function(result.parameters)
