@@ -162,8 +162,8 @@ def test_energy_conserved_in_water_with_anisotropic_added_mass(models_dir, tilte
     """
     overrides = {
         "hydrodynamics.drag": False,
-        "end.payload_mass": 2000.0,
-        "end.payload_volume": 0.5,
+        "end.payload.mass": 2000.0,
+        "end.payload.volume": 0.5,
     }
     scene, model, drive, u = build(models_dir, overrides)
     assert scene.hydrodynamics.added_mass_axial == 0.0

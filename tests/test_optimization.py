@@ -233,3 +233,17 @@ def test_load_names_a_missing_file(solved, tmp_path):
     (tmp_path / "r" / "result.npz").unlink()
     with pytest.raises(ValueError, match=r"result\.npz"):
         OcpResult.load(tmp_path / "r")
+
+
+def test_intervals_that_do_not_divide_the_steps_are_refused_before_any_model(
+    models_dir, monkeypatch
+):
+    from cable_ocp.control.problem import WinchProblem
+
+    def forbidden(*args, **kwargs):
+        pytest.fail("the intervals must be checked before the problem is built")
+
+    monkeypatch.setattr(WinchProblem, "from_scene", forbidden)
+    scene = load_scene(models_dir / "small_tow.toml")  # 40 s at h = 0.5 s: 80 steps
+    with pytest.raises(ValueError, match=r"intervals = 42 must divide the 80 RK4 steps"):
+        optimize(scene, quiet=True)

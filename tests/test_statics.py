@@ -14,7 +14,7 @@ import pytest
 from cable_ocp.drive.drive import Drive
 from cable_ocp.model.cable import CableModel
 from cable_ocp.model.layout import INPUTS
-from cable_ocp.scene.schema import load_scene
+from cable_ocp.scene.schema import EndPayload, load_scene
 from cable_ocp.simulation import statics
 from cable_ocp.simulation.statics import (
     RESIDUAL_TOLERANCE,
@@ -267,8 +267,8 @@ def test_equilibrium_in_a_current_is_the_trailing_shape(models_dir, current, val
         ((0.0, 10.0, 0.0), {}),
         ((4.0, 0.0, 0.0), {"end.force": [0.0, 5000.0, -20000.0]}),
         ((0.0, 8.0, 0.0), {"end.force": [0.0, -20000.0, 0.0]}),
-        ((0.0, 20.0, 0.0), {"end.payload_mass": 5000.0, "end.payload_volume": 1.0,
-                            "end.payload_drag_area": 2.0}),
+        ((0.0, 20.0, 0.0), {"end.payload.mass": 5000.0, "end.payload.volume": 1.0,
+                            "end.payload.drag_area": 2.0}),
     ],
     ids=["10m/s", "x-current+end-force", "upstream-end-force", "payload"],
 )  # fmt: skip
@@ -285,8 +285,9 @@ def test_top_force_balances_weight_drag_and_end_loads(models_dir, current, overr
     env, end = scene.environment, scene.end
     velocity = np.array(current)
     weight = (scene.cable.density - env.water_density) * scene.cable.cross_section_area
-    weight = weight * scene.cable.length + end.payload_mass - env.water_density * end.payload_volume
-    payload_drag = 0.5 * env.water_density * end.payload_drag * end.payload_drag_area
+    payload = end.payload or EndPayload(mass=0.0)
+    weight = weight * scene.cable.length + payload.mass - env.water_density * payload.volume
+    payload_drag = 0.5 * env.water_density * payload.drag * payload.drag_area
     loads = (
         np.array([0.0, 0.0, -weight * env.gravity])
         + morison_drag(scene, joints).sum(axis=1)

@@ -17,9 +17,9 @@ EVERYTHING = {
     "environment.current": [0.4, -0.2, 0.05],
     "hydrodynamics.added_mass_axial": 0.3,
     "cable.bending_damping": 0.2,
-    "end.payload_mass": 2000.0,
-    "end.payload_volume": 0.5,
-    "end.payload_drag_area": 0.3,
+    "end.payload.mass": 2000.0,
+    "end.payload.volume": 0.5,
+    "end.payload.drag_area": 0.3,
 }
 
 

@@ -120,8 +120,24 @@ def make_control(scene, settings: IpoptSettings) -> KnotSpline | HermiteInterval
     return HermiteIntervals(duration, settings.control_intervals or settings.intervals)
 
 
+def steps_per_interval(duration: float, step: float, intervals: int) -> int:
+    """RK4 steps in each shooting interval; ``intervals`` must divide the steps of the run."""
+    total_steps = step_count(duration, step)
+    if total_steps % intervals:
+        raise ValueError(
+            f"intervals = {intervals} must divide the {total_steps} RK4 steps "
+            f"(T = {duration} s, h = {step} s)"
+        )
+    return total_steps // intervals
+
+
 def ipopt_problem(scene, settings: IpoptSettings) -> WinchProblem:
-    """The scene's winch problem with the control, model and step the IPOPT settings ask for."""
+    """The scene's winch problem with the control, model and step the IPOPT settings ask for.
+
+    The shooting intervals are checked first, before any model is built.
+    """
+    step = settings.step or scene.numerics.step
+    steps_per_interval(scene.numerics.duration, step, settings.intervals)
     return WinchProblem.from_scene(
         scene, make_control(scene, settings), settings.elements, settings.step
     )
@@ -204,13 +220,8 @@ class ShootingProblem:
         self.problem, self.settings = problem, settings
         duration, step = problem.duration, problem.step
         model, control = problem.model, problem.control
-        total_steps = step_count(duration, step)
-        if total_steps % settings.intervals:
-            raise ValueError(
-                f"intervals = {settings.intervals} must divide the {total_steps} RK4 steps "
-                f"(T = {duration} s, h = {step} s)"
-            )
-        self.per_interval = per_interval = total_steps // settings.intervals
+        self.per_interval = per_interval = steps_per_interval(duration, step, settings.intervals)
+        total_steps = per_interval * settings.intervals
 
         step_times = problem.grid[:-1]
         fixed = stage_inputs(problem.drive, step_times, step)

@@ -383,6 +383,7 @@ def optimize(
         Check ``success``: a failed solve is returned with ``success = False`` and the solver's
         status, never as an answer.
     """
+    check_verbosity(quiet, verbose)
     if method not in METHODS:
         raise ValueError(f"method = {method!r}: must be one of {', '.join(map(repr, METHODS))}")
     chosen = METHODS[method]

@@ -109,7 +109,7 @@ def spec_from_scene(scene, elements: int | None = None) -> ModelSpec:
     elements : int, optional
         Overrides ``scene.model.elements``.
     """
-    cable, env, hyd, end = scene.cable, scene.environment, scene.hydrodynamics, scene.end
+    cable, env, hyd = scene.cable, scene.environment, scene.hydrodynamics
     water = env.water_density if env.submerged else 0.0
     area = cable.cross_section_area
     hydro = None
@@ -144,13 +144,20 @@ def spec_from_scene(scene, elements: int | None = None) -> ModelSpec:
         water_density=water,
         baumgarte_alpha=scene.numerics.baumgarte_alpha,
         baumgarte_beta=scene.numerics.baumgarte_beta,
-        payload=Payload(
-            mass=end.payload_mass,
-            volume=end.payload_volume,
-            drag_area=end.payload_drag_area,
-            drag_coefficient=end.payload_drag,
-            added_mass_coefficient=end.payload_added_mass,
-        ),
+        payload=_payload(scene.end.payload),
+    )
+
+
+def _payload(payload) -> Payload:
+    """The model's payload from a scene's ``[end.payload]`` (none: a payload of zero mass)."""
+    if payload is None:
+        return Payload()
+    return Payload(
+        mass=payload.mass,
+        volume=payload.volume,
+        drag_area=payload.drag_area,
+        drag_coefficient=payload.drag,
+        added_mass_coefficient=payload.added_mass,
     )
 
 

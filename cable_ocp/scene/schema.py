@@ -27,6 +27,7 @@ except ModuleNotFoundError:  # Python 3.10
 __all__ = [
     "Cable",
     "EndLoad",
+    "EndPayload",
     "Environment",
     "Hill",
     "Hydrodynamics",
@@ -394,6 +395,21 @@ class TopMotion(_Validated):
                 )
 
 
+@_section("end.payload")
+@dataclass(frozen=True)
+class EndPayload(_Validated):
+    """A point mass at the free end E = A_0 with buoyancy, drag and added mass.
+
+    The table is the switch: without ``[end.payload]`` there is no payload.
+    """
+
+    mass: float = _param(doc="Payload mass.", ge=0, unit="kg")
+    volume: float = _param(0.0, doc="Payload volume (buoyancy).", ge=0, unit="m^3")
+    drag_area: float = _param(0.0, doc="Payload drag area.", ge=0, unit="m^2")
+    drag: float = _param(1.0, doc="Payload drag coefficient.", ge=0)
+    added_mass: float = _param(1.0, doc="Payload added-mass coefficient.", ge=0)
+
+
 @_section("end")
 @dataclass(frozen=True)
 class EndLoad(_Validated):
@@ -408,11 +424,9 @@ class EndLoad(_Validated):
     force_period: Vector3 = _param((0.0, 0.0, 0.0), "vec3", "0 = no oscillation.", ge=0, unit="s")
     force_start: float = _param(0.0, doc="Start of the varying force.", ge=0, unit="s")
     force_ramp: float = _param(0.0, doc="Smoothstep ramp time (0 = step).", ge=0, unit="s")
-    payload_mass: float = _param(0.0, doc="Payload mass.", ge=0, unit="kg")
-    payload_volume: float = _param(0.0, doc="Payload volume (buoyancy).", ge=0, unit="m^3")
-    payload_drag_area: float = _param(0.0, doc="Payload drag area.", ge=0, unit="m^2")
-    payload_drag: float = _param(1.0, doc="Payload drag coefficient.", ge=0)
-    payload_added_mass: float = _param(1.0, doc="Payload added-mass coefficient.", ge=0)
+    payload: EndPayload | None = _param(
+        None, "section", "[end.payload]", item=EndPayload, optional=True
+    )
 
 
 @_section("winch")

@@ -138,7 +138,7 @@ def check_supported(scene: Scene) -> None:
         problems.append("environment.submerged must be true")
     if any(scene.environment.current):
         problems.append("environment.current must be zero")
-    if any(end.force) or any(end.force_amplitude) or end.payload_mass or end.payload_volume:
+    if any(end.force) or any(end.force_amplitude) or end.payload is not None:
         problems.append("no end force or payload ([end] section)")
     if problems:
         raise ValueError(f"scene {scene.name!r} cannot be run in MoorDyn: " + "; ".join(problems))
