@@ -15,7 +15,7 @@ from cable_ocp.model.cable import CableModel
 from cable_ocp.model.layout import INPUTS
 from cable_ocp.simulation.integrate import evaluate_into, integrate
 from cable_ocp.simulation.seabed import clearance_error, rms_objective
-from cable_ocp.simulation.statics import equilibrium
+from cable_ocp.simulation.statics import equilibrium, moving_with_the_top
 from cable_ocp.simulation.trajectory import Trajectory
 
 WinchSpec = None | np.ndarray | Callable
@@ -140,7 +140,9 @@ def simulate(
         A model built for the scene (built here if not given); it may have another number of
         elements than the scene.
     initial_state : array (model.state_size,), optional
-        Defaults to the static equilibrium under the inputs at t = 0; must be finite.
+        Defaults to the static equilibrium under the inputs at t = 0, moving as the top does
+        then (:func:`~cable_ocp.simulation.statics.moving_with_the_top`: a heave starts at full
+        speed); must be finite.
     quiet : bool
         No progress bar when true.
     compiled : bool
@@ -166,11 +168,12 @@ def simulate(
     check_top_length(scene, drive, sample_times)
     if initial_state is not None:
         initial_state = checked_state(initial_state, model.state_size)
-    x0 = (
-        equilibrium(model, drive, compiled=compiled).state
-        if initial_state is None
-        else initial_state
-    )
+    if initial_state is None:
+        start = drive.inputs(np.zeros(1))[:, 0]
+        initial_state = moving_with_the_top(
+            model, equilibrium(model, drive, compiled=compiled).state, start
+        )
+    x0 = initial_state
     run = integrate(
         model,
         x0,

@@ -233,6 +233,34 @@ def equilibrium(
     return Equilibrium(state, u, outputs["joints"], tensions, float(left))
 
 
+def moving_with_the_top(model: CableModel, state: np.ndarray, u: np.ndarray) -> np.ndarray:
+    """The state in the same shape, moving as the top does under the inputs ``u``.
+
+    Every element translates with the lower end of the top element: the top's velocity less the
+    winch's pay-out along the top element's axis. The bonds then hold at velocity level too, so a
+    run whose top starts moving (a heave) starts consistently; a top at rest leaves the state as
+    it is.
+
+    Parameters
+    ----------
+    model : CableModel
+    state : array (state_size,)
+        A state at rest, e.g. an equilibrium's.
+    u : array (15,)
+        The inputs at the start.
+    """
+    q, _ = model.coordinates(state)
+    psi, theta = q[-1][3], q[-1][4]
+    top_axis = np.array([np.cos(theta) * np.cos(psi), np.sin(theta), np.cos(theta) * np.sin(psi)])
+    velocity = u[INPUTS.top_velocity] - u[INPUTS.top_length_rate] * top_axis
+    moving = np.array(state, dtype=float)
+    half = model.state_size // 2
+    for i in range(model.element_count):
+        start = half + i * model.dofs
+        moving[start : start + 3] = velocity
+    return moving
+
+
 def bond_tensions(model: CableModel, state: np.ndarray, u: np.ndarray) -> np.ndarray:
     """Signed bond tensions (n+1,), N: positive pulls, negative pushes.
 
