@@ -316,3 +316,29 @@ def test_ctrl_c_keeps_the_finished_cases_and_a_rerun_completes(tmp_path, monkeyp
     monkeypatch.setattr(runner, "write_case", real_write)
     rerun = run_sweep(spec, tmp_path / "out", workers=1, quiet=True, processes=False)
     assert len(rerun.ran) == 3 and len(rerun.skipped) == 1 and rerun.all_ok
+
+
+def test_a_lost_task_is_recorded_and_retried(tmp_path, monkeypatch):
+    """A case whose task dies (its worker lost) is saved as failed with the reason, the other
+    cases are saved as they finish, and ``retry_failed`` runs only that case again."""
+    from cable_ocp.sweep import execute
+
+    real = execute.run_case
+
+    def dies_at_the_fast_tow(scene, *args, **kwargs):
+        if scene.top.tow_profile.surge_speed == 1.0:
+            raise RuntimeError("worker tcp://127.0.0.1:1 died")
+        return real(scene, *args, **kwargs)
+
+    text = HEADER + '[grid]\n"top.tow.surge_speed" = [0.5, 1.0]\n'
+    spec = load_sweep(write(tmp_path, text))
+    out = tmp_path / "out"
+    monkeypatch.setattr(execute, "run_case", dies_at_the_fast_tow)
+    report = run_sweep(spec, out, workers=1, quiet=True, processes=False)
+    ds = report.dataset
+    assert list(ds["status"].values) == ["ok", "failed"]
+    assert ds["reason"].values[1] == "task lost: RuntimeError: worker tcp://127.0.0.1:1 died"
+    monkeypatch.setattr(execute, "run_case", real)
+    again = run_sweep(spec, out, workers=1, quiet=True, processes=False, retry_failed=True)
+    assert again.ran == [1] and again.skipped == [0]
+    assert list(again.dataset["status"].values) == ["ok", "ok"]
