@@ -25,13 +25,9 @@ from cable_ocp.control.problem import SolverOutcome, WinchProblem
 from cable_ocp.drive.controls import HermiteIntervals, KnotSpline
 from cable_ocp.model.cable import CableModel
 from cable_ocp.model.compile import CompileReport
-from cable_ocp.model.compile import compiled as compile_function
 from cable_ocp.model.layout import INPUT_SIZE, INPUTS
 from cable_ocp.simulation.integrate import (
-    RK4_STAGES,
-    WHOLE_STEP_LIMIT,
     SimulationError,
-    parametric_rk4_step,
     stage_inputs,
     step_compile_report,
     step_count,
@@ -148,26 +144,14 @@ def ocp_step(
 ) -> tuple[ca.Function, CompileReport | None]:
     """The RK4 step ``(x, stage_inputs) -> x_next`` with first derivatives, for the NLP.
 
-    Compiled, a model whose whole step :func:`cable_ocp.simulation.integrate.step_function` would
-    compile flat gets its step built around the compiled right-hand side (with its derivatives)
-    instead: gcc spends superlinear time on one long function, so the right-hand side's derivatives
-    compile about ten times faster than the flat step's, for the same nominal cost and a slightly
-    slower reverse sweep (figures: ``cable-ocp bench --only ocp-speed``). Larger models use the
-    compiled step of :mod:`cable_ocp.simulation.integrate`. Interpreted, it is the model's SX step
-    (second derivatives too). The report is None when nothing was compiled.
+    Compiled, the step of :func:`cable_ocp.simulation.integrate.step_function` with its
+    derivatives; interpreted, the model's SX step (second derivatives too). The report is None
+    when nothing was compiled.
     """
     if not compiled:
         return step_function(model, step), None
-    parametric = model.parametric
-    if RK4_STAGES * parametric.rhs.n_instructions() > WHOLE_STEP_LIMIT:
-        function = step_function(model, step, compiled=True, derivatives=True)
-        return function, step_compile_report(model, step, derivatives=True)
-
-    def build():
-        rhs, report = compile_function(parametric.rhs, repr(parametric.structure), derivatives=True)
-        return model.bind(parametric_rk4_step(parametric, rhs), h=step), report
-
-    return model.memo(("ocp_step", step), build)
+    function = step_function(model, step, compiled=True, derivatives=True)
+    return function, step_compile_report(model, step, derivatives=True)
 
 
 def _interval_function(step_function, step, steps, hills, end_height0) -> ca.Function:

@@ -65,30 +65,27 @@ def structure_of(spec: Any) -> Any:
     return _map_numbers(spec, lambda _, name, value: MARKER if _is_parameter(name, value) else 0.0)
 
 
-def parameter_names(spec: Any) -> list[str]:
-    """Dotted paths of the parameters, in the order of ``p`` (e.g. ``element.hydro.current[1]``)."""
-    names: list[str] = []
+def _parameters(spec: Any) -> list[tuple[str, float]]:
+    """``(dotted path, value)`` of each parameter, in the order of ``p``."""
+    found: list[tuple[str, float]] = []
 
     def collect(path: str, name: str, value: float) -> float:
         if _is_parameter(name, value):
-            names.append(path)
+            found.append((path, float(value)))
         return value
 
     _map_numbers(spec, collect)
-    return names
+    return found
+
+
+def parameter_names(spec: Any) -> list[str]:
+    """Dotted paths of the parameters, in the order of ``p`` (e.g. ``element.hydro.current[1]``)."""
+    return [path for path, _ in _parameters(spec)]
 
 
 def parameter_values(spec: Any) -> np.ndarray:
     """The vector ``p`` of a spec (its numbers, in :func:`parameter_names` order)."""
-    values: list[float] = []
-
-    def collect(_: str, name: str, value: float) -> float:
-        if _is_parameter(name, value):
-            values.append(float(value))
-        return value
-
-    _map_numbers(spec, collect)
-    return np.array(values)
+    return np.array([value for _, value in _parameters(spec)])
 
 
 def symbolic_spec(structure: Any) -> tuple[Any, ca.SX]:

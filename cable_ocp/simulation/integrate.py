@@ -103,18 +103,22 @@ def compiled_parametric_step(
 ) -> tuple[ca.Function, CompileReport]:
     """The RK4 step of a structure compiled to C: ``(x, stage_inputs, p, h) -> x_next``.
 
-    A small model's whole step is compiled as one flat Function (at n = 3 its derivatives are
-    25 % faster than around a compiled right-hand side). A large one's four copies of the
-    right-hand side made gcc run out of memory at n = 100, so its step is compiled around the
-    structured right-hand side (5 DOF) or its flat right-hand side alone (torsion). Built once
-    per structure and process; the library is keyed by the structure, not by its numbers.
+    A small model's whole step is compiled as one flat Function. With derivatives it is built
+    around the compiled right-hand side and its derivatives instead: gcc spends superlinear time
+    on one long function, so those compile about ten times faster than the flat step's, for the
+    same nominal cost and a slightly slower reverse sweep (``cable-ocp bench --only ocp-speed``).
+    A large model's four copies of the right-hand side made gcc run out of memory at n = 100, so
+    its step is compiled around the structured right-hand side (5 DOF) or its flat right-hand
+    side alone (torsion). Built once per structure and process; the library is keyed by the
+    structure, not by its numbers.
     """
 
     def build() -> tuple[ca.Function, CompileReport]:
         description = repr(parametric.structure)
-        if RK4_STAGES * parametric.rhs.n_instructions() <= WHOLE_STEP_LIMIT:
+        flat = RK4_STAGES * parametric.rhs.n_instructions() <= WHOLE_STEP_LIMIT
+        if flat and not derivatives:
             return compile_function(parametric_rk4_step(parametric), description, derivatives)
-        if structured.supports(parametric):
+        if not flat and structured.supports(parametric):
             looped = parametric_rk4_step(parametric, structured.structured_rhs(parametric))
             return compile_function(looped, description, derivatives)
         rhs, report = compile_function(parametric.rhs, description, derivatives)

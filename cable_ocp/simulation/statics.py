@@ -227,10 +227,11 @@ def equilibrium(
         )
     state = np.array(state_of(solution)).ravel()
     model.check_regular(state)
-    check_physical(model, state, u)
     outputs = model.output_values(state, u)
     tensions = _signed_tensions(outputs["joints"], outputs["bond_forces"])
-    return Equilibrium(state, u, outputs["joints"], tensions, float(left))
+    found = Equilibrium(state, u, outputs["joints"], tensions, float(left))
+    check_physical(model, found)
+    return found
 
 
 def moving_with_the_top(model: CableModel, state: np.ndarray, u: np.ndarray) -> np.ndarray:
@@ -250,8 +251,7 @@ def moving_with_the_top(model: CableModel, state: np.ndarray, u: np.ndarray) -> 
         The inputs at the start.
     """
     q, _ = model.coordinates(state)
-    psi, theta = q[-1][3], q[-1][4]
-    top_axis = np.array([np.cos(theta) * np.cos(psi), np.sin(theta), np.cos(theta) * np.sin(psi)])
+    top_axis = np.array(axis_direction(q[-1][3], q[-1][4])).ravel()
     velocity = u[INPUTS.top_velocity] - u[INPUTS.top_length_rate] * top_axis
     moving = np.array(state, dtype=float)
     half = model.state_size // 2
@@ -279,7 +279,7 @@ def _signed_tensions(joints: np.ndarray, forces: np.ndarray) -> np.ndarray:
     return -np.sum(forces * axes, axis=0)
 
 
-def check_physical(model: CableModel, state: np.ndarray, u: np.ndarray) -> None:
+def check_physical(model: CableModel, found: Equilibrium) -> None:
     """Raise :class:`EquilibriumError` unless an equilibrium is one a cable can hang in.
 
     Every bond must pull (a chain of rods can also balance standing up in compression, a root
@@ -290,14 +290,10 @@ def check_physical(model: CableModel, state: np.ndarray, u: np.ndarray) -> None:
     Parameters
     ----------
     model : CableModel
-    state : array (state_size,)
-    u : array (15,)
-        The inputs the equilibrium holds under.
+    found : Equilibrium
+        A root of the static equations, with its joints and signed tensions.
     """
-    spec = model.spec
-    outputs = model.output_values(state, u)
-    joints = outputs["joints"]
-    tensions = _signed_tensions(joints, outputs["bond_forces"])
+    spec, joints, tensions, u = model.spec, found.joints, found.tensions, found.inputs
     weight_in_air = spec.element.mass_per_length * spec.gravity * spec.cable_length
     scale = max(float(np.abs(tensions).max()), weight_in_air)
     pushing = np.flatnonzero(tensions < -COMPRESSION_TOLERANCE * scale)
