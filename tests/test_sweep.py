@@ -221,7 +221,7 @@ def test_a_foreign_folder_is_refused(grid_run, tmp_path):
     stray = tmp_path / "stray"
     stray.mkdir()
     (stray / "notes.txt").write_text("mine")
-    with pytest.raises(ValueError, match="not empty and holds no sweep"):
+    with pytest.raises(ValueError, match="not empty and holds no sweep of cable-ocp"):
         run_sweep(spec, stray, quiet=True, processes=False)
     assert not (stray / "sweep.json").exists()
 

@@ -131,6 +131,31 @@ def atomic_directory(target: str | os.PathLike) -> Iterator[Path]:
         shutil.rmtree(backup, ignore_errors=True)
 
 
+def write_atomic(path: str | os.PathLike, data: str | bytes, mode: int | None = None) -> Path:
+    """Write a file so that a reader sees either the old or the whole new content, never a part.
+
+    The content goes to a scratch file ``.NAME.XXXXXXXX.tmp`` beside ``path``, which is then
+    renamed onto it. ``mode`` (default: :func:`file_mode` of the folder) is set before the
+    rename.
+    """
+    path = Path(path)
+    scratch = path.parent / f".{path.name}.{secrets.token_hex(4)}.tmp"
+    try:
+        with open(scratch, "xb") as handle:
+            handle.write(data.encode() if isinstance(data, str) else data)
+        os.chmod(scratch, file_mode(path.parent) if mode is None else mode)
+        os.replace(scratch, path)
+    except BaseException:
+        scratch.unlink(missing_ok=True)
+        raise
+    return path
+
+
+def file_mode(folder: str | os.PathLike) -> int:
+    """Permissions of a results file in ``folder``: the folder's own, without execute bits."""
+    return os.stat(folder).st_mode & 0o666
+
+
 def json_text(data: Any) -> str:
     """JSON text of ``data`` with NaN and infinities written as ``null`` (strict JSON).
 

@@ -9,9 +9,10 @@ from pathlib import Path
 
 import numpy as np
 
+from cable_ocp.scene.bundled import models_dir
 from cable_ocp.sweep import execute
 from cable_ocp.sweep.runner import run_sweep
-from cable_ocp.sweep.spec import MODELS_DIR, load_sweep
+from cable_ocp.sweep.spec import load_sweep
 
 SWEEP = """
 scene = "{scene}"
@@ -22,7 +23,7 @@ task = "{task}"
 [grid]
 "top.tow.surge_speed" = {speeds}
 """
-OPTIMIZER = 'method = "ipopt"\n[optimizer]\nstep = 0.25\nintervals = 8'
+OPTIMIZER = 'method = "ipopt"\n[optimizer]\nelements = 4\nstep = 0.25\nintervals = 8'
 
 
 def _load() -> str:
@@ -59,7 +60,7 @@ def sweep_benchmark(
     """
     speeds = [round(float(v), 4) for v in np.linspace(0.6, 1.4, cases)]
     text = SWEEP.format(
-        scene=MODELS_DIR / "small_tow.toml",
+        scene=models_dir() / "small_tow.toml",
         task=task,
         optimizer=OPTIMIZER if task == "optimize" else "",
         speeds=speeds,

@@ -2,14 +2,18 @@
 
 Cases already in the folder are skipped (resume); a failed case (an exception, a solver that did
 not converge, a worker that died) is saved with its reason and the others go on. Ctrl-C cancels
-what is left and still assembles the Dataset from the finished cases.
+what is left and still assembles the Dataset from the finished cases. So does a lost engine: a
+scheduler that went away, or no worker left for :data:`ENGINE_TIMEOUT` seconds; the report says
+so in ``engine_lost`` and a rerun resumes.
 """
 
 from __future__ import annotations
 
+import asyncio
 import logging
 import os
 import time
+from contextlib import contextmanager
 from dataclasses import dataclass, field
 from pathlib import Path
 
@@ -21,12 +25,20 @@ from cable_ocp.sweep.spec import SweepSpec
 from cable_ocp.sweep.store import (
     assemble,
     case_path,
+    case_statuses,
+    check_folder,
     claim_folder,
-    finished_cases,
+    folder_lock,
+    mark_folder,
     read_case,
+    remove_scratch,
     save_dataset,
     write_case,
 )
+
+ENGINE_TIMEOUT = 60.0  # s without a worker (or a scheduler) before the engine counts as lost
+POLL = 0.2  # s between looks at the engine while cases run
+WORKER_MEMORY = "about 100 MB"  # of one worker process, said when --workers is refused
 
 
 @dataclass
@@ -45,6 +57,9 @@ class SweepReport:
         Cases found finished in the folder.
     interrupted : bool
         Ctrl-C stopped the run; unfinished cases have status ``"not run"``.
+    engine_lost : str
+        Why the Dask engine was lost (empty if it was not); unfinished cases have status
+        ``"not run"``.
     wall_time : float, s
         Of this run, cluster start included.
     workers : int
@@ -56,6 +71,7 @@ class SweepReport:
     ran: list[int] = field(default_factory=list)
     skipped: list[int] = field(default_factory=list)
     interrupted: bool = False
+    engine_lost: str = ""
     wall_time: float = 0.0
     workers: int = 0
 
@@ -65,20 +81,61 @@ class SweepReport:
         return bool((self.dataset["status"] == "ok").all())
 
 
+def usable_cores() -> int:
+    """Cores this process may run on."""
+    try:
+        return len(os.sched_getaffinity(0))
+    except AttributeError:  # not on Linux
+        return os.cpu_count() or 1
+
+
+def check_engine(scheduler: str | None, workers: int | None) -> None:
+    """Refuse ``workers`` with a scheduler, or more workers than cores.
+
+    Raises
+    ------
+    ValueError
+        Naming the option.
+    """
+    if workers is None:
+        return
+    if scheduler is not None:
+        raise ValueError(
+            f"--workers {workers} with --scheduler {scheduler}: the scheduler has its own "
+            "workers; give one of the two"
+        )
+    cores = usable_cores()
+    if not 1 <= workers <= cores:
+        raise ValueError(
+            f"--workers {workers}: must be 1 to {cores}, the cores of this machine (each worker "
+            f"is a process of {WORKER_MEMORY} that runs one case at a time)"
+        )
+
+
 def _client(scheduler: str | None, workers: int | None, processes: bool):
-    """A Dask client of an existing scheduler, or of a new LocalCluster (one thread per worker)."""
+    """A Dask client of an existing scheduler, or of a new LocalCluster (one thread per worker).
+
+    The client is not made Dask's default, so that nothing else (xarray's write lock) goes
+    through the scheduler.
+    """
     from dask.distributed import Client, LocalCluster
 
     if scheduler is not None:
-        return Client(scheduler, timeout="30s"), None
+        try:
+            return Client(scheduler, timeout="30s", set_as_default=False), None
+        except (OSError, TypeError, ValueError) as error:
+            raise ValueError(
+                f"--scheduler {scheduler}: cannot reach a Dask scheduler there "
+                f"({type(error).__name__}: {' '.join(str(error).split())[:200]}); nothing ran"
+            ) from None
     cluster = LocalCluster(
-        n_workers=workers or os.cpu_count() or 1,
+        n_workers=workers or usable_cores(),
         threads_per_worker=1,
         processes=processes,
         dashboard_address=None,
         silence_logs=logging.ERROR,
     )
-    return Client(cluster), cluster
+    return Client(cluster, set_as_default=False), cluster
 
 
 def _lost(error: BaseException) -> dict:
@@ -92,6 +149,10 @@ def _lost(error: BaseException) -> dict:
     }
 
 
+class EngineLost(Exception):
+    """The Dask scheduler went away, or no worker was left for too long."""
+
+
 def run_sweep(
     spec: SweepSpec,
     out: str | Path,
@@ -100,6 +161,7 @@ def run_sweep(
     quiet: bool = False,
     retry_failed: bool = False,
     processes: bool = True,
+    engine_timeout: float = ENGINE_TIMEOUT,
 ) -> SweepReport:
     """Run the cases of a sweep that are not finished yet, and assemble all of them.
 
@@ -109,48 +171,100 @@ def run_sweep(
         From :func:`~cable_ocp.sweep.spec.load_sweep` (every case already validated).
     out : path-like
         The sweep folder (see :mod:`cable_ocp.sweep.store`); created, or resumed when it holds
-        this sweep, refused when it holds anything else.
+        this sweep, refused when it holds anything else or another sweep is running in it.
     scheduler : str, optional
         Address of a running Dask scheduler; default: a LocalCluster started here.
     workers : int, optional
-        Workers of the LocalCluster (default: one per core).
+        Workers of the LocalCluster (default: one per core; at most one per core with
+        ``processes``; not with ``scheduler``).
     quiet : bool
         No progress bar.
     retry_failed : bool
-        Run the cases saved as failed again.
+        Run the cases saved as failed, or whose file is damaged, again.
     processes : bool
         LocalCluster workers as processes (true) or threads of this process (tests).
+    engine_timeout : float, s
+        How long the sweep waits without any worker (or for a lost scheduler) before it stops
+        with ``engine_lost`` set.
 
     Returns
     -------
     SweepReport
+
+    Raises
+    ------
+    ValueError
+        A folder that is not this sweep's, in use, or with damaged files (naming the file and
+        how to recover); bad ``workers``; an unreachable scheduler. Nothing runs then.
     """
     started = time.perf_counter()
-    folder = Path(out).resolve()
-    claim_folder(folder, spec)
-    done = finished_cases(folder, spec)
-    if retry_failed:
-        done = {i for i in done if str(read_case(case_path(folder, i))["status"].values) == "ok"}
-    todo = [case for case in spec.cases if case.index not in done]
+    check_engine(scheduler, workers if processes else None)
+    folder = Path(out).expanduser().resolve()
+    check_folder(folder, spec)  # before anything is written
+    mark_folder(folder)
     report = SweepReport(dataset=xr.Dataset(), path=folder / "sweep.nc")
-    report.skipped = sorted(done)
-    if todo:
-        _run(spec, folder, todo, report, scheduler, workers, quiet, processes)
-    report.dataset = assemble(folder, spec)
-    save_dataset(folder, report.dataset)
+    with folder_lock(folder, f"cable-ocp sweep {spec.path}"):
+        claim_folder(folder, spec)
+        remove_scratch(folder)
+        statuses = case_statuses(folder, spec)
+        damaged = sorted(i for i, s in statuses.items() if s == "damaged")
+        if damaged and not retry_failed:
+            others = f" (and {len(damaged) - 1} more case files)" if len(damaged) > 1 else ""
+            try:
+                read_case(case_path(folder, damaged[0]))
+            except ValueError as error:
+                raise ValueError(f"{error}{others}") from None
+        keep = ("ok",) if retry_failed else ("ok", "failed")
+        done = {i for i, s in statuses.items() if s in keep}
+        todo = [case for case in spec.cases if case.index not in done]
+        report.skipped = sorted(done)
+        if todo:
+            _run(spec, folder, todo, report, scheduler, workers, quiet, processes, engine_timeout)
+        report.dataset = assemble(folder, spec)
+        save_dataset(folder, report.dataset)
     report.wall_time = time.perf_counter() - started
     return report
 
 
-def _run(spec, folder, todo, report, scheduler, workers, quiet, processes) -> None:
-    """Submit ``todo`` and save each case as it arrives (Ctrl-C: cancel the rest)."""
+@contextmanager
+def _dask_quiet(active: bool):
+    """Silence Dask's own logging (a lost scheduler's reconnect tracebacks) while closing."""
+    loggers = [logging.getLogger(name) for name in ("distributed", "tornado", "asyncio")]
+    levels = [logger.level for logger in loggers]
+    if active:
+        for logger in loggers:
+            logger.setLevel(logging.CRITICAL + 1)
+    try:
+        yield
+    finally:
+        for logger, level in zip(loggers, levels, strict=True):
+            logger.setLevel(level)
+
+
+def _engine_state(client) -> str:
+    """Why the engine is unusable now (empty if the client is connected)."""
+    if client.status not in ("running", "newly-created"):
+        return f"the Dask scheduler is gone (client {client.status})"
+    return ""
+
+
+def _workers(client) -> int | None:
+    """Workers the scheduler has now (None if it cannot be asked)."""
+    try:
+        return len(client.scheduler_info().get("workers", {}))
+    except Exception:  # noqa: BLE001 - any failure to ask is a scheduler we cannot use
+        return None
+
+
+def _run(spec, folder, todo, report, scheduler, workers, quiet, processes, engine_timeout) -> None:
+    """Submit ``todo`` and save each case as it arrives (Ctrl-C, a lost engine: stop)."""
     from dask.distributed import as_completed
 
     client, cluster = _client(scheduler, workers, processes)
     progress = Progress(f"sweep ({len(todo)} cases)", len(todo), quiet)
-    failed = 0
+    failed, lost = 0, False
     try:
-        report.workers = len(client.scheduler_info().get("workers", {}))
+        report.workers = _workers(client) or 0
         futures = {
             client.submit(
                 execute.run_case,
@@ -164,22 +278,59 @@ def _run(spec, folder, todo, report, scheduler, workers, quiet, processes) -> No
             for case in todo
         }
         progress.update(0, f"0/{len(todo)} on {report.workers} workers")
+        arrivals = as_completed(futures, loop=client.loop)
+        last_seen = time.monotonic()  # last time the engine had a worker
         try:
-            for future in as_completed(futures):
-                case = futures[future]
-                try:
-                    record = future.result()
-                except Exception as error:  # the task died with its worker
-                    record = _lost(error)
-                write_case(folder, case, record)
-                report.ran.append(case.index)
-                failed += record["status"] != "ok"
-                progress.update(len(report.ran), f"{len(report.ran)}/{len(todo)}, {failed} failed")
+            while not arrivals.is_empty():
+                batch = arrivals.next_batch(block=False)
+                for future in batch:
+                    if future.status == "cancelled":  # not by us: the scheduler went away
+                        continue
+                    try:
+                        record = future.result()
+                    except (Exception, asyncio.CancelledError) as error:
+                        if _engine_state(client):
+                            continue  # not a result of the case: it did not run to the end
+                        record = _lost(error)  # the task died with its worker
+                    case = futures[future]
+                    write_case(folder, case, record)
+                    report.ran.append(case.index)
+                    failed += record["status"] != "ok"
+                    done = len(report.ran)
+                    progress.update(done, f"{done}/{len(todo)}, {failed} failed")
+                why = _engine_state(client) or (
+                    "the Dask scheduler is gone (it cancelled the cases)"
+                    if any(f.status == "cancelled" for f in batch)
+                    else ""
+                )
+                if why:
+                    raise EngineLost(why)
+                if batch:
+                    continue
+                count = _workers(client)
+                if count:
+                    last_seen = time.monotonic()
+                elif time.monotonic() - last_seen > engine_timeout:
+                    raise EngineLost(
+                        "the Dask scheduler cannot be reached"
+                        if count is None
+                        else f"the Dask scheduler has had no worker for {engine_timeout:g} s"
+                    )
+                time.sleep(POLL)
         except KeyboardInterrupt:
             report.interrupted = True
             client.cancel(list(futures))
+        except EngineLost as error:
+            lost = True
+            report.engine_lost = str(error)
     finally:
         progress.close()
-        client.close()
-        if cluster is not None:
-            cluster.close()
+        with _dask_quiet(lost):
+            if lost:
+                try:
+                    client.cancel(list(futures))
+                except Exception:  # noqa: BLE001, S110 - the scheduler is gone already
+                    pass
+            client.close(timeout=5)
+            if cluster is not None:
+                cluster.close()

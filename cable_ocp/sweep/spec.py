@@ -5,7 +5,8 @@ A sweep file names a scene, a task and the overrides of each case::
     scene = "../paper_flat.toml"   # relative to the sweep file, or a bundled scene name
     task = "optimize"              # or "simulate"
     method = "ipopt"               # optimize only: "ipopt" or "nelder-mead"
-    [optimizer]                    # optimize only: IpoptSettings / NelderMeadSettings fields
+    [optimizer]                    # optimize only: IpoptSettings / NelderMeadSettings fields;
+                                   # unset ones are optimize()'s (METHODS: a reduced model)
     elements = 3
     [set]                          # dotted-key overrides shared by every case
     "numerics.duration" = 60.0
@@ -34,7 +35,9 @@ import itertools
 import json
 import math
 import numbers
-from dataclasses import asdict, dataclass, fields
+import types
+import typing
+from dataclasses import asdict, dataclass, fields, replace
 from pathlib import Path
 from typing import Any
 
@@ -42,6 +45,8 @@ import numpy as np
 
 from cable_ocp.control.nelder_mead import NelderMeadSettings
 from cable_ocp.control.ocp import IpoptSettings
+from cable_ocp.control.optimization import METHODS as DEFAULTS
+from cable_ocp.scene.bundled import models_dir
 from cable_ocp.scene.schema import Scene, SceneError, load_scene
 from cable_ocp.simulation.integrate import step_count
 
@@ -50,10 +55,9 @@ try:
 except ModuleNotFoundError:  # Python 3.10
     import tomli as tomllib
 
-MODELS_DIR = Path(__file__).resolve().parent.parent.parent / "models"
 TOP_KEYS = ("scene", "description", "task", "method", "optimizer", "set", "grid", "sample")
 TASKS = ("simulate", "optimize")
-METHODS = ("ipopt", "nelder-mead")
+METHODS = tuple(DEFAULTS)
 DESIGNS = ("latin-hypercube", "uniform")
 SAMPLE_KEYS = ("n", "seed", "design", "ranges")
 MAX_CASES = 100_000
@@ -136,16 +140,62 @@ def _find_scene(value: Any, sweep_path: Path) -> Path:
     """The scene file: relative to the sweep file, else a bundled scene name."""
     if not isinstance(value, str) or not value:
         raise _fail("scene", f": expected a scene file path or bundled scene name, got {value!r}")
-    candidates = [sweep_path.parent / value, MODELS_DIR / value, MODELS_DIR / f"{value}.toml"]
+    models = models_dir()
+    candidates = [sweep_path.parent / value, models / value, models / f"{value}.toml"]
     for candidate in candidates:
         if candidate.is_file():
             return candidate.resolve()
-    bundled = ", ".join(sorted(p.stem for p in MODELS_DIR.glob("*.toml")))
+    bundled = ", ".join(sorted(p.stem for p in models.glob("*.toml")))
     raise _fail(
         "scene",
         f" = {value!r}: file not found (relative to {sweep_path.parent}); bundled scenes: "
         f"{bundled}",
     )
+
+
+def bundled_sweeps() -> dict[str, Path]:
+    """The example sweep files shipped with the package (``models/sweeps/``), by name."""
+    return {p.stem: p for p in sorted((models_dir() / "sweeps").glob("*.toml"))}
+
+
+def _find_sweep(path: Path) -> Path:
+    """The sweep file: a path, else the name of a bundled example (``"tow_speeds"``)."""
+    if path.exists() or path.parent != Path("."):
+        return path.resolve()
+    examples = bundled_sweeps()
+    name = path.name.removesuffix(".toml")
+    if name in examples:
+        return examples[name]
+    raise ValueError(
+        f"sweep file {path}: not found (nor a bundled example: {', '.join(examples) or 'none'})"
+    )
+
+
+# What a value of each type of an optimiser field must be, said in the error.
+_KINDS = {bool: "true or false", int: "an integer", float: "a finite number", str: "a string",
+          dict: "a table"}  # fmt: skip
+
+
+def _option_fits(value: Any, allowed: tuple) -> bool:
+    if isinstance(value, bool):
+        return bool in allowed
+    if int in allowed and isinstance(value, int):
+        return True
+    if float in allowed and isinstance(value, int | float):
+        return math.isfinite(value)
+    return any(isinstance(value, kind) for kind in allowed if kind in (str, dict))
+
+
+def _check_options(cls: type, options: dict) -> None:
+    """Each ``[optimizer]`` value of the type its settings field declares."""
+    hints = typing.get_type_hints(cls)
+    for name, value in options.items():
+        hint = hints[name]
+        union = typing.get_origin(hint) in (typing.Union, types.UnionType)
+        allowed = tuple(a for a in (typing.get_args(hint) if union else (hint,)) if a in _KINDS)
+        if allowed and not _option_fits(value, allowed):
+            expected = " or ".join(_KINDS[a] for a in allowed)
+            raise _fail(f"optimizer.{name}", f" = {value!r:.60}: expected {expected}")
 
 
 def _settings(data: dict, task: str, method: str) -> IpoptSettings | NelderMeadSettings | None:
@@ -155,7 +205,7 @@ def _settings(data: dict, task: str, method: str) -> IpoptSettings | NelderMeadS
             key = "optimizer" if options else "method"
             raise _fail(key, ": only allowed with task = 'optimize'")
         return None
-    cls = IpoptSettings if method == "ipopt" else NelderMeadSettings
+    cls = type(DEFAULTS[method].default)
     allowed = [f.name for f in fields(cls)]
     for name in options:
         if name not in allowed:
@@ -163,22 +213,58 @@ def _settings(data: dict, task: str, method: str) -> IpoptSettings | NelderMeadS
                 f"optimizer.{name}",
                 f": unknown key for method = {method!r}; allowed keys: {', '.join(allowed)}",
             )
+    _check_options(cls, options)
     try:
-        return cls(**options)
+        # Unset fields keep optimize()'s defaults (METHODS): a reduced model, not the scene's.
+        return replace(DEFAULTS[method].default, **options)
     except (TypeError, ValueError) as error:
         raise _fail("optimizer", f": {error}") from None
 
 
-def _grid(table: dict) -> tuple[tuple[str, ...], list[dict]]:
+def _kind(value: Any) -> str | None:
+    """What a swept value is, or None if it cannot be a coordinate of the Dataset."""
+    if isinstance(value, bool):
+        return "boolean"
+    if isinstance(value, numbers.Real):
+        return "number"
+    if isinstance(value, str):
+        return "string"
+    if isinstance(value, list) and value and all(_is_number(v) for v in value):
+        return "vector"
+    return None
+
+
+def _grid(table: dict) -> tuple[tuple[str, ...], list[dict], list[dict]]:
+    """The full factorial: swept keys, each case's overrides and each case's grid positions."""
     for key, values in table.items():
         if not isinstance(values, list) or not values:
             raise _fail(f"grid.{key}", f": expected a non-empty list of values, got {values!r}")
+        kinds = set()
+        for position, value in enumerate(values):
+            kind = _kind(value)
+            if kind is None:
+                raise _fail(
+                    f"grid.{key}[{position}]",
+                    f" = {value!r:.60}: a swept value must be a number, a string, a boolean or "
+                    "a list of numbers (it becomes a coordinate of sweep.nc); sweep the fields "
+                    'of a table one by one, e.g. "top.tow.surge_speed"',
+                )
+            if kind == "number" and not math.isfinite(value):
+                raise _fail(f"grid.{key}[{position}]", f" = {value!r}: must be finite")
+            kinds.add(kind)
+        if len(kinds) > 1:
+            raise _fail(
+                f"grid.{key}",
+                f": values of one key must be of one kind, got {', '.join(sorted(kinds))}",
+            )
     keys = tuple(table)
     count = math.prod(len(v) for v in table.values())
     if count > MAX_CASES:
         raise _fail("grid", f": {count} cases; at most {MAX_CASES}")
-    combos = itertools.product(*(table[k] for k in keys))
-    return keys, [dict(zip(keys, combo, strict=True)) for combo in combos]
+    combos = itertools.product(*(range(len(table[k])) for k in keys))
+    positions = [dict(zip(keys, combo, strict=True)) for combo in combos]
+    overrides = [{k: table[k][p] for k, p in case.items()} for case in positions]
+    return keys, overrides, positions
 
 
 def _is_number(value: Any) -> bool:
@@ -257,13 +343,12 @@ def _base_value(scene: Scene, key: str) -> Any:
     return None if isinstance(node, bool) else node
 
 
-def _blame(error: SceneError, case: int, overrides: dict, design: str, grid: dict) -> str:
-    """Name the sweep file key behind a scene error of one case."""
+def _blame(error: SceneError, case: int, overrides: dict, positions: dict | None) -> str:
+    """Name the sweep file key behind a scene error of one case (``positions``: in the grid)."""
     for key, value in overrides.items():
         if error.path == key or error.path.startswith((key + ".", key + "[")):
-            if design == "grid":
-                position = next(k for k, v in enumerate(grid[key]) if v == value)
-                return f"grid.{key}[{position}] = {value!r} (case {case}): {error}"
+            if positions is not None:
+                return f"grid.{key}[{positions[key]}] = {value!r} (case {case}): {error}"
             return f"sample.ranges.{key}: drawn value {value!r} (case {case}): {error}"
     return f"case {case} with {json.dumps(overrides)}: {error}"
 
@@ -303,7 +388,7 @@ def load_sweep(path: str | Path) -> SweepSpec:
     Parameters
     ----------
     path : path-like
-        The sweep TOML file.
+        The sweep TOML file, or the name of a bundled example (:func:`bundled_sweeps`).
 
     Returns
     -------
@@ -314,15 +399,22 @@ def load_sweep(path: str | Path) -> SweepSpec:
     ValueError
         Naming the sweep file key (and case) at fault, before any case runs.
     """
-    path = Path(path).resolve()
+    path = _find_sweep(Path(path))
     try:
-        text = path.read_text()
+        text = path.read_text(encoding="utf-8")
     except OSError as error:
         raise ValueError(f"sweep file {path}: cannot be read: {error}") from None
+    except UnicodeDecodeError as error:
+        raise ValueError(
+            f"sweep file {path}: not a text file (TOML must be UTF-8: byte {error.start} is "
+            f"{error.object[error.start : error.start + 1]!r})"
+        ) from None
     try:
         data = tomllib.loads(text)
     except tomllib.TOMLDecodeError as error:
         raise ValueError(f"sweep file {path}: invalid TOML: {error}") from None
+    except RecursionError:
+        raise ValueError(f"sweep file {path}: invalid TOML: nested too deeply") from None
     for key in data:
         if key not in TOP_KEYS:
             raise _fail(key, f": unknown key; allowed keys: {', '.join(TOP_KEYS)}")
@@ -345,9 +437,10 @@ def load_sweep(path: str | Path) -> SweepSpec:
     grid, sample = _table(data, "grid"), _table(data, "sample")
     if grid and sample:
         raise _fail("sample", ": give either [grid] or [sample], not both")
+    positions: list = []
     if grid:
         design = "grid"
-        swept, overrides = _grid(grid)
+        swept, overrides, positions = _grid(grid)
     elif sample:
         design, swept, overrides = _sample(sample, base)
     else:
@@ -357,9 +450,14 @@ def load_sweep(path: str | Path) -> SweepSpec:
         try:
             scene = base.updated(case)
         except SceneError as error:
-            raise ValueError(_blame(error, index, case, design, grid)) from None
+            where = positions[index] if positions else None
+            raise ValueError(_blame(error, index, case, where)) from None
         _check_intervals(scene, settings, index)
         cases.append(Case(index, case, scene, fingerprint(scene, task, method, settings)))
+    for key, values in grid.items():
+        lengths = sorted({len(v) for v in values if isinstance(v, list)})
+        if len(lengths) > 1:  # one coordinate per component needs one length
+            raise _fail(f"grid.{key}", f": vectors of {lengths} numbers; give one length")
     return SweepSpec(
         path=path,
         scene_path=scene_path,

@@ -2,10 +2,18 @@
 
 Layout of ``DIR``::
 
+    DIR/.cable_ocp-results    the marker of a results folder (cable_ocp.scene.output.MARKER)
+    DIR/.sweep.lock           held by the sweep running here; names its owner
     DIR/sweep.json            the manifest: sweep file, and each case's overrides and fingerprint
     DIR/sweep.toml            a copy of the sweep file
     DIR/cases/case_00007.nc   case 7, written atomically (temporary file + rename) as it finishes
     DIR/sweep.nc              all cases in one xarray Dataset (assembled from the case files)
+
+A folder is a sweep folder only with the marker: a folder of the user's, even one holding a
+``sweep.json``, is refused and left untouched. Every file is written by the process that runs
+the sweep, without Dask's help, so a lost scheduler cannot lose a finished case; files get the
+folder's permissions (without execute bits). Scratch files (``.NAME.XXXXXXXX.tmp``) that a killed
+run left behind are removed by the next run.
 
 The Dataset has dimensions ``case`` and ``time``. Each swept key is a coordinate along ``case``
 named by its dotted key (``"top.tow.surge_speed"``); a vector is one coordinate per component,
@@ -20,7 +28,10 @@ from __future__ import annotations
 
 import json
 import os
-import tempfile
+import socket
+import time
+from collections.abc import Iterator
+from contextlib import contextmanager
 from dataclasses import asdict
 from pathlib import Path
 from typing import Any
@@ -28,12 +39,22 @@ from typing import Any
 import numpy as np
 import xarray as xr
 
+from cable_ocp.scene.output import MARKER, check_target, file_mode, write_atomic
 from cable_ocp.sweep.execute import SERIES
 from cable_ocp.sweep.spec import Case, SweepSpec
+
+try:
+    import fcntl
+except ModuleNotFoundError:  # Windows: no lock, one sweep per folder is then the user's care
+    fcntl = None
 
 SCALARS = ("omega", "wall_time")
 OPTIMIZE_SCALARS = ("omega_model", "iterations", "evaluations")
 TEXT = ("status", "reason")
+LOCK = ".sweep.lock"
+# What a sweep writes in its folder: a folder holding anything else is not a sweep's.
+SWEEP_NAMES = {MARKER, LOCK, "sweep.json", "sweep.toml", "cases", "sweep.nc"}
+RECOVER = "rerun the same command with --retry-failed to compute it again"
 TIME_DECIMALS = 9  # output times rounded to 1 ns so equal times of different cases coincide
 UNITS = {
     "omega": "m", "wall_time": "s", "omega_model": "m", "winch_angle": "rad", "end_x": "m",
@@ -47,14 +68,23 @@ def case_path(folder: Path, index: int) -> Path:
 
 
 def _atomic_netcdf(dataset: xr.Dataset, target: Path) -> None:
+    """Write ``dataset`` to ``target`` through a scratch file, without any Dask scheduler.
+
+    xarray takes its write lock through the current Dask scheduler; with a distributed client
+    that is the scheduler, which a sweep must outlive. The synchronous scheduler keeps the lock
+    in this process.
+    """
+    import dask
+
     target.parent.mkdir(parents=True, exist_ok=True)
-    handle, scratch = tempfile.mkstemp(prefix=f".{target.name}.", dir=target.parent)
-    os.close(handle)
+    scratch = target.parent / f".{target.name}.{os.urandom(4).hex()}.tmp"
     try:
-        dataset.to_netcdf(scratch)
+        with dask.config.set(scheduler="synchronous"):
+            dataset.to_netcdf(scratch)
+        os.chmod(scratch, file_mode(target.parent))
         os.replace(scratch, target)
     except BaseException:
-        Path(scratch).unlink(missing_ok=True)
+        scratch.unlink(missing_ok=True)
         raise
 
 
@@ -62,9 +92,9 @@ def write_case(folder: Path, case: Case, record: dict[str, Any]) -> Path:
     """Save one case's record (from :func:`~cable_ocp.sweep.execute.run_case`) atomically."""
     data: dict[str, Any] = {}
     if "time" in record:
-        time = np.round(record["time"], TIME_DECIMALS)
+        time_ = np.round(record["time"], TIME_DECIMALS)
         data.update({name: ("time", record[name]) for name in SERIES})
-        coords = {"time": time}
+        coords = {"time": time_}
     else:
         coords = {}
     for name in (*SCALARS, *OPTIMIZE_SCALARS, "solver_status", *TEXT, "success"):
@@ -81,9 +111,29 @@ def write_case(folder: Path, case: Case, record: dict[str, Any]) -> Path:
 
 
 def read_case(path: Path) -> xr.Dataset:
-    """A case file, loaded into memory (the file is closed)."""
-    with xr.open_dataset(path) as dataset:
-        return dataset.load()
+    """A case file, loaded into memory (the file is closed).
+
+    Raises
+    ------
+    ValueError
+        Naming the file, if it is empty, truncated or not a case file, and how to recover.
+    """
+    try:
+        with xr.open_dataset(path) as dataset:
+            dataset = dataset.load()
+        if "status" not in dataset or "fingerprint" not in dataset.attrs:
+            raise ValueError("no status or fingerprint")
+    except (OSError, ValueError, KeyError, TypeError, RuntimeError) as error:
+        detail = "empty file" if _size(path) == 0 else " ".join(str(error).split())[:120]
+        raise ValueError(f"{path}: damaged case file ({detail}): {RECOVER}") from None
+    return dataset
+
+
+def _size(path: Path) -> int:
+    try:
+        return path.stat().st_size
+    except OSError:
+        return -1
 
 
 def _manifest(spec: SweepSpec) -> dict[str, Any]:
@@ -95,69 +145,187 @@ def _manifest(spec: SweepSpec) -> dict[str, Any]:
     }
 
 
-def claim_folder(folder: Path, spec: SweepSpec) -> None:
-    """Make ``folder`` this sweep's, or refuse one that holds anything else.
+def read_manifest(path: Path) -> dict[str, Any]:
+    """A sweep folder's ``sweep.json``, checked.
 
     Raises
     ------
     ValueError
-        ``folder`` is not empty and not a sweep folder, or belongs to another sweep (other cases,
-        or the same overrides on a changed scene file or other optimiser settings).
+        Naming the file and how to recover, if it is unreadable or not a manifest.
+    """
+    try:
+        held = json.loads(path.read_text(encoding="utf-8"))
+        cases = held["cases"] if isinstance(held, dict) else None
+        if not isinstance(cases, list):
+            raise ValueError("no list of cases")
+        for case in cases:
+            if not (isinstance(case, dict) and isinstance(case.get("overrides"), dict)
+                    and isinstance(case.get("fingerprint"), str)):  # fmt: skip
+                raise ValueError("a case without overrides or fingerprint")
+    except (OSError, ValueError, RecursionError) as error:
+        detail = " ".join(str(error).split())[:120] or type(error).__name__
+        raise ValueError(
+            f"{path}: damaged sweep manifest ({detail}): delete it and rerun the same command "
+            "(the case files are kept, each checked against this sweep)"
+        ) from None
+    return held
+
+
+def check_folder(folder: Path, spec: SweepSpec) -> None:
+    """Refuse a ``--out`` that is not a new, empty or this sweep's folder; write nothing.
+
+    Raises
+    ------
+    ValueError
+        Naming the folder and why: a user's folder (no marker, with or without a
+        ``sweep.json``), another command's results, another sweep's, a damaged manifest, an
+        unwritable folder; see also :func:`~cable_ocp.scene.output.check_target`.
     """
     folder = Path(folder)
-    manifest_path = folder / "sweep.json"
-    wanted = _manifest(spec)
-    if manifest_path.is_file():
-        held = json.loads(manifest_path.read_text())
-        mine, theirs = wanted["cases"], held.get("cases", [])
-        advice = f"choose another --out or delete {folder} to start over"
-        if len(mine) != len(theirs):
+    names = {p.name for p in folder.iterdir()} if folder.is_dir() else set()
+    if names - {LOCK} and MARKER not in names:
+        older = (
+            f" (if an older cable-ocp wrote it, add an empty file {folder / MARKER} to resume it)"
+            if {"sweep.json", "cases"} <= names
+            else ""
+        )
+        raise ValueError(
+            f"--out {folder} is not empty and holds no sweep of cable-ocp (no {MARKER} "
+            f"marker){older}: give a new or empty folder; nothing was written"
+        )
+    if names - {LOCK} or not names:  # (a lock alone: a sweep that is claiming it)
+        check_target(folder)
+    if not names - {LOCK, MARKER}:
+        return
+    if not os.access(folder, os.W_OK | os.X_OK):
+        raise ValueError(f"--out {folder}: the folder is not writable; nothing was written")
+    if "sweep.json" not in names:
+        if names - SWEEP_NAMES:
             raise ValueError(
-                f"--out {folder} belongs to another sweep ({held.get('sweep_file')}, "
-                f"{len(theirs)} cases; this one has {len(mine)}): {advice}"
+                f"--out {folder} holds the results of another cable-ocp command, not a sweep: "
+                "give a new or empty folder"
             )
-        for index, (a, b) in enumerate(zip(mine, theirs, strict=True)):
-            if a["overrides"] != b["overrides"]:
-                raise ValueError(
-                    f"--out {folder} belongs to another sweep ({held.get('sweep_file')}): its "
-                    f"case {index} is {json.dumps(b['overrides'])}, this sweep's is "
-                    f"{json.dumps(a['overrides'])}: {advice}"
-                )
-            if a["fingerprint"] != b["fingerprint"]:
-                raise ValueError(
-                    f"--out {folder} was made by this sweep with another scene file content, "
-                    f"[set] or optimiser settings (case {index} differs): {advice}"
-                )
-    elif folder.exists() and any(folder.iterdir()):
-        raise ValueError(f"--out {folder} is not empty and holds no sweep (no sweep.json)")
+        return  # a sweep folder whose manifest was deleted to recover: rebuilt
+    held = read_manifest(folder / "sweep.json")
+    mine, theirs = _manifest(spec)["cases"], held["cases"]
+    advice = f"choose another --out or delete {folder} to start over"
+    if len(mine) != len(theirs):
+        raise ValueError(
+            f"--out {folder} belongs to another sweep ({held.get('sweep_file')}, "
+            f"{len(theirs)} cases; this one has {len(mine)}): {advice}"
+        )
+    for index, (a, b) in enumerate(zip(mine, theirs, strict=True)):
+        if a["overrides"] != b["overrides"]:
+            raise ValueError(
+                f"--out {folder} belongs to another sweep ({held.get('sweep_file')}): its "
+                f"case {index} is {json.dumps(b['overrides'])}, this sweep's is "
+                f"{json.dumps(a['overrides'])}: {advice}"
+            )
+        if a["fingerprint"] != b["fingerprint"]:
+            raise ValueError(
+                f"--out {folder} was made by this sweep with another scene file content, "
+                f"[set] or optimiser settings (case {index} differs): {advice}"
+            )
+
+
+def mark_folder(folder: Path) -> None:
+    """Create ``folder`` (if new) with the marker of a results folder (if it has none)."""
+    folder = Path(folder)
     folder.mkdir(parents=True, exist_ok=True)
+    if not (folder / MARKER).is_file():
+        write_atomic(folder / MARKER, "A cable-ocp sweep folder: rerun its sweep to resume.\n")
+
+
+def claim_folder(folder: Path, spec: SweepSpec) -> None:
+    """Make ``folder`` this sweep's (marker, manifest, copy of the sweep file), or refuse it.
+
+    Every file is replaced atomically, so a reader never sees a part of one. Call it holding
+    :func:`folder_lock`, as :func:`~cable_ocp.sweep.runner.run_sweep` does.
+
+    Raises
+    ------
+    ValueError
+        As :func:`check_folder`.
+    """
+    folder = Path(folder)
+    check_folder(folder, spec)
+    mark_folder(folder)
     (folder / "cases").mkdir(exist_ok=True)
-    manifest_path.write_text(json.dumps(wanted, indent=1))
-    (folder / "sweep.toml").write_text(spec.text)
+    write_atomic(folder / "sweep.json", json.dumps(_manifest(spec), indent=1))
+    write_atomic(folder / "sweep.toml", spec.text)
 
 
-def finished_cases(folder: Path, spec: SweepSpec) -> set[int]:
-    """Indices of the cases whose file is present (ok or failed) and made by this sweep.
+def remove_scratch(folder: Path) -> list[Path]:
+    """Remove the scratch files a killed run left in a sweep folder; return them."""
+    folder = Path(folder)
+    stale = [*folder.glob(".*.tmp"), *(folder / "cases").glob(".case_*")]
+    for path in stale:
+        if path.is_file() and not path.is_symlink():
+            path.unlink(missing_ok=True)
+    return stale
+
+
+@contextmanager
+def folder_lock(folder: Path, what: str = "") -> Iterator[None]:
+    """Hold ``folder/.sweep.lock`` for the block; refuse a folder another sweep holds.
+
+    The lock is the operating system's (``flock``), so it is released when its owner ends, in
+    whatever way; the file names the owner (host, process, start, ``what``) for the message.
+
+    Raises
+    ------
+    ValueError
+        Naming the folder and the owner, if another process holds the lock.
+    """
+    folder = Path(folder)
+    folder.mkdir(parents=True, exist_ok=True)
+    path = folder / LOCK
+    handle = os.open(path, os.O_RDWR | os.O_CREAT, file_mode(folder))
+    try:
+        if fcntl is not None:
+            try:
+                fcntl.flock(handle, fcntl.LOCK_EX | fcntl.LOCK_NB)
+            except OSError:
+                owner = os.pread(handle, 1000, 0).decode(errors="replace").strip() or "unknown"
+                raise ValueError(
+                    f"--out {folder} is in use by another sweep ({owner}): wait for it to end, "
+                    "or give another --out"
+                ) from None
+        started = time.strftime("%Y-%m-%d %H:%M:%S")
+        owner = f"pid {os.getpid()} on {socket.gethostname()} since {started}"
+        os.ftruncate(handle, 0)
+        os.pwrite(handle, f"{owner}{', ' + what if what else ''}\n".encode(), 0)
+        yield
+    finally:
+        os.close(handle)  # releases the lock
+
+
+def case_statuses(folder: Path, spec: SweepSpec) -> dict[int, str]:
+    """Status of each case whose file is present: ``"ok"``, ``"failed"`` or ``"damaged"``.
 
     Raises
     ------
     ValueError
         A case file whose fingerprint is not its case's (a foreign or stale file).
     """
-    done = set()
+    statuses = {}
     for case in spec.cases:
         path = case_path(folder, case.index)
         if not path.is_file():
             continue
-        with xr.open_dataset(path) as dataset:
-            stored = dataset.attrs.get("fingerprint")
+        try:
+            dataset = read_case(path)
+        except ValueError:
+            statuses[case.index] = "damaged"
+            continue
+        stored = dataset.attrs.get("fingerprint")
         if stored != case.fingerprint:
             raise ValueError(
                 f"{path} was made by another sweep (fingerprint {stored}, expected "
                 f"{case.fingerprint}): delete it or choose another --out"
             )
-        done.add(case.index)
-    return done
+        statuses[case.index] = "ok" if str(dataset["status"].values) == "ok" else "failed"
+    return statuses
 
 
 def _coordinates(spec: SweepSpec) -> dict[str, tuple[str, np.ndarray]]:
