@@ -79,9 +79,19 @@ def _simulate(args) -> int:
     return 0
 
 
+def _given(args, names: tuple[str, ...]) -> dict:
+    """The options among ``names`` given on the command line (the others are None)."""
+    return {name: getattr(args, name) for name in names if getattr(args, name) is not None}
+
+
 def _ipopt_settings(args):
-    """IPOPT settings from the options; ``--hessian exact`` needs the interpreted model."""
-    from cable_ocp.control.ocp import IpoptSettings
+    """IPOPT settings: optimize()'s defaults (``METHODS``) with the options given.
+
+    ``--hessian exact`` needs the interpreted model.
+    """
+    from dataclasses import replace
+
+    from cable_ocp.control.optimization import METHODS
 
     exact = args.hessian == "exact"
     if exact and not args.quiet:
@@ -90,24 +100,19 @@ def _ipopt_settings(args):
             "(compiled = False): the compiled step carries no second derivatives",
             file=sys.stderr,
         )
-    return IpoptSettings(
-        elements=args.elements,
-        step=args.step,
-        intervals=args.intervals,
-        shooting=args.shooting,
-        control=args.control,
-        hessian=args.hessian,
-        max_iter=args.max_iter,
-        compiled=not exact,
-    )
+    names = ("elements", "step", "intervals", "shooting", "control", "hessian", "max_iter")
+    given = _given(args, names) | ({"compiled": False} if exact else {})
+    return replace(METHODS["ipopt"].default, **given)
 
 
 def _nelder_mead_settings(args):
-    from cable_ocp.control.nelder_mead import NelderMeadSettings
+    """Nelder-Mead settings: optimize()'s defaults (``METHODS``) with the options given."""
+    from dataclasses import replace
 
-    return NelderMeadSettings(
-        elements=args.elements, step=args.step, max_evaluations=args.max_evaluations
-    )
+    from cable_ocp.control.optimization import METHODS
+
+    given = _given(args, ("elements", "step", "max_evaluations"))
+    return replace(METHODS["nelder-mead"].default, **given)
 
 
 def _optimize(args) -> int:
@@ -236,33 +241,30 @@ def _knots(text: str) -> list[float]:
 
 
 def _add_optimiser_options(parser) -> None:
+    # No defaults here: unset options keep optimize()'s (cable_ocp.control.optimization.METHODS).
     parser.add_argument(
         "--elements",
         type=_integer(1, 1000),
-        default=3,
-        help="elements of the optimisation model (verification uses the scene's)",
+        help="elements of the optimisation model (default: optimize()'s reduced model; "
+        "verification uses the scene's)",
     )
     parser.add_argument(
-        "--step", type=_positive, default=0.5, help="RK4 step of the optimisation [s]"
+        "--step", type=_positive, help="RK4 step of the optimisation [s] (default: optimize()'s)"
     )
-    parser.add_argument("--intervals", type=_integer(1, 100_000), default=42,
-                        help="shooting intervals (IPOPT)")  # fmt: skip
+    parser.add_argument("--intervals", type=_integer(1, 100_000), help="shooting intervals (IPOPT)")
     parser.add_argument(
         "--shooting",
         choices=["single", "multiple"],
-        default="single",
         help="IPOPT: only the winch parameters as variables (single) or the interval states too",
     )
-    parser.add_argument("--control", choices=["hermite", "spline"], default="hermite")
+    parser.add_argument("--control", choices=["hermite", "spline"])
     parser.add_argument(
         "--hessian",
         choices=["limited-memory", "exact"],
-        default="limited-memory",
         help="exact: second derivatives, on the interpreted (not compiled) model",
     )
-    parser.add_argument("--max-iter", type=_integer(1, 10**6), default=300, help="IPOPT iterations")
-    parser.add_argument("--max-evaluations", type=_integer(1, 10**8), default=3000,
-                        help="Nelder-Mead runs")  # fmt: skip
+    parser.add_argument("--max-iter", type=_integer(1, 10**6), help="IPOPT iterations")
+    parser.add_argument("--max-evaluations", type=_integer(1, 10**8), help="Nelder-Mead runs")
     parser.add_argument("--set", action="append", default=[], metavar="KEY=VALUE")
     talk = parser.add_mutually_exclusive_group()
     talk.add_argument("--quiet", action="store_true", help="print nothing while solving")

@@ -2,9 +2,22 @@
 
 from __future__ import annotations
 
+import argparse
 import json
+import math
 import sys
 from pathlib import Path
+
+
+def _weight(text: str) -> float:
+    """An argparse type: a finite number >= 0 (a weight of the objective)."""
+    try:
+        value = float(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected a number, got {text!r:.40}") from None
+    if not (math.isfinite(value) and value >= 0):
+        raise argparse.ArgumentTypeError(f"{text!r:.40} is out of range: must be finite and >= 0")
+    return value
 
 
 def add_mpc_command(subparsers) -> None:
@@ -35,7 +48,7 @@ def add_mpc_command(subparsers) -> None:
         "--heave-margin", type=float, default=1.0, help="room kept for the heave feedback, 0..1"
     )
     parser.add_argument(
-        "--rate-weight", type=float, default=1e-4, help="pay-out speed weight [s^2]"
+        "--rate-weight", type=_weight, default=1e-4, help="pay-out speed weight [s^2]"
     )
     parser.add_argument("--max-iter", type=int, default=100, help="IPOPT iterations per solve")
     parser.add_argument(

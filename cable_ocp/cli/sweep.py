@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import argparse
+import math
 import sys
 from pathlib import Path
 from typing import TYPE_CHECKING
@@ -12,7 +13,8 @@ import numpy as np
 if TYPE_CHECKING:
     from cable_ocp.sweep.runner import SweepReport
 
-# Exit codes: 0 every case ok, 3 some case failed or did not run (as a failed optimize), 130 Ctrl-C.
+# Exit codes: 0 every case ok, 3 some case failed or did not run (as a failed optimize) or the
+# engine was lost, 130 Ctrl-C; bad input (the sweep file, --out, --workers) is 2 as elsewhere.
 FAILED_EXIT, INTERRUPTED_EXIT = 3, 130
 MAX_ROWS = 50  # beyond this many cases the table lists the cases that are not ok only
 
@@ -26,10 +28,23 @@ def add_sweep_command(commands) -> argparse.ArgumentParser:
         "models/sweeps/) on a Dask LocalCluster or an existing scheduler. Every finished case "
         "is saved in DIR/cases at once; a rerun skips them. All cases end up in DIR/sweep.nc.",
     )
-    sweep.add_argument("sweep", type=Path, help="the sweep TOML file")
+    sweep.add_argument(
+        "sweep", type=Path, help="the sweep TOML file, or the name of a bundled example"
+    )
     sweep.add_argument("--out", type=Path, required=True, help="sweep folder (resumed if present)")
     sweep.add_argument("--scheduler", help="address of a running Dask scheduler, e.g. tcp://h:8786")
-    sweep.add_argument("--workers", type=int, help="LocalCluster workers (default: one per core)")
+    sweep.add_argument(
+        "--workers",
+        type=int,
+        help="LocalCluster workers, at most one per core (default: one per core)",
+    )
+    sweep.add_argument(
+        "--engine-timeout",
+        type=float,
+        metavar="SECONDS",
+        help="stop (resumable) after this long without a Dask worker or scheduler "
+        "(default: cable_ocp.sweep.runner.ENGINE_TIMEOUT)",
+    )
     sweep.add_argument("--retry-failed", action="store_true", help="rerun cases saved as failed")
     sweep.add_argument("--quiet", action="store_true", help="no progress bar")
     sweep.set_defaults(run=run_sweep_command)
@@ -65,12 +80,18 @@ def summary(report: SweepReport) -> str:
 
 
 def run_sweep_command(args: argparse.Namespace) -> int:
-    """Run ``cable-ocp sweep``; 0 when every case is ok, 3 otherwise, 130 after Ctrl-C."""
-    from cable_ocp.sweep.runner import run_sweep  # Dask and xarray load only for a sweep
+    """Run ``cable-ocp sweep``; 0 when every case is ok, 3 otherwise, 130 after Ctrl-C.
+
+    3: a case failed or did not run, or the engine was lost (one line says how to resume).
+    """
+    # Dask and xarray load only for a sweep.
+    from cable_ocp.sweep.runner import check_engine, run_sweep
     from cable_ocp.sweep.spec import load_sweep
 
-    if args.workers is not None and args.workers < 1:
-        raise ValueError(f"--workers {args.workers}: must be >= 1")
+    check_engine(args.scheduler, args.workers)
+    timeout = args.engine_timeout
+    if timeout is not None and not (math.isfinite(timeout) and timeout > 0):
+        raise ValueError(f"--engine-timeout {timeout}: must be finite and > 0 s")
     spec = load_sweep(args.sweep)
     report = run_sweep(
         spec,
@@ -79,9 +100,19 @@ def run_sweep_command(args: argparse.Namespace) -> int:
         workers=args.workers,
         quiet=args.quiet,
         retry_failed=args.retry_failed,
+        **({} if timeout is None else {"engine_timeout": timeout}),
     )
     print(summary(report))
     print(f"results written to {report.path}")
+    if report.engine_lost:
+        saved = int((report.dataset["status"] != "not run").sum())
+        print(
+            f"cable-ocp sweep: the Dask engine was lost ({report.engine_lost}); {saved} of "
+            f"{report.dataset.sizes['case']} cases are saved: start the engine again and rerun "
+            "the same command to resume",
+            file=sys.stderr,
+        )
+        return FAILED_EXIT
     if report.interrupted:
         print("cable-ocp sweep: interrupted; rerun the same command to resume", file=sys.stderr)
         return INTERRUPTED_EXIT

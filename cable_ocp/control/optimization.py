@@ -120,28 +120,30 @@ class OcpResult:
         ValueError
             Naming the file, if a file of the result is missing, truncated or garbled.
         """
+        import typing
+
+        from cable_ocp.scene.records import control_parameters, parse_json, record_fields
+
         folder = Path(folder)
+        hints = typing.get_type_hints(cls)  # each field of result.json checked against its type
+        saved = [f.name for f in fields(cls) if f.name not in ("parameters", "trajectory")]
+        types = {name: hints[name] for name in saved}
         path = folder / "result.json"
         try:
-            meta = json.loads(path.read_text())
-            names = {f.name for f in fields(cls)} - {"parameters", "trajectory"}
-            if not isinstance(meta, dict) or not names - _OPTIONAL_FIELDS <= set(meta) <= names:
-                raise ValueError(f"fields {sorted(meta) if isinstance(meta, dict) else meta!r}")
-            meta = {k: _from_json(k, v) for k, v in meta.items()}
+            meta = record_fields(parse_json(path.read_text()), types, _OPTIONAL_FIELDS)
+            if meta["method"] not in METHODS:
+                raise ValueError(f"method = {meta['method']!r:.40}: not {' or '.join(METHODS)}")
             path = folder / "result.npz"
             with np.load(path) as data:
                 parameters = np.asarray(data["parameters"], dtype=float)
-            path, trajectory = folder / "trajectory.npz", None
-            if path.exists():
-                try:
-                    trajectory = Trajectory.load(folder / "trajectory")
-                except json.JSONDecodeError:
-                    path = folder / "trajectory.json"
-                    raise
+            control_parameters(parameters, meta["control"])
         except (OSError, ValueError, KeyError, TypeError, zipfile.BadZipFile, EOFError) as error:
             raise ValueError(
                 f"{path}: not a readable optimisation result ({type(error).__name__}: {error})"
-            ) from error
+            ) from None
+        trajectory = None
+        if (folder / "trajectory.npz").exists() or (folder / "trajectory.json").exists():
+            trajectory = Trajectory.load(folder / "trajectory")  # a ValueError naming its file
         return cls(parameters=parameters, trajectory=trajectory, **meta)
 
 

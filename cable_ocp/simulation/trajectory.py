@@ -119,7 +119,7 @@ class Trajectory:
             ) from None
         try:
             meta = _meta_from_json(json.loads(meta_path.read_text()), arrays["states"].shape[1])
-        except (OSError, ValueError) as error:
+        except (OSError, ValueError, RecursionError) as error:  # RecursionError: nested too deeply
             raise ValueError(
                 f"{meta_path}: not a readable trajectory ({type(error).__name__}: {error})"
             ) from None
