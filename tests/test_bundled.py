@@ -53,6 +53,6 @@ def test_pyproject_lists_every_subpackage_and_ships_the_data():
     found = {".".join(init.parent.relative_to(ROOT).parts) for init in inits}
     assert found | {"cable_ocp.models"} == set(setuptools["packages"])
     assert setuptools["package-dir"] == {"cable_ocp.models": "models"}
-    assert setuptools["package-data"]["cable_ocp.models"] == ["*.toml"]
+    assert setuptools["package-data"]["cable_ocp.models"] == ["*.toml", "sweeps/*.toml"]
     for pattern in setuptools["package-data"]["cable_ocp"]:
         assert list((ROOT / "cable_ocp").glob(pattern)), pattern

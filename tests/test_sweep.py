@@ -118,6 +118,17 @@ def test_uniform_sample_stays_in_range(tmp_path):
          "sample.design = 'sobol': must be one of latin-hypercube, uniform"),
         ('[grid]\n"top.tow.surge_speed" = [1.0]\n[sample]\nn = 2', "sample: give either [grid] or"),
         ('[optimizer]\nelements = 3', "optimizer: only allowed with task = 'optimize'"),
+        ('[grid]\n"top.tow.surge_speed" = [1.0, nan]',
+         "grid.top.tow.surge_speed[1] = nan: must be finite"),
+        ('[grid]\n"top.tow.surge_speed" = [1.0, inf]',
+         "grid.top.tow.surge_speed[1] = inf: must be finite"),
+        ('[grid]\n"top.tow" = [{surge_speed = 1.0}]',
+         "grid.top.tow[0] = {'surge_speed': 1.0}: a swept value must be a number, a string"),
+        ('[grid]\n"seabed.hills" = [[{position = 1.0}]]', "grid.seabed.hills[0] = [{'position'"),
+        ('[grid]\n"top.tow.surge_speed" = [1.0, "fast"]',
+         "grid.top.tow.surge_speed: values of one key must be of one kind, got number, string"),
+        ('[grid]\n"top.tow.ramp_time" = [-1.0, 2.0, -1.0]',
+         "grid.top.tow.ramp_time[0] = -1.0 (case 0): top.tow.ramp_time = -1.0"),
     ],
 )  # fmt: skip
 def test_bad_sweep_file_names_the_key(tmp_path, body, message):
@@ -140,6 +151,16 @@ def test_bad_sweep_file_names_the_key(tmp_path, body, message):
          "optimizer.intervals = 7 (case 0): must divide the 160 RK4 steps"),
         ('scene = "hanging"\n[set]\n"model.elements" = 0',
          "set.model.elements: model.elements = 0 is out of range: must be >= 1"),
+        ('scene = "hanging"\ntask = "optimize"\n[optimizer]\nstep = "abc"',
+         "optimizer.step = 'abc': expected a finite number"),
+        ('scene = "hanging"\ntask = "optimize"\n[optimizer]\nelements = 2.5',
+         "optimizer.elements = 2.5: expected an integer"),
+        ('scene = "hanging"\ntask = "optimize"\n[optimizer]\nmax_iter = true',
+         "optimizer.max_iter = True: expected an integer"),
+        ('scene = "hanging"\ntask = "optimize"\n[optimizer]\ncompiled = 1',
+         "optimizer.compiled = 1: expected true or false"),
+        ('scene = "hanging"\ntask = "optimize"\nmethod = "nelder-mead"\n[optimizer]\nxatol = nan',
+         "optimizer.xatol = nan: expected a finite number"),
     ],
 )  # fmt: skip
 def test_bad_sweep_header_names_the_key(tmp_path, text, message):
@@ -342,3 +363,216 @@ def test_a_lost_task_is_recorded_and_retried(tmp_path, monkeypatch):
     again = run_sweep(spec, out, workers=1, quiet=True, processes=False, retry_failed=True)
     assert again.ran == [1] and again.skipped == [0]
     assert list(again.dataset["status"].values) == ["ok", "ok"]
+
+
+# --- issue 17: the sweep file, the folder, the defaults -----------------------------------------
+
+TWO = HEADER + '[grid]\n"top.tow.surge_speed" = [0.5, 1.0]\n'
+
+
+def sweep_cli(args, capsys) -> tuple[int, str, str]:
+    """``cable-ocp sweep ...`` in-process: (exit code, stdout, stderr)."""
+    from cable_ocp import cli
+
+    code = cli.main(["sweep", *map(str, args)])
+    out, err = capsys.readouterr()
+    return code, out, err
+
+
+def assert_one_line_exit_2(code, out, err, fragment):
+    assert code == 2, err
+    assert err.count("\n") == 1 and err.startswith("cable-ocp sweep: error: "), err
+    assert fragment in err and "Traceback" not in out + err
+
+
+def test_binary_sweep_file_is_named(tmp_path, capsys):
+    path = tmp_path / "binary.toml"
+    path.write_bytes(b"\x89PNG\r\n\x1a\n\x00\xff")
+    code, out, err = sweep_cli([path, "--out", tmp_path / "out"], capsys)
+    assert_one_line_exit_2(code, out, err, f"sweep file {path}: not a text file")
+    assert not (tmp_path / "out").exists()
+
+
+def test_bundled_example_sweeps_load_by_name():
+    from cable_ocp.scene.bundled import models_dir
+    from cable_ocp.sweep.spec import bundled_sweeps
+
+    assert set(bundled_sweeps()) >= {"tow_speeds", "ocp_sample"}
+    spec = load_sweep("tow_speeds")
+    assert spec.path == models_dir() / "sweeps" / "tow_speeds.toml"
+    assert spec.scene_path == models_dir() / "small_tow.toml" and len(spec.cases) == 6
+    with pytest.raises(ValueError, match="not found .nor a bundled example: ocp_sample"):
+        load_sweep("no_such_sweep")
+
+
+def test_sweep_defaults_are_the_methods_table(tmp_path, monkeypatch):
+    """No [optimizer]: optimize()'s settings (METHODS), not the scene's full model."""
+    from dataclasses import replace
+
+    from cable_ocp.control.optimization import METHODS
+
+    base = f'scene = "{MODELS / "small_tow.toml"}"\ntask = "optimize"\n'  # 21 s: 42 steps of 0.5 s
+    duration = '[set]\n"numerics.duration" = 21.0\n'
+    for method in ("ipopt", "nelder-mead"):
+        spec = load_sweep(write(tmp_path, base + f'method = "{method}"\n' + duration))
+        assert spec.settings == METHODS[method].default
+        assert spec.settings.elements is not None  # a reduced model, as on the command line
+        options = f'method = "{method}"\n[optimizer]\nelements = 4\n' + duration
+        spec = load_sweep(write(tmp_path, base + options))
+        assert spec.settings == replace(METHODS[method].default, elements=4)
+    # One place: a changed default reaches the sweep.
+    monkeypatch.setitem(
+        METHODS,
+        "ipopt",
+        replace(
+            METHODS["ipopt"], default=replace(METHODS["ipopt"].default, elements=2)
+        ),  # fmt: skip
+    )
+    assert load_sweep(write(tmp_path, base + duration)).settings.elements == 2
+
+
+@pytest.mark.parametrize("content", ["[1, 2]", "copied"])
+def test_a_user_folder_with_a_sweep_json_is_refused_and_untouched(tmp_path, capsys, content):
+    sweep = write(tmp_path, TWO)
+    folder = tmp_path / "mine"
+    folder.mkdir()
+    if content == "copied":  # a copy of a real manifest, beside the user's own sweep.toml
+        run_sweep(load_sweep(sweep), tmp_path / "real", workers=1, quiet=True, processes=False)
+        (folder / "sweep.json").write_bytes((tmp_path / "real" / "sweep.json").read_bytes())
+    else:
+        (folder / "sweep.json").write_text(content)
+    (folder / "sweep.toml").write_text("# my notes\n")
+    before = {p.name: p.read_bytes() for p in folder.iterdir()}
+    code, out, err = sweep_cli([sweep, "--out", folder, "--workers", "1", "--quiet"], capsys)
+    assert_one_line_exit_2(code, out, err, "holds no sweep of cable-ocp (no .cable_ocp-results")
+    assert {p.name: p.read_bytes() for p in folder.iterdir()} == before
+
+
+def test_another_commands_results_folder_is_refused(tmp_path):
+    folder = tmp_path / "res"
+    folder.mkdir()
+    (folder / ".cable_ocp-results").write_text("")
+    (folder / "summary.json").write_text("{}")
+    with pytest.raises(ValueError, match="holds the results of another cable-ocp command"):
+        run_sweep(load_sweep(write(tmp_path, TWO)), folder, quiet=True, processes=False)
+    assert sorted(p.name for p in folder.iterdir()) == [".cable_ocp-results", "summary.json"]
+
+
+@pytest.fixture
+def two_done(tmp_path):
+    """A finished 2-case sweep: (spec, folder)."""
+    spec = load_sweep(write(tmp_path, TWO))
+    run_sweep(spec, tmp_path / "out", workers=1, quiet=True, processes=False)
+    return spec, tmp_path / "out"
+
+
+@pytest.mark.parametrize("damage", ["empty", "truncated"])
+def test_a_damaged_case_file_is_named_and_retry_failed_recomputes_it(two_done, damage):
+    spec, out = two_done
+    path = case_path(out, 1)
+    good = open_sweep(out)["omega"].values[1]
+    path.write_bytes(b"" if damage == "empty" else path.read_bytes()[:500])
+    with pytest.raises(ValueError) as error:
+        run_sweep(spec, out, workers=1, quiet=True, processes=False)
+    message = str(error.value)
+    assert message.startswith(f"{path}: damaged case file (") and "--retry-failed" in message
+    assert ("empty file" in message) == (damage == "empty")
+    report = run_sweep(spec, out, workers=1, quiet=True, processes=False, retry_failed=True)
+    assert report.ran == [1] and report.skipped == [0] and report.all_ok
+    assert report.dataset["omega"].values[1] == good
+
+
+def test_a_damaged_manifest_is_named_and_deleting_it_recovers(two_done):
+    spec, out = two_done
+    stamps = {k: os.stat(case_path(out, k)).st_mtime_ns for k in (0, 1)}
+    for damage in ("", '{"cases": [1, 2]}', "[" * 100_000):
+        (out / "sweep.json").write_text(damage)
+        with pytest.raises(ValueError) as error:
+            run_sweep(spec, out, quiet=True, processes=False)
+        assert str(error.value).startswith(f"{out / 'sweep.json'}: damaged sweep manifest (")
+        assert "delete it and rerun the same command" in str(error.value)
+    (out / "sweep.json").unlink()
+    report = run_sweep(spec, out, quiet=True, processes=False)
+    assert report.ran == [] and report.skipped == [0, 1] and report.all_ok
+    assert {k: os.stat(case_path(out, k)).st_mtime_ns for k in (0, 1)} == stamps
+
+
+def test_leftover_scratch_files_are_removed_by_the_next_run(two_done):
+    spec, out = two_done
+    left = [out / "cases" / ".case_00001.nc.0badc0de.tmp", out / "cases" / ".case_00000.nc.x1y2",
+            out / ".sweep.nc.deadbeef.tmp", out / ".sweep.json.01234567.tmp"]  # fmt: skip
+    for path in left:
+        path.write_bytes(b"partial")
+    keep = out / "cases" / "notes.txt"  # not a scratch file of ours: kept
+    keep.write_text("mine")
+    run_sweep(spec, out, quiet=True, processes=False)
+    assert not any(path.exists() for path in left) and keep.exists()
+
+
+def test_results_files_have_the_folders_permissions(tmp_path):
+    import stat
+
+    folder = tmp_path / "out"
+    folder.mkdir(mode=0o750)
+    folder.chmod(0o750)
+    run_sweep(load_sweep(write(tmp_path, TWO)), folder, workers=1, quiet=True, processes=False)
+    files = [p for p in folder.rglob("*") if p.is_file()]
+    assert {p.name for p in files} >= {"sweep.nc", "sweep.json", "sweep.toml", "case_00000.nc"}
+    for path in files:
+        assert stat.S_IMODE(path.stat().st_mode) == 0o640, path
+
+
+def test_workers_are_bounded_and_not_given_with_a_scheduler(tmp_path, capsys):
+    from cable_ocp.sweep.runner import usable_cores
+
+    sweep = write(tmp_path, TWO)
+    too_many = usable_cores() + 1
+    for extra, message in [
+        (["--workers", too_many], f"--workers {too_many}: must be 1 to {usable_cores()}"),
+        (["--workers", 0], "--workers 0: must be 1 to"),
+        (["--workers", 1, "--scheduler", "tcp://127.0.0.1:1"], "give one of the two"),
+        (["--engine-timeout", "inf"], "--engine-timeout inf: must be finite and > 0"),
+    ]:
+        code, out, err = sweep_cli([sweep, "--out", tmp_path / "out", *extra], capsys)
+        assert_one_line_exit_2(code, out, err, message)
+    assert not (tmp_path / "out").exists()
+
+
+def test_a_second_sweep_into_a_busy_folder_is_refused(tmp_path, capsys):
+    from cable_ocp.sweep.store import folder_lock
+
+    spec = load_sweep(write(tmp_path, TWO))
+    out = tmp_path / "out"
+    with folder_lock(out, "cable-ocp sweep first.toml"):  # as if another process ran it
+        code, _, err = sweep_cli([spec.path, "--out", out, "--workers", "1", "--quiet"], capsys)
+        assert code == 2 and f"--out {out} is in use by another sweep (pid {os.getpid()}" in err
+        assert "first.toml" in err and not (out / "cases").exists()
+    report = run_sweep(spec, out, workers=1, quiet=True, processes=False)  # free again
+    assert sorted(report.ran) == [0, 1]
+
+
+def test_claiming_a_folder_in_parallel_never_reads_half_a_manifest(tmp_path):
+    import threading
+
+    from cable_ocp.sweep.store import check_folder, claim_folder
+
+    spec = load_sweep(write(tmp_path, GRID))
+    out = tmp_path / "out"
+    claim_folder(out, spec)
+    errors: list[BaseException] = []
+
+    def race():
+        try:
+            for _ in range(150):
+                claim_folder(out, spec)
+                check_folder(out, spec)
+        except BaseException as error:  # noqa: BLE001 - collected for the assert
+            errors.append(error)
+
+    threads = [threading.Thread(target=race) for _ in range(4)]
+    for thread in threads:
+        thread.start()
+    for thread in threads:
+        thread.join()
+    assert errors == []
+    assert not list(out.glob(".*.tmp"))

@@ -250,7 +250,10 @@ def claim_folder(folder: Path, spec: SweepSpec) -> None:
     folder = Path(folder)
     check_folder(folder, spec)
     mark_folder(folder)
-    (folder / "cases").mkdir(exist_ok=True)
+    cases = folder / "cases"
+    if not cases.is_dir():
+        cases.mkdir()
+        os.chmod(cases, os.stat(folder).st_mode & 0o777)  # the folder's, as its files
     write_atomic(folder / "sweep.json", json.dumps(_manifest(spec), indent=1))
     write_atomic(folder / "sweep.toml", spec.text)
 
@@ -281,6 +284,10 @@ def folder_lock(folder: Path, what: str = "") -> Iterator[None]:
     folder.mkdir(parents=True, exist_ok=True)
     path = folder / LOCK
     handle = os.open(path, os.O_RDWR | os.O_CREAT, file_mode(folder))
+    try:
+        os.fchmod(handle, file_mode(folder))
+    except PermissionError:  # another user's lock file: its mode is theirs
+        pass
     try:
         if fcntl is not None:
             try:
