@@ -6,7 +6,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from cable_ocp.control import problem as problem_module
+from cable_ocp.control import verification as verification_module
 from cable_ocp.control.nelder_mead import NelderMeadSettings
 from cable_ocp.control.ocp import IpoptSettings
 from cable_ocp.control.optimization import optimize
@@ -66,7 +66,7 @@ def test_top_length_check_accepts_the_tolerance(short):
     """simulate's length check: r_D * BOUND_TOLERANCE outside passes, ten times that raises."""
     times = np.array([0.0, 1.0])
     radius = short.winch.drum_radius
-    edge = (short.winch.top_length_max - short.segment_length / 2) / radius  # 35 rad
+    edge = (short.winch.top_length_max - short.top_element_length) / radius  # 35 rad
 
     def drive(angle):
         return Drive.from_scene(short, lambda t: (np.full(t.shape, angle), 0 * t, 0 * t))
@@ -127,11 +127,12 @@ def test_verification_failure_is_a_failed_result(short, monkeypatch):
     def broken(*args, **kwargs):
         raise SimulationError("the bonds tore at t = 3 s")
 
-    monkeypatch.setattr(problem_module, "simulate", broken)
+    monkeypatch.setattr(verification_module, "simulate", broken)
     result = optimize(short, "ipopt", IpoptSettings(intervals=2), quiet=True)
     assert not result.success
-    assert result.status.startswith("verification failed:")
-    assert "SimulationError" in result.status and "bonds tore" in result.status
+    assert "; verification failed: no trustworthy full-model simulation" in result.status
+    assert result.status.startswith("IPOPT converged")
+    assert "at h = 0.125 s" in result.status and "bonds tore" in result.status
     assert result.trajectory is None and np.isnan(result.omega)
     assert result.parameters.size == 4
 
@@ -140,7 +141,7 @@ def test_nelder_mead_verification_failure_is_a_failed_result(short, monkeypatch)
     def broken(*args, **kwargs):
         raise ValueError("top element too long")
 
-    monkeypatch.setattr(problem_module, "simulate", broken)
+    monkeypatch.setattr(verification_module, "simulate", broken)
     result = optimize(short, "nelder-mead", NelderMeadSettings(max_evaluations=400), quiet=True)
     assert not result.success
     assert result.status == (

@@ -44,7 +44,7 @@ def test_ipopt_beats_locked_winch(solved, small):
 
 def test_winch_bounds_hold_along_the_trajectory(solved, small):
     result, _ = solved
-    low, high = angle_bounds(small, small.segment_length)
+    low, high = angle_bounds(small)
     phi = result.trajectory.winch_angle
     assert phi.min() >= low - 1e-9 and phi.max() <= high + 1e-9
     length = result.trajectory.top_length

@@ -68,7 +68,9 @@ def test_defaults_and_derived_properties():
 def test_overrides(flat):
     scene = load_scene(MODELS / "paper_flat.toml", {"model.elements": 30, "numerics.step": 0.01})
     assert scene.model.elements == 30 and scene.numerics.step == 0.01
-    assert scene.segment_length == 10.0
+    # The winch keeps its reach at n = 30: the top element stays 10 m long, the rest is graded.
+    assert scene.top_element_length == 10.0
+    assert scene.segment_length == pytest.approx(290.0 / 29.5, rel=1e-15)
     assert flat.updated({"model.elements": 30, "numerics.step": 0.01}) == scene
     assert flat.updated({"seabed.hills": [HILL]}).seabed.hills == (Hill(**HILL),)
     assert flat.updated({"name": "x"}).name == "x"
@@ -86,8 +88,8 @@ def test_direct_construction_is_validated(flat):
         dataclasses.replace(flat.cable, diameter=-1.0)
     with pytest.raises(ValueError, match=r"^numerics\.step = 2\.0 .* <= numerics\.duration"):
         Numerics(duration=1.0, step=2.0)
-    with pytest.raises(ValueError, match=r"^winch\.top_length_min"):
-        dataclasses.replace(flat, cable=Cable(length=30.0))
+    with pytest.raises(ValueError, match=r"^winch\.angle_min"):
+        dataclasses.replace(flat, cable=Cable(length=20.0))
     with pytest.raises(ValueError, match=r"^seabed\.hills\[0\]: expected a Hill"):
         Seabed(hills=(HILL,))
     with pytest.raises(ValueError, match=r"^hill\.width_x"):
@@ -142,9 +144,9 @@ BAD = [
     ({"winch.angle_min": 1.0}, r"^winch\.angle_min = 1\.0 is out of range: must be <= 0"),
     ({"winch.angle_max": -1.0}, r"^winch\.angle_max = -1\.0 is out of range: must be >= 0"),
     ({"winch.angle_min": 0.0, "winch.angle_max": 0.0}, r"^winch\.angle_min .* < winch\.angle_max"),
-    ({"winch.top_length_min": 12.0}, r"^winch\.top_length_min = 12\.0 .* <= Delta/2"),
-    ({"winch.top_length_max": 8.0}, r"^winch\.top_length_max = 8\.0 .* >= Delta/2"),
-    ({"model.elements": 100}, r"^winch\.top_length_min = 2\.0 .* Delta/2 .* = 1\.5"),
+    ({"winch.top_length_min": 145.0}, r"^winch\.angle_min = -16\.0 .* over half the cable"),
+    ({"winch.top_length_max": 8.0}, r"^winch\.top_length_max = 8\.0 .* at phi = 0, .* = 10\.0"),
+    ({"winch.angle_min": -300.0}, r"^winch\.angle_min = -300\.0 .* > .* = -296\.0 .*\(rad\)$"),
     ({"winch.top_length_max": 1.0}, r"^winch\.top_length_max .* > winch\.top_length_min"),
     ({"end.force_period": [0.0, -1.0, 0.0]}, r"^end\.force_period\[1\] = -1\.0 .* >= 0 \(s\)"),
     ({"environment.water_density": 0.0}, r"^environment\.water_density = 0\.0 .* when"),

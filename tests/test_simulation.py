@@ -74,10 +74,11 @@ def test_top_length_bounds_checked_before_integrating(flat_scene, monkeypatch):
         raise AssertionError("reached the integrator")
 
     monkeypatch.setattr(simulation, "integrate", never)
-    monkeypatch.setattr(simulation, "equilibrium", never)
+    monkeypatch.setattr(simulation, "starting_state", never)
     # Pay-out: 10 m + 0.5 m x 30 rad = 25 m > top_length_max = 22 m.
+    capped = flat_scene.updated({"winch.top_length_max": 22.0})
     with pytest.raises(ValueError, match=r"winch\.top_length_min, winch\.top_length_max"):
-        simulate(flat_scene, winch=np.full(14, 30.0))
+        simulate(capped, winch=np.full(14, 30.0))
     # Haul-in: 10 m - 0.5 m x 17 rad = 1.5 m < top_length_min = 2 m.
     with pytest.raises(ValueError, match=r"winch\.top_length_min, winch\.top_length_max"):
         simulate(flat_scene, winch=np.linspace(-1.0, -17.0, 14))
@@ -87,7 +88,7 @@ def test_library_entry_points_reject_bad_numbers_before_integrating(monkeypatch)
     def forbidden(*args, **kwargs):
         pytest.fail("bad input must be refused before any heavy work")
 
-    monkeypatch.setattr(simulation, "equilibrium", forbidden)
+    monkeypatch.setattr(simulation, "starting_state", forbidden)
     monkeypatch.setattr(simulation, "integrate", forbidden)
     scene = load_scene(
         MODELS / "hanging.toml", {"model.elements": 2, "winch.top_length_max": 160.0}

@@ -23,6 +23,7 @@ import numpy as np
 
 from cable_ocp.control.problem import SolverOutcome, WinchProblem
 from cable_ocp.drive.controls import HermiteIntervals, KnotSpline
+from cable_ocp.drive.drive import stage_times
 from cable_ocp.model.cable import CableModel
 from cable_ocp.model.compile import CompileReport
 from cable_ocp.model.layout import INPUT_SIZE, INPUTS
@@ -209,11 +210,11 @@ class ShootingProblem:
 
         step_times = problem.grid[:-1]
         fixed = stage_inputs(problem.drive, step_times, step)
-        stage_times = (step_times[:, None] + np.array([0.0, step / 2, step])).ravel()
+        times, left = stage_times(step_times, step)
         parameters = ca.MX.sym("winch", control.size)
         radius = problem.scene.winch.drum_radius
         winch_rows = ca.vertcat(
-            *[(radius * ca.sparsify(ca.DM(b)) @ parameters).T for b in control.basis(stage_times)]
+            *[(radius * ca.sparsify(ca.DM(b)) @ parameters).T for b in control.basis(times, left)]
         )
         # The winch sets the top-element length with its rate and acceleration (three rows).
         winch_inputs = ca.MX.zeros(INPUT_SIZE, fixed.shape[1])

@@ -21,6 +21,7 @@ import numpy as np
 from cable_ocp.control.nelder_mead import NelderMeadSettings, nelder_mead_problem, solve_nelder_mead
 from cable_ocp.control.ocp import IpoptSettings, ShootingProblem, ipopt_problem
 from cable_ocp.control.problem import SolverOutcome, WinchProblem
+from cable_ocp.control.verification import Verification
 from cable_ocp.simulation.progress import check_verbosity
 from cable_ocp.simulation.trajectory import Trajectory
 
@@ -73,6 +74,20 @@ class OcpResult:
         Of ``build_time``, compiling C (0 when the libraries came from the disk cache).
     verification_time : float, s
         Checking the bounds and simulating the scene's model with the optimised winch.
+    bound_time : float, s
+        How long the verified winch rode a bound (within
+        :data:`cable_ocp.control.verification.BOUND_RIDE`): a bound-limited optimum, which is a
+        success all the same.
+    bond_residual : float, m
+        Largest bond residual of the verified run, the health check of its simulation.
+    verified_step : float, s
+        RK4 step of the verified run: the scene's, or a halving of it when the run at the
+        scene's step left its bonds (see ``notes``).
+    heave_feedforward : bool
+        The scene heaves and the winch pays the heave out (eq. 38) under the optimised profile:
+        ``parameters`` are the slow profile on top, ``trajectory.winch_angle`` the sum.
+    notes : str
+        What the user should know beyond the status (bound riding, a refined verification step).
     """
 
     method: str
@@ -93,6 +108,11 @@ class OcpResult:
     refinements: list[float] = field(default_factory=list)
     compile_time: float = 0.0
     verification_time: float = 0.0
+    bound_time: float = 0.0
+    bond_residual: float = float("nan")
+    verified_step: float = float("nan")
+    heave_feedforward: bool = False
+    notes: str = ""
 
     def save(self, folder: str | Path) -> None:
         """Write ``result.json``, ``result.npz`` and the trajectory into ``folder``.
@@ -148,9 +168,12 @@ class OcpResult:
 
 
 # Fields of OcpResult that results written before them lack (their defaults are used).
-_OPTIONAL_FIELDS = {"compile_time", "verification_time"}
+_OPTIONAL_FIELDS = {
+    "compile_time", "verification_time", "bound_time", "bond_residual", "verified_step",
+    "heave_feedforward", "notes",
+}  # fmt: skip
 # Fields of OcpResult that hold floats which may be NaN.
-_FLOAT_FIELDS = ("omega", "omega_model", "history", "refinements")
+_FLOAT_FIELDS = ("omega", "omega_model", "history", "refinements", "bond_residual", "verified_step")
 
 
 def _json_value(value):
@@ -175,7 +198,7 @@ def _timed_verify(problem: WinchProblem, quiet: bool, compiled: bool):
     """``problem.verify`` that adds up its wall time: returns (verify, elapsed) callables."""
     elapsed = [0.0]
 
-    def verify(parameters: np.ndarray) -> tuple[Trajectory | None, str | None]:
+    def verify(parameters: np.ndarray) -> Verification:
         begun = time.perf_counter()
         checked = problem.verify(parameters, quiet=quiet, compiled=compiled)
         elapsed[0] += time.perf_counter() - begun
@@ -217,7 +240,7 @@ def solve_ipopt(
     verify, verification_time = _timed_verify(problem, quiet, settings.compiled)
     outcomes: list[SolverOutcome] = []
     verified: list[float] = []
-    best_outcome, best, failure = None, None, None
+    best_outcome, best, checked, failure = None, None, None, None
     parameters, bias = problem.first_guess(), None
     for _ in range(1 + (refinements if problem.reduced else 0)):
         if best is not None:
@@ -227,22 +250,23 @@ def solve_ipopt(
         outcome = nlp.solve(parameters, bias)
         outcomes.append(outcome)
         if not outcome.success:
-            failure = outcome.status
+            failure = f"IPOPT did not converge: {outcome.status}"
             if best is None:  # show where the failed solve got to, still marked as failed
-                best, _ = verify(outcome.parameters)
+                checked = verify(outcome.parameters)
+                best = checked.trajectory
                 best_outcome = outcome if best is not None else None
                 verified.append(best.omega if best is not None else float("nan"))
             break
-        trial, reason = verify(outcome.parameters)
-        if trial is None:
+        trial = verify(outcome.parameters)
+        if trial.trajectory is None:
             verified.append(float("nan"))
-            failure = f"verification failed: {reason}"
+            failure = f"IPOPT converged ({outcome.status}); verification failed: {trial.reason}"
             break
-        verified.append(trial.omega)
-        if best is not None and trial.omega >= best.omega:
+        verified.append(trial.trajectory.omega)
+        if best is not None and trial.trajectory.omega >= best.omega:
             break
-        gain = trial.omega / best.omega if best is not None else 0.0
-        best_outcome, best = outcome, trial
+        gain = trial.trajectory.omega / best.omega if best is not None else 0.0
+        best_outcome, best, checked = outcome, trial.trajectory, trial
         if gain > SMALL_GAIN:
             break
     shown = best_outcome or outcomes[-1]
@@ -265,7 +289,29 @@ def solve_ipopt(
         refinements=verified,
         compile_time=nlp.compile_time,
         verification_time=verification_time(),
+        **_verification_fields(problem, checked),
     )
+
+
+def _verification_fields(problem: WinchProblem, checked: Verification | None) -> dict:
+    """The OcpResult fields that report the verification of the profile shown."""
+    fields = {"heave_feedforward": problem.heave_feedforward}
+    if checked is None or checked.trajectory is None:
+        return fields
+    notes = []
+    if checked.bound_time > 0:
+        notes.append(f"the winch rode its angle bound for {checked.bound_time:.1f} s")
+    if problem.heave_feedforward:
+        notes.append("the winch pays out the heave (eq. 38) under the optimised profile")
+    if checked.note:
+        notes.append(checked.note)
+    return {
+        **fields,
+        "bound_time": checked.bound_time,
+        "bond_residual": checked.bond_residual,
+        "verified_step": checked.step,
+        "notes": "; ".join(notes),
+    }
 
 
 def _nelder_mead_status(outcome: SolverOutcome, reason: str | None) -> str:
@@ -299,7 +345,8 @@ def solve_nelder_mead_verified(
     # A capped search is verified too (the paper's method usually stops at its cap); it stays
     # success = False.
     verify, verification_time = _timed_verify(problem, quiet, compiled=False)
-    trajectory, reason = verify(outcome.parameters)
+    checked = verify(outcome.parameters)
+    trajectory, reason = checked.trajectory, checked.reason
     omega = trajectory.omega if trajectory is not None else float("nan")
     return OcpResult(
         method="nelder-mead",
@@ -319,6 +366,7 @@ def solve_nelder_mead_verified(
         history=outcome.history,
         refinements=[omega],
         verification_time=verification_time(),
+        **_verification_fields(problem, checked),
     )
 
 
@@ -383,7 +431,14 @@ def optimize(
     -------
     OcpResult
         Check ``success``: a failed solve is returned with ``success = False`` and the solver's
-        status, never as an answer.
+        status, never as an answer. On a valid scene it never raises: a failure of the physics on
+        the way (no equilibrium, a simulation that blows up, a solver error) is such a result,
+        with the reason and a remedy.
+
+    Raises
+    ------
+    ValueError
+        Bad input (a method, setting or scene field out of range), before any heavy work.
     """
     check_verbosity(quiet, verbose)
     if method not in METHODS:
@@ -395,5 +450,32 @@ def optimize(
             f"settings: {type(settings).__name__} given for method {method!r}, which takes "
             f"{type(chosen.default).__name__}"
         )
-    problem = chosen.problem(scene, settings)
-    return chosen.solve(problem, settings, quiet=quiet, verbose=verbose, **kwargs)
+    started = time.perf_counter()
+    try:
+        problem = chosen.problem(scene, settings)
+        return chosen.solve(problem, settings, quiet=quiet, verbose=verbose, **kwargs)
+    except RuntimeError as error:  # SimulationError, EquilibriumError, CasADi's errors
+        return failed_result(method, settings, error, time.perf_counter() - started)
+
+
+def failed_result(
+    method: str, settings: IpoptSettings | NelderMeadSettings, error: Exception, wall_time: float
+) -> OcpResult:
+    """The result of an optimisation that stopped on ``error`` before it had a profile."""
+    reason = f"{type(error).__name__}: {error}"
+    return OcpResult(
+        method=method,
+        parameters=np.zeros(0),
+        control=getattr(settings, "control", "spline"),
+        trajectory=None,
+        omega=float("nan"),
+        omega_model=float("nan"),
+        success=False,
+        status=f"failed before a profile was found: {reason}",
+        iterations=0,
+        evaluations=0,
+        wall_time=wall_time,
+        build_time=0.0,
+        solve_time=0.0,
+        function_time=0.0,
+    )

@@ -37,11 +37,18 @@ NAMES = ("winch angle phi", "winch rate phi'", "winch acceleration phi''")
 UNITS = ("rad", "rad/s", "rad/s^2")
 
 
-def angle_bounds(scene, full_segment: float) -> tuple[float, float]:
-    """Winch-angle range (rad) from the angle bounds and the top-element length bounds."""
+def angle_bounds(scene) -> tuple[float, float]:
+    """Winch-angle range (rad) from the angle bounds and the top-element length bounds.
+
+    The scene's mesh gives the top element the winch's whole haul-in (``Scene.mesh``), so the
+    range is the winch's own unless ``winch.top_length_max`` cuts the pay-out.
+    """
     w = scene.winch
-    low = max(w.angle_min, (w.top_length_min - full_segment / 2) / w.drum_radius)
-    high = min(w.angle_max, (w.top_length_max - full_segment / 2) / w.drum_radius)
+    top = scene.top_element_length
+    low = max(w.angle_min, (w.top_length_min - top) / w.drum_radius)
+    high = w.angle_max
+    if w.top_length_max is not None:
+        high = min(high, (w.top_length_max - top) / w.drum_radius)
     if low > 0 or high < 0:
         raise ValueError(
             f"winch bounds leave no room around phi(0) = 0: the angle range is [{low}, {high}] rad "
@@ -53,7 +60,7 @@ def angle_bounds(scene, full_segment: float) -> tuple[float, float]:
 def winch_limits(scene) -> list[tuple[int, float, float, str]]:
     """The bounds that apply: ``(derivative, low, high, scene fields)`` for angle, rate, acc."""
     w = scene.winch
-    low, high = angle_bounds(scene, scene.segment_length)
+    low, high = angle_bounds(scene)
     limits = [(0, low, high, "winch.angle_min/max with winch.top_length_min/max")]
     if w.rate_max is not None:
         limits.append((1, -w.rate_max, w.rate_max, "winch.rate_max"))

@@ -8,6 +8,12 @@ variables and the angle bounds as linear constraints.
   ``phi(0) = 0``; it starts at rest and ends free (as :func:`cable_ocp.drive.winch.spline_angle`).
 - :class:`HermiteIntervals`: a piecewise cubic per interval of a grid, with the angle and its rate
   at the grid nodes as parameters (C1); ``phi(0) = phi'(0) = 0`` are held fixed.
+
+Both take ``left``: where true, a time on a breakpoint is evaluated as the limit from the left. The
+Hermite angle's acceleration jumps at its nodes, and an RK4 step that ends on a node must see the
+acceleration of the piece it integrates over: with the right limit there, every node put a kick of
+``h r_D |jump in phi''| / 6`` (m/s) into the bond rates, and the bonds drifted by 1e-4 m within
+a few nodes (paper_hill with a moving winch).
 """
 
 from __future__ import annotations
@@ -50,8 +56,11 @@ class KnotSpline:
         """Times (s) between which the angle is one cubic polynomial: the knots."""
         return knot_times(self.duration, self.knots)
 
-    def basis(self, t: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-        """``B0, B1, B2`` at the times ``t``: arrays (len(t), size)."""
+    def basis(self, t: np.ndarray, left=None) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """``B0, B1, B2`` at the times ``t``: arrays (len(t), size).
+
+        ``left`` is accepted for a uniform interface; the spline is C2, both limits agree.
+        """
         t = np.clip(np.atleast_1d(np.asarray(t, dtype=float)), 0.0, self.duration)
         values = np.vstack([np.zeros(self.knots), np.eye(self.knots)])
         zeros = np.zeros(self.knots)
@@ -85,15 +94,19 @@ class HermiteIntervals:
         """Times (s) between which the angle is one cubic polynomial: the nodes."""
         return np.linspace(0.0, self.duration, self.intervals + 1)
 
-    def basis(self, t: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    def basis(self, t: np.ndarray, left=None) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """``B0, B1, B2`` at the times ``t``: arrays (len(t), size).
 
         A time on a node belongs to the interval that starts there (the last node to the last
-        interval).
+        interval), or, where ``left`` (bool, or array like ``t``) is true, to the interval that
+        ends there (node 0 to the first).
         """
         t = np.clip(np.atleast_1d(np.asarray(t, dtype=float)), 0.0, self.duration)
         width = self.duration / self.intervals
-        k = np.minimum((t / width + 1e-9).astype(int), self.intervals - 1)
+        k = (t / width + 1e-9).astype(int)
+        if left is not None:
+            k = np.where(left, np.ceil(t / width - 1e-9).astype(int) - 1, k)
+        k = np.clip(k, 0, self.intervals - 1)
         s = t / width - k
         h00, h10, h01, h11 = hermite_polynomials(s)
         scale = np.array([1.0, 1.0 / width, 1.0 / width**2])[:, None]
@@ -108,11 +121,11 @@ class HermiteIntervals:
         return out[0], out[1], out[2]
 
     def angle_function(self, parameters: np.ndarray):
-        """The winch angle history of a parameter vector."""
+        """The winch angle history of a parameter vector (it takes ``left`` as :meth:`basis`)."""
         parameters = np.asarray(parameters, dtype=float).ravel()
 
-        def angle(t):
-            b0, b1, b2 = self.basis(t)
+        def angle(t, left=None):
+            b0, b1, b2 = self.basis(t, left)
             return b0 @ parameters, b1 @ parameters, b2 @ parameters
 
         return angle

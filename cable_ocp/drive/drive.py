@@ -43,7 +43,8 @@ class Drive:
         Winch angle ``t -> (phi, phi', phi'')`` (rad), before heave compensation.
     end : EndLoad
         The scene's ``[end]`` section.
-    segment_length : float, m
+    top_length : float, m
+        The top element at ``phi = 0`` (the model's mesh, ``Scene.mesh``).
     drum_radius : float, m
     heave_compensation : bool
         Add ``z_A / r_D`` to the winch angle (eq. 38).
@@ -52,7 +53,7 @@ class Drive:
     top: TopMotionFunction
     angle: winch.WinchAngleFunction
     end: object
-    segment_length: float
+    top_length: float
     drum_radius: float
     heave_compensation: bool = False
 
@@ -64,16 +65,19 @@ class Drive:
         n = elements or scene.model.elements
         return cls(
             top=top_motion(scene.top),
-            angle=angle or winch.locked,
+            angle=winch.with_left(angle or winch.locked),
             end=scene.end,
-            segment_length=scene.cable.length / n,
+            top_length=scene.mesh(n)[1],
             drum_radius=scene.winch.drum_radius,
             heave_compensation=scene.top.heave_compensated,
         )
 
-    def winch_angle(self, t: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-        """Winch angle with its rates (rad, rad/s, rad/s^2), heave compensation included."""
-        phi, rate, acc = self.angle(t)
+    def winch_angle(self, t: np.ndarray, left=None) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """Winch angle with its rates (rad, rad/s, rad/s^2), heave compensation included.
+
+        ``left`` (bool array like ``t``): left limits there (see :func:`stage_times`).
+        """
+        phi, rate, acc = self.angle(t, left)
         if self.heave_compensation:
             position, velocity, acceleration = self.top(t)
             start = self.top(np.zeros(1))[0][2]
@@ -82,9 +86,34 @@ class Drive:
             acc = acc + acceleration[2] / self.drum_radius
         return phi, rate, acc
 
-    def inputs(self, t: np.ndarray) -> np.ndarray:
-        """Input vector ``u`` at the times ``t`` (s): array (15, len(t)), see ``INPUT_NAMES``."""
+    def inputs(self, t: np.ndarray, left=None) -> np.ndarray:
+        """Input vector ``u`` at the times ``t`` (s): array (15, len(t)), see ``INPUT_NAMES``.
+
+        ``left`` (bool array like ``t``): the winch's left limits there (see :func:`stage_times`).
+        """
         t = np.atleast_1d(np.asarray(t, dtype=float))
         position, velocity, acceleration = self.top(t)
-        length = winch.top_length(self.winch_angle, t, self.segment_length, self.drum_radius)
+        length = winch.top_length(self.winch_angle, t, self.top_length, self.drum_radius, left)
         return np.vstack([position, velocity, acceleration, length, end_force(self.end, t)])
+
+    def stage_inputs(self, starts: np.ndarray, step: float) -> np.ndarray:
+        """Inputs at the RK4 stages of the steps starting at ``starts``: array (15, 3 len)."""
+        times, left = stage_times(starts, step)
+        return self.inputs(times, left)
+
+
+def stage_times(starts: np.ndarray, step: float) -> tuple[np.ndarray, np.ndarray]:
+    """The RK4 stage times ``t, t + h/2, t + h`` of steps starting at ``starts`` (s), flattened.
+
+    Returns
+    -------
+    times : array (3 len(starts),), s
+    left : array of bool, like ``times``
+        True at the end stages ``t + h``: a step that ends on a breakpoint of a piecewise input
+        (the Hermite winch's acceleration jumps at its nodes) integrates its own piece, so its end
+        stage takes the limit from the left.
+    """
+    starts = np.asarray(starts, dtype=float).ravel()
+    times = (starts[:, None] + np.array([0.0, step / 2, step])[None, :]).ravel()
+    left = np.tile(np.array([False, False, True]), starts.size)
+    return times, left

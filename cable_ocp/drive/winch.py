@@ -1,23 +1,40 @@
 """Winch angle ``phi(t)`` and the top-element length it sets (CONVENTIONS.md §3, paper eq. 38, 41).
 
-``l_n(t) = Delta/2 + r_D (phi(t) - phi(0))`` with ``phi > 0`` paying out. An angle history is a
-callable ``t -> (phi, phi', phi'')`` in rad, rad/s, rad/s^2.
+``l_n(t) = l_top + r_D (phi(t) - phi(0))`` with ``phi > 0`` paying out, ``l_top`` the top element
+at ``phi = 0`` (Delta/2 on a uniform mesh; longer where the winch needs the reach, ``Scene.mesh``).
+An angle history is a callable ``(t, left=None) -> (phi, phi', phi'')`` in rad, rad/s, rad/s^2;
+where ``left`` is true a time on a breakpoint of a piecewise profile gives the limit from the left
+(the end stage of an RK4 step, :func:`cable_ocp.drive.drive.stage_times`). The profiles here are
+C2: they ignore it.
 """
 
 from __future__ import annotations
 
+import inspect
 from collections.abc import Callable
 
 import numpy as np
 from scipy.interpolate import CubicSpline
 
-WinchAngleFunction = Callable[[np.ndarray], tuple[np.ndarray, np.ndarray, np.ndarray]]
+WinchAngleFunction = Callable[..., tuple[np.ndarray, np.ndarray, np.ndarray]]
 
 
-def locked(t: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+def locked(t: np.ndarray, left=None) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """A winch that does not turn: ``phi = 0``."""
     zeros = np.zeros(np.atleast_1d(t).shape)
     return zeros, zeros.copy(), zeros.copy()
+
+
+def with_left(angle: WinchAngleFunction) -> WinchAngleFunction:
+    """``angle`` if it takes ``left``; else the same history taken as smooth (both limits agree).
+
+    A user's callable ``t -> (phi, phi', phi'')`` need not know about left limits.
+    """
+    try:
+        takes_left = "left" in inspect.signature(angle).parameters
+    except (TypeError, ValueError):
+        takes_left = False
+    return angle if takes_left else lambda t, left=None: angle(t)
 
 
 def knot_times(duration: float, knots: int) -> np.ndarray:
@@ -42,7 +59,7 @@ def spline_angle(duration: float, knot_values) -> WinchAngleFunction:
     )
     rate, acceleration = spline.derivative(1), spline.derivative(2)
 
-    def angle(t):
+    def angle(t, left=None):
         t = np.clip(np.atleast_1d(np.asarray(t, dtype=float)), 0.0, duration)
         return spline(t), rate(t), acceleration(t)
 
@@ -75,7 +92,7 @@ def tabulated_angle(time, angles) -> WinchAngleFunction:
     spline = CubicSpline(time, angles, bc_type="natural")
     rate, acceleration = spline.derivative(1), spline.derivative(2)
 
-    def angle(t):
+    def angle(t, left=None):
         t = np.clip(np.atleast_1d(np.asarray(t, dtype=float)), 0.0, time[-1])
         return spline(t), rate(t), acceleration(t)
 
@@ -83,10 +100,17 @@ def tabulated_angle(time, angles) -> WinchAngleFunction:
 
 
 def top_length(
-    angle: WinchAngleFunction, t: np.ndarray, segment_length: float, drum_radius: float
+    angle: WinchAngleFunction,
+    t: np.ndarray,
+    nominal_length: float,
+    drum_radius: float,
+    left=None,
 ) -> np.ndarray:
-    """Top-element length and its rates (3, len(t)): m, m/s, m/s^2."""
-    phi, rate, acceleration = angle(t)
+    """Top-element length and its rates (3, len(t)): m, m/s, m/s^2 (``left`` as the angle's).
+
+    ``nominal_length`` (m) is the top element at ``phi = 0``.
+    """
+    phi, rate, acceleration = angle(t, left)
     return np.vstack(
-        [segment_length / 2 + drum_radius * phi, drum_radius * rate, drum_radius * acceleration]
+        [nominal_length + drum_radius * phi, drum_radius * rate, drum_radius * acceleration]
     )

@@ -66,6 +66,9 @@ class ModelSpec:
     elements : int
         ``n``; the model has ``n + 1`` rigid elements.
     cable_length : float, m
+    top_length : float, m
+        The top element at ``phi = 0`` (the scene's graded mesh, ``Scene.mesh``); the elements
+        below share the rest of the line.
     element : ElementProperties
     bending_stiffness : float, N m^2
         ``EI``; the spring between two elements is ``k = EI / Delta``. 0 switches bending off.
@@ -83,6 +86,7 @@ class ModelSpec:
 
     elements: int
     cable_length: float
+    top_length: float
     element: ElementProperties
     bending_stiffness: float
     torsional_stiffness: float
@@ -96,8 +100,8 @@ class ModelSpec:
 
     @property
     def segment_length(self) -> float:
-        """Delta = L / n (m)."""
-        return self.cable_length / self.elements
+        """``Delta = (L - l_top) / (n - 1/2)`` (m): L / n on a uniform mesh."""
+        return (self.cable_length - self.top_length) / (self.elements - 0.5)
 
 
 def spec_from_scene(scene, elements: int | None = None) -> ModelSpec:
@@ -132,9 +136,11 @@ def spec_from_scene(scene, elements: int | None = None) -> ModelSpec:
         torsion=scene.model.torsion,
         hydro=hydro,
     )
+    elements = elements or scene.model.elements
     return ModelSpec(
-        elements=elements or scene.model.elements,
+        elements=elements,
         cable_length=cable.length,
+        top_length=scene.mesh(elements)[1],
         element=props,
         bending_stiffness=cable.bending_stiffness if scene.model.bending else 0.0,
         torsional_stiffness=cable.torsional_stiffness,

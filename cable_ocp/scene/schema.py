@@ -443,12 +443,15 @@ class Winch(_Validated):
     )
     knots: int = _param(14, "int", "Cubic-spline subintervals p.", ge=1, le=200)
     top_length_min: float = _param(2.0, doc="Shortest top element.", gt=0, unit="m")
-    top_length_max: float = _param(22.0, doc="Longest top element.", gt=0, unit="m")
+    top_length_max: float | None = _param(
+        None, doc="Longest top element (none: winch.angle_max alone).", gt=0, unit="m",
+        optional=True,
+    )  # fmt: skip
 
     def _check_relations(self) -> None:
         if self.angle_min >= self.angle_max:
             raise self._fail("angle_min", "< winch.angle_max")
-        if self.top_length_max <= self.top_length_min:
+        if self.top_length_max is not None and self.top_length_max <= self.top_length_min:
             raise self._fail("top_length_max", "> winch.top_length_min")
 
 
@@ -530,10 +533,36 @@ class Scene(_Validated):
     numerics: Numerics = _param(kind="section", doc="[numerics]", item=Numerics)
     source: str | None = field(default=None, compare=False)
 
+    def mesh(self, elements: int | None = None) -> tuple[float, float]:
+        """The graded mesh of a model of ``elements`` (default: the scene's n), m.
+
+        The winch's reach belongs to the winch: the top element is long enough at ``phi = 0`` to
+        haul in all of ``r_D |winch.angle_min|`` and still be ``winch.top_length_min`` long, at
+        any n. Below it the rest of the line is cut as the paper does (CONVENTIONS.md §3).
+
+        Returns
+        -------
+        segment : float, m
+            ``Delta = (L - l_top) / (n - 1/2)``: elements 1..n-1 are Delta long, element 0 Delta/2.
+        top : float, m
+            ``l_top = max(L / 2n, winch.top_length_min - r_D winch.angle_min)``, the top element
+            at ``phi = 0``; ``L / 2n`` (the uniform mesh, Delta = L / n) whenever it has the
+            reach.
+        """
+        n = elements or self.model.elements
+        w = self.winch
+        top = max(self.cable.length / (2 * n), w.top_length_min - w.drum_radius * w.angle_min)
+        return (self.cable.length - top) / (n - 0.5), top
+
     @property
     def segment_length(self) -> float:
-        """Segment length Delta = L / n, m."""
-        return self.cable.length / self.model.elements
+        """Segment length Delta of the scene's mesh (L / n when uniform, see :meth:`mesh`), m."""
+        return self.mesh()[0]
+
+    @property
+    def top_element_length(self) -> float:
+        """Length of the top element at ``phi = 0`` (Delta/2 when uniform, see :meth:`mesh`), m."""
+        return self.mesh()[1]
 
     def _check_relations(self) -> None:
         water = self.environment.water_density
@@ -544,12 +573,21 @@ class Scene(_Validated):
                 f"= {water!r} kg/m^3 when environment.submerged is true (a cable lighter than "
                 "water floats)",
             )
-        half = self.segment_length / 2
-        rule = f"Delta/2 = cable.length / model.elements / 2 = {half!r}"
-        if self.winch.top_length_min > half:
-            raise self.winch._fail("top_length_min", f"<= {rule}")
-        if self.winch.top_length_max < half:
-            raise self.winch._fail("top_length_max", f">= {rule}")
+        w, top = self.winch, self.top_element_length
+        reach = w.top_length_min - w.drum_radius * w.angle_min
+        if reach >= self.cable.length / 2:
+            raise w._fail(
+                "angle_min",
+                f"> -(cable.length / 2 - winch.top_length_min) / winch.drum_radius = "
+                f"{-(self.cable.length / 2 - w.top_length_min) / w.drum_radius!r} (the top element "
+                f"that hauls it all in would be {reach!r} m, over half the cable)",
+            )
+        if w.top_length_max is not None and w.top_length_max < top:
+            raise w._fail(
+                "top_length_max",
+                f">= the top element's length at phi = 0, max(cable.length / model.elements / 2, "
+                f"winch.top_length_min - winch.drum_radius * winch.angle_min) = {top!r}",
+            )
 
     def updated(self, overrides: Mapping[str, Any]) -> Scene:
         """Return a new validated scene with dotted-key ``overrides`` applied (see `load_scene`)."""

@@ -152,8 +152,7 @@ def step_count(duration: float, step: float) -> int:
 
 def stage_inputs(drive: Drive, times: np.ndarray, step: float) -> np.ndarray:
     """Inputs at the RK4 stages of the steps starting at ``times``: array (15, 3 len(times))."""
-    stage_times = (times[:, None] + np.array([0.0, step / 2, step])[None, :]).ravel()
-    return drive.inputs(stage_times)
+    return drive.stage_inputs(times, step)
 
 
 @dataclass(frozen=True)
@@ -305,6 +304,24 @@ def _residual_norms(model: CableModel, count: int, compiled: bool) -> ca.Functio
         return model.bind(model.parametric.memo(("bond_norm", count), lambda: library.map(count)))
 
     return model.memo(("bond_norm", compiled, count), build)
+
+
+def bond_residuals(
+    model: CableModel, states: np.ndarray, inputs: np.ndarray, compiled: bool = False
+) -> np.ndarray:
+    """Largest bond residual (m) of each state of a run: array (k,).
+
+    Parameters
+    ----------
+    model : CableModel
+    states : array (k, state_size)
+    inputs : array (k, 15)
+    compiled : bool
+        Evaluate the compiled residual (as :func:`integrate` checks it).
+    """
+    norms = np.empty(states.shape[0])
+    evaluate_into(_residual_norms(model, norms.size, compiled), [states, inputs], [norms])
+    return norms
 
 
 def _check_block(model, block, norms, times, step, tolerance) -> None:

@@ -15,7 +15,7 @@ from cable_ocp.model.cable import CableModel
 from cable_ocp.model.layout import INPUTS
 from cable_ocp.simulation.integrate import evaluate_into, integrate
 from cable_ocp.simulation.seabed import clearance_error, rms_objective
-from cable_ocp.simulation.statics import equilibrium, moving_with_the_top
+from cable_ocp.simulation.statics import starting_state
 from cable_ocp.simulation.trajectory import Trajectory
 
 WinchSpec = None | np.ndarray | Callable
@@ -57,6 +57,7 @@ def check_top_length(scene, drive: Drive, times: np.ndarray) -> None:
     """
     length = drive.inputs(times)[INPUTS.top_length]
     low, high = scene.winch.top_length_min, scene.winch.top_length_max
+    high = np.inf if high is None else high
     tolerance = scene.winch.drum_radius * BOUND_TOLERANCE
     outside = (length < low - tolerance) | (length > high + tolerance)
     if outside.any():
@@ -169,10 +170,7 @@ def simulate(
     if initial_state is not None:
         initial_state = checked_state(initial_state, model.state_size)
     if initial_state is None:
-        start = drive.inputs(np.zeros(1))[:, 0]
-        initial_state = moving_with_the_top(
-            model, equilibrium(model, drive, compiled=compiled).state, start
-        )
+        initial_state = starting_state(model, drive, compiled=compiled)
     x0 = initial_state
     run = integrate(
         model,

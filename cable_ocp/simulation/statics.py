@@ -261,6 +261,24 @@ def moving_with_the_top(model: CableModel, state: np.ndarray, u: np.ndarray) -> 
     return moving
 
 
+def starting_state(model: CableModel, drive: Drive, compiled: bool = False) -> np.ndarray:
+    """Where every run of a drive starts: its static equilibrium at t = 0, moving with the top.
+
+    The equilibrium under the inputs at t = 0 (:func:`equilibrium`), then
+    :func:`moving_with_the_top`, so that a top already moving at t = 0 (a heave) keeps the bonds
+    from the first step. One definition for simulations, optimisation models and plants.
+
+    Parameters
+    ----------
+    model : CableModel
+    drive : Drive
+    compiled : bool
+        See :func:`equilibrium`.
+    """
+    start = drive.inputs(np.zeros(1))[:, 0]
+    return moving_with_the_top(model, equilibrium(model, drive, compiled=compiled).state, start)
+
+
 def bond_tensions(model: CableModel, state: np.ndarray, u: np.ndarray) -> np.ndarray:
     """Signed bond tensions (n+1,), N: positive pulls, negative pushes.
 

@@ -13,6 +13,7 @@ import numpy as np
 
 from cable_ocp.model.cable import CableModel
 from cable_ocp.simulation.run import simulate
+from cable_ocp.studies.uniform import locked_uniform
 
 
 def end_difference(a, b) -> float:
@@ -128,16 +129,14 @@ def element_convergence(
 ) -> ElementConvergence:
     """Locked-winch end trajectories for several ``n`` against ``reference_elements``.
 
-    The top-element length bounds are widened to admit ``Delta/2`` of every ``n``.
+    The winch is locked, on the uniform mesh of every ``n``.
     """
     step = step or scene.numerics.step
     every = max(1, round(scene.numerics.step * scene.numerics.output_every / step))
-    base = scene.updated(
-        {
-            "numerics.step": step,
-            "numerics.output_every": every,
-            "winch.top_length_min": min(scene.winch.top_length_min, scene.cable.length / 400),
-        }
+    base = locked_uniform(
+        scene,
+        [*elements, reference_elements],
+        {"numerics.step": step, "numerics.output_every": every},
     )
 
     def run(n):

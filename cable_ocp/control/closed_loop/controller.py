@@ -155,7 +155,7 @@ class RecedingHorizon:
         positions = ca.repmat(top, 1, stage_times.size) + top_velocity @ ca.DM(stage_times).T
         length_rows = (
             ca.vertcat(*[(radius * ca.sparsify(ca.DM(b)) @ winch).T for b in b_stage])
-            + ca.vertcat(model.spec.segment_length / 2, 0, 0) @ ones
+            + ca.vertcat(model.spec.top_length, 0, 0) @ ones
         )
         stages = ca.vertcat(
             positions,
@@ -240,7 +240,7 @@ class RecedingHorizon:
         local_times = (np.arange(steps)[:, None] * h + np.array([0.0, h / 2, h])).ravel()
         bases = hermite_basis(local_times, self.settings.sample, 1)
         lengths = ca.vertcat(*[(radius * ca.DM(b) @ winch).T for b in bases]) + ca.DM(
-            [model.spec.segment_length / 2, 0.0, 0.0]
+            [model.spec.top_length, 0.0, 0.0]
         ) @ ca.DM.ones(1, local_times.size)
         stages = fixed + ca.vertcat(
             ca.DM.zeros(9, local_times.size), lengths, ca.DM.zeros(3, local_times.size)

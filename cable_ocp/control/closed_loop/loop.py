@@ -28,6 +28,7 @@ from cable_ocp.drive.bounds import angle_bounds
 from cable_ocp.drive.drive import end_force
 from cable_ocp.model.cable import CableModel
 from cable_ocp.model.layout import INPUTS
+from cable_ocp.simulation.integrate import SimulationError
 from cable_ocp.simulation.progress import Progress
 from cable_ocp.simulation.seabed import clearance_error, rms_objective
 
@@ -182,7 +183,7 @@ def mpc(
     if unknown:
         raise ValueError(f"references = {references}: each must be 'locked' or 'open-loop'")
     started = time.perf_counter()
-    low, high = angle_bounds(scene, scene.segment_length)
+    low, high = angle_bounds(scene)
     commanded_bounds = [(0, low, high)]
     if scene.winch.rate_max is not None:
         commanded_bounds.append((1, -scene.winch.rate_max, scene.winch.rate_max))
@@ -219,6 +220,7 @@ def mpc(
     reference = float(x[2])
     guess = np.zeros(controller.size)
     sample_times, solve_times, iterations, statuses, failures = [], [], [], [], []
+    plant_failure = None
     progress = Progress("mpc", duration, quiet)
     for k in range(samples):
         now = k * sample
@@ -232,7 +234,7 @@ def mpc(
             reduced,
             forecast.position,
             forecast.velocity,
-            reduced.spec.segment_length / 2 + radius * phi[0],
+            reduced.spec.top_length + radius * phi[0],
             radius * rate[0],
         )
         force = end_force(scene.end, now + controller.force_times)
@@ -263,7 +265,11 @@ def mpc(
             height = BlendedHeight(previous, forecast, now, sample)
         previous = forecast
         command = _command(plan, height, plant.top, radius)
-        block, block_inputs, applied = plant.advance(x, now, per_sample, command)
+        try:
+            block, block_inputs, applied = plant.advance(x, now, per_sample, command)
+        except SimulationError as error:
+            plant_failure = f"the plant failed between t = {now:g} and {now + sample:g} s: {error}"
+            break
         x = block[-1]
         step_times = now + np.arange(1, per_sample + 1) * h
         times.append(step_times)
@@ -280,7 +286,8 @@ def mpc(
     time_grid = np.concatenate(times)
     end = np.concatenate(states)[:, 0:3]
     error = clearance_error(scene.seabed.hills, end)
-    ref_errors = _references(scene, plant, references, time_grid)
+    ref_errors, ref_failures = _references(scene, plant, references, time_grid)
+    status = _status(samples, failures, plant_failure, ref_failures)
     return MpcResult(
         time=time_grid,
         winch_angle=np.concatenate(angles),
@@ -294,7 +301,7 @@ def mpc(
         iterations=np.array(iterations),
         statuses=statuses,
         failures=failures,
-        success=not failures,
+        success=not failures and plant_failure is None,
         limited_steps=limited,
         angle_range=(low, high),
         real_time_factor=duration / wall_time,
@@ -316,21 +323,45 @@ def mpc(
         },
         references=ref_errors,
         reference_omegas={k: rms_objective(time_grid, v) for k, v in ref_errors.items()},
+        status=status,
     )
 
 
+def _status(samples: int, failures: list[str], plant_failure: str | None, references) -> str:
+    """One line on how the loop went: every solve, the plant, the reference runs."""
+    parts = [plant_failure] if plant_failure else []
+    parts.append(
+        f"{len(failures)} of {samples} solves failed (the plant kept the previous plan)"
+        if failures
+        else "every solve succeeded"
+    )
+    return "; ".join(parts + references)
+
+
 def _run_open(plant: Plant, angle, time_grid: np.ndarray) -> np.ndarray:
-    """Clearance error of the plant under a fixed angle history (no controller)."""
+    """Clearance error of the plant under a fixed angle history (no controller).
+
+    Raises SimulationError when the plant fails under it.
+    """
     x = plant.initial_state(plant.apply(angle, np.zeros(1)))
     states, _, _ = plant.advance(x, 0.0, time_grid.size - 1, angle)
     return clearance_error(plant.scene.seabed.hills, states[:, 0:3])
 
 
-def _references(scene, plant: Plant, names, time_grid) -> dict[str, np.ndarray]:
-    """The reference runs asked for (see :func:`mpc`)."""
-    out = {}
+def _references(scene, plant: Plant, names, time_grid) -> tuple[dict[str, np.ndarray], list]:
+    """The reference runs asked for (see :func:`mpc`), and why any of them is missing."""
+    out, missing = {}, []
+
+    def run(name, angle):
+        try:
+            out[name] = _run_open(plant, angle, time_grid)
+        except SimulationError as error:
+            missing.append(f"reference {name!r} left out: its plant run failed ({error})")
+
+    if time_grid[-1] < scene.numerics.duration:
+        return out, ["no reference runs: the loop stopped early"]
     if "locked" in names:
-        out["locked"] = _run_open(plant, lambda t: tuple(np.zeros((3, np.size(t)))), time_grid)
+        run("locked", lambda t: tuple(np.zeros((3, np.size(t)))))
     if "open-loop" in names:
         from cable_ocp.control.ocp import IpoptSettings, make_control
         from cable_ocp.control.optimization import optimize
@@ -338,8 +369,11 @@ def _references(scene, plant: Plant, names, time_grid) -> dict[str, np.ndarray]:
         calm = scene.updated({"top.heave.amplitude": 0.0})
         settings = IpoptSettings(elements=3, step=0.5, intervals=_intervals(scene, 0.5))
         result = optimize(calm, "ipopt", settings, quiet=True)
+        if not result.success:
+            missing.append(f"reference 'open-loop' left out: {result.status}")
+            return out, missing
         profile = make_control(calm, settings).angle_function(result.parameters)
-        out["open-loop"] = _run_open(plant, profile, time_grid)
+        run("open-loop", profile)
         top = plant.top
 
         def compensated(t):
@@ -353,8 +387,8 @@ def _references(scene, plant: Plant, names, time_grid) -> dict[str, np.ndarray]:
                 acc + acceleration[2] / r,
             )
 
-        out["open-loop + heave feedback"] = _run_open(plant, compensated, time_grid)
-    return out
+        run("open-loop + heave feedback", compensated)
+    return out, missing
 
 
 def _intervals(scene, step: float) -> int:

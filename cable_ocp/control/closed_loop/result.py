@@ -43,7 +43,7 @@ class MpcResult:
     failures : list of str
         One line per failed solve (its time and status); the plant then kept the previous plan.
     success : bool
-        Every solve succeeded.
+        Every solve succeeded and the plant ran to the end.
     limited_steps : int
         Plant steps at which the soft limiter changed the commanded angle (within 0.5 rad of a
         bound, :mod:`.plant`).
@@ -64,6 +64,9 @@ class MpcResult:
         ``"open-loop"``, ``"open-loop + heave feedback"``), m.
     reference_omegas : dict of str to float
         Their Omega, m.
+    status : str
+        How the loop went: the plant's failure (when and why; the arrays then end there), the
+        failed solves, reference runs left out.
     """
 
     time: np.ndarray
@@ -88,12 +91,14 @@ class MpcResult:
     settings: dict
     references: dict[str, np.ndarray] = field(default_factory=dict)
     reference_omegas: dict[str, float] = field(default_factory=dict)
+    status: str = ""
 
     def summary(self) -> dict:
         """The scalar figures of the run (json-ready)."""
         return {
             "omega_m": self.omega,
             "success": self.success,
+            "status": self.status,
             "failed_solves": len(self.failures),
             "failures": self.failures,
             "solves": int(self.sample_times.size),

@@ -13,22 +13,13 @@ from cable_ocp.simulation.integrate import integrate
 from cable_ocp.simulation.statics import equilibrium
 from cable_ocp.studies.speed_accuracy.plan import StudyPlan
 from cable_ocp.studies.speed_accuracy.timing import timed
+from cable_ocp.studies.uniform import locked_uniform
 
 
 def study_scene(scene, plan: StudyPlan, duration: float):
-    """The scene over ``duration`` (s), its top-element bounds widened to admit every ``Delta/2``.
-
-    The winch stays locked, so the bounds only have to admit the initial top element.
-    """
+    """The scene over ``duration`` (s) on the uniform mesh of every n of the plan (locked winch)."""
     counts = (*plan.elements, *plan.torsion_elements, plan.reference_elements)
-    half = scene.cable.length / 2
-    return scene.updated(
-        {
-            "numerics.duration": duration,
-            "winch.top_length_min": min(scene.winch.top_length_min, half / max(counts)),
-            "winch.top_length_max": max(scene.winch.top_length_max, half / min(counts)),
-        }
-    )
+    return locked_uniform(scene, counts, {"numerics.duration": duration})
 
 
 @dataclass(frozen=True)

@@ -7,6 +7,8 @@ for the Baumgarte drift (:data:`SHARP_PUSH`).
 
 from __future__ import annotations
 
+from cable_ocp.studies.uniform import locked_uniform
+
 # The end_force scene's push (10 kN along x ramped over 15 s, 5 kN sine along y) from t = 0.
 PUSH = {"end.force_start": 0.0}
 # The same push ramped up over 1 s: a violent start, for the Baumgarte drift.
@@ -16,15 +18,8 @@ SHARP_PUSH = {**PUSH, "end.force_ramp": 1.0}
 def pushed_scene(scene, elements: int, torsion: bool, push: dict = PUSH):
     """The scene with ``elements``, ``torsion`` and a push (scene overrides, :data:`PUSH`).
 
-    The top-element length bounds are widened to admit ``Delta/2`` of this ``n`` (locked winch).
+    The winch is locked, on the uniform mesh of this ``n``.
     """
-    half = scene.cable.length / elements / 2
-    return scene.updated(
-        {
-            **push,
-            "model.elements": elements,
-            "model.torsion": torsion,
-            "winch.top_length_min": min(scene.winch.top_length_min, half),
-            "winch.top_length_max": max(scene.winch.top_length_max, half),
-        }
+    return locked_uniform(
+        scene, [elements], {**push, "model.elements": elements, "model.torsion": torsion}
     )

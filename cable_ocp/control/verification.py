@@ -1,0 +1,134 @@
+"""Verification of a winch profile on the scene's own model: does it do what it claims.
+
+What a user asks of an optimised profile: on the scene's full model, within the winch's limits, in
+a simulation that can be trusted, where does it keep the end? :func:`verify_profile` answers it:
+
+1. the winch bounds, held between the samples (:func:`cable_ocp.drive.bounds.violation`);
+2. a simulation of the scene's model under the profile. Its bond residual is the health check of
+   that simulation, not a measure of the profile: it is reported, and a run that leaves the
+   scene's ``numerics.constraint_tolerance`` at the scene's step is tried again at half and a
+   quarter of the step (the same output times) before the profile is declared unverifiable;
+3. how long the winch rode a bound: a bound-limited optimum is a success that says so.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from cable_ocp.drive.bounds import angle_bounds, violation
+from cable_ocp.model.cable import CableModel
+from cable_ocp.simulation.integrate import SimulationError, bond_residuals
+from cable_ocp.simulation.run import simulate
+from cable_ocp.simulation.trajectory import Trajectory
+
+# Halvings of the scene's step tried when a run at it leaves its bonds or blows up.
+STEP_HALVINGS = 2
+# The winch counts as riding a bound while its angle is within this of it (rad).
+BOUND_RIDE = 1e-3
+
+
+@dataclass(frozen=True)
+class Verification:
+    """The verdict on a winch profile.
+
+    Attributes
+    ----------
+    trajectory : Trajectory or None
+        The scene's model under the profile; None when the profile failed.
+    reason : str or None
+        Why it failed (a bound broken, or no trustworthy simulation); None when it passed.
+    step : float, s
+        RK4 step of the run that passed (the scene's, or a halving of it).
+    bond_residual : float, m
+        Largest bond residual of that run (NaN without one).
+    bound_time : float, s
+        Time the winch angle spent within :data:`BOUND_RIDE` of a bound.
+    note : str
+        How the run was obtained, when not at the scene's step (else empty).
+    """
+
+    trajectory: Trajectory | None
+    reason: str | None
+    step: float
+    bond_residual: float = float("nan")
+    bound_time: float = 0.0
+    note: str = ""
+
+
+def verify_profile(
+    scene, control, parameters: np.ndarray, quiet: bool = True, compiled: bool = False
+) -> Verification:
+    """Check the bounds of a profile and simulate the scene's own model under it.
+
+    Parameters
+    ----------
+    scene : Scene
+        Heave compensation (a feedforward of the optimisation) is the scene's.
+    control : KnotSpline or HermiteIntervals
+    parameters : array
+        The profile's parameters (rad, rad/s).
+    quiet : bool
+        No progress bar.
+    compiled : bool
+        Simulate the compiled model.
+
+    Returns
+    -------
+    Verification
+        Never raises for a failed check: the reason says what failed and where.
+    """
+    step = scene.numerics.step
+    reason = violation(scene, control, parameters)
+    if reason is not None:
+        return Verification(None, reason, step)
+    angle = control.angle_function(parameters)
+    drifted = []
+    for halving in range(STEP_HALVINGS + 1):
+        trial = scene
+        if halving:
+            trial = scene.updated(
+                {
+                    "numerics.step": step / 2**halving,
+                    "numerics.output_every": scene.numerics.output_every * 2**halving,
+                }
+            )
+        try:
+            trajectory = simulate(trial, winch=angle, quiet=quiet, compiled=compiled)
+        except SimulationError as error:
+            drifted.append(f"at h = {trial.numerics.step:g} s: {error}")
+            continue
+        except Exception as error:  # noqa: BLE001 - any other failure of the check fails it
+            reason = f"the full-model simulation raised {type(error).__name__}: {error}"
+            return Verification(None, reason, trial.numerics.step)
+        model = CableModel.from_scene(trial)
+        residual = bond_residuals(model, trajectory.states, trajectory.inputs, compiled)
+        note = ""
+        if drifted:
+            note = (
+                f"verified at h = {trial.numerics.step:g} s, since the run at the scene's step "
+                f"h = {step:g} s failed ({drifted[0]})"
+            )
+        return Verification(
+            trajectory,
+            None,
+            trial.numerics.step,
+            float(residual.max()),
+            bound_time(scene, trajectory),
+            note,
+        )
+    reason = (
+        f"no trustworthy full-model simulation at the scene's step or {STEP_HALVINGS} halvings "
+        f"of it: {'; '.join(drifted)}"
+    )
+    return Verification(None, reason, step / 2**STEP_HALVINGS)
+
+
+def bound_time(scene, trajectory: Trajectory) -> float:
+    """Time (s) that the winch angle of a run spent within :data:`BOUND_RIDE` of a bound."""
+    low, high = angle_bounds(scene)
+    phi = trajectory.winch_angle
+    riding = (phi <= low + BOUND_RIDE) | (phi >= high - BOUND_RIDE)
+    both = riding[:-1] & riding[1:]
+    return float(np.sum(np.diff(trajectory.time)[both]))

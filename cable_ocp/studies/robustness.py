@@ -1,0 +1,242 @@
+"""Robustness on a user's own scene: seeded random variants of ``paper_hill``, solved by default.
+
+``cable-ocp bench --only robustness [--cases N --seed S]`` draws N scenes that an offshore user
+would plausibly set (tow speed, sway, clearance, one to three Gaussian hills near the end's path, a
+uniform current, the number of elements, and in about a third of them a vessel heave), runs the
+default :func:`cable_ocp.optimize` on each (and :func:`cable_ocp.mpc` on the heaving ones), and
+prints how many succeeded, how many raised (which must be none), Omega against the locked winch,
+how many optima rode a winch bound, and the wall times.
+
+A case *meets the goal* when it succeeded and its Omega is at most :data:`OMEGA_GOAL`, or at least
+:data:`GAIN_GOAL` times better than the locked winch's (where the winch's range does not allow
+the first).
+"""
+
+from __future__ import annotations
+
+import time
+import traceback
+from dataclasses import dataclass
+
+import numpy as np
+
+from cable_ocp.control.closed_loop.loop import mpc
+from cable_ocp.control.optimization import optimize
+from cable_ocp.scene.bundled import scene_path
+from cable_ocp.scene.schema import load_scene
+
+OMEGA_GOAL = 0.01  # m
+GAIN_GOAL = 3.0  # locked Omega over the optimum's
+
+
+@dataclass(frozen=True)
+class Ranges:
+    """Where the random scenes are drawn from (uniformly unless stated).
+
+    Attributes
+    ----------
+    surge_speed : (float, float), m/s
+    sway_speed : (float, float), m/s
+    clearance : (float, float), m
+    hills : (int, int)
+        Fewest and most hills.
+    hill_height : (float, float), m
+    hill_width : (float, float), m
+    hill_x, hill_y : (float, float), m
+        Where the hill centres lie, around the end's path.
+    current : float, m/s
+        Largest magnitude of each horizontal current component.
+    elements : tuple of int
+    heave_share : float
+        Share of the scenes with a vessel heave.
+    heave_amplitude : (float, float), m
+    heave_period : (float, float), s
+    """
+
+    surge_speed: tuple[float, float] = (0.7, 1.4)
+    sway_speed: tuple[float, float] = (0.0, 0.5)
+    clearance: tuple[float, float] = (3.0, 12.0)
+    hills: tuple[int, int] = (1, 3)
+    hill_height: tuple[float, float] = (3.0, 15.0)
+    hill_width: tuple[float, float] = (15.0, 30.0)
+    hill_x: tuple[float, float] = (20.0, 160.0)
+    hill_y: tuple[float, float] = (-10.0, 45.0)
+    current: float = 0.3
+    elements: tuple[int, ...] = (10, 15, 20)
+    heave_share: float = 1 / 3
+    heave_amplitude: tuple[float, float] = (0.3, 1.0)
+    heave_period: tuple[float, float] = (7.0, 12.0)
+
+
+def random_overrides(rng: np.random.Generator, ranges: Ranges = Ranges()) -> dict:
+    """Scene overrides of ``paper_hill`` for one random case (rounded to readable figures)."""
+
+    def uniform(bounds, digits=2):
+        return round(float(rng.uniform(*bounds)), digits)
+
+    hills = [
+        {
+            "height": uniform(ranges.hill_height, 1),
+            "x0": uniform(ranges.hill_x, 0),
+            "y0": uniform(ranges.hill_y, 0),
+            "width_x": uniform(ranges.hill_width, 0),
+            "width_y": uniform(ranges.hill_width, 0),
+        }
+        for _ in range(int(rng.integers(ranges.hills[0], ranges.hills[1] + 1)))
+    ]
+    overrides = {
+        "model.elements": int(rng.choice(ranges.elements)),
+        "top.tow.surge_speed": uniform(ranges.surge_speed),
+        "top.tow.sway_speed": uniform(ranges.sway_speed),
+        "seabed.clearance": uniform(ranges.clearance, 1),
+        "seabed.hills": hills,
+        "environment.current": [
+            uniform((-ranges.current, ranges.current)),
+            uniform((-ranges.current, ranges.current)),
+            0.0,
+        ],
+    }
+    if rng.uniform() < ranges.heave_share:
+        overrides["top.heave"] = {
+            "amplitude": uniform(ranges.heave_amplitude),
+            "period": uniform(ranges.heave_period, 1),
+        }
+    return overrides
+
+
+def random_cases(count: int, seed: int, ranges: Ranges = Ranges()) -> list[dict]:
+    """``count`` scene overrides drawn from ``ranges`` with the seed ``seed``."""
+    rng = np.random.default_rng(seed)
+    return [random_overrides(rng, ranges) for _ in range(count)]
+
+
+def run_case(overrides: dict, closed_loop: bool = True) -> dict:
+    """Default ``optimize`` (and ``mpc`` on a heaving scene) of one case; never raises.
+
+    Returns
+    -------
+    dict
+        ``raised`` (the traceback's last line, or None), ``success``, ``status``, ``omega`` and
+        ``locked`` (m), ``bound_time`` (s the verified winch rode a bound), ``wall`` (s); with a
+        heave, the same for the closed loop under ``mpc_*``.
+    """
+    scene = load_scene(scene_path("paper_hill"), overrides)
+    row = {"overrides": overrides, "heave": scene.top.heave is not None, "raised": None}
+    started = time.perf_counter()
+    try:
+        result = optimize(scene, quiet=True)
+        row.update(
+            success=result.success,
+            status=result.status,
+            omega=result.omega,
+            locked=result.locked_omega,
+            bound_time=result.bound_time,
+        )
+    except Exception as error:  # noqa: BLE001 - a raise is what this benchmark counts
+        row.update(success=False, status="raised", raised=_last_line(error))
+    row["wall"] = time.perf_counter() - started
+    if closed_loop and row["heave"]:
+        started = time.perf_counter()
+        row["mpc_raised"] = None
+        try:
+            loop = mpc(scene, quiet=True)
+            row.update(mpc_success=loop.success, mpc_omega=loop.omega, mpc_status=loop.status)
+        except Exception as error:  # noqa: BLE001
+            row.update(mpc_success=False, mpc_status="raised", mpc_raised=_last_line(error))
+        row["mpc_wall"] = time.perf_counter() - started
+    return row
+
+
+def _last_line(error: Exception) -> str:
+    return traceback.format_exception_only(type(error), error)[-1].strip()
+
+
+def meets_goal(row: dict) -> bool:
+    """Success with Omega <= OMEGA_GOAL, or at least GAIN_GOAL times better than locked."""
+    if not row["success"]:
+        return False
+    return row["omega"] <= OMEGA_GOAL or row["omega"] * GAIN_GOAL <= row["locked"]
+
+
+def summary(rows: list[dict]) -> dict:
+    """The benchmark's figures over its rows (see the module docstring)."""
+    successes = [r for r in rows if r["success"]]
+    ratio = np.array([r["omega"] / r["locked"] for r in successes]) if successes else np.zeros(0)
+    omega = np.array([r["omega"] for r in successes])
+    loops = [r for r in rows if "mpc_success" in r]
+    return {
+        "cases": len(rows),
+        "success": len(successes),
+        "raised": sum(r["raised"] is not None for r in rows),
+        "goal": sum(meets_goal(r) for r in rows),
+        "bound_limited": sum(r.get("bound_time", 0.0) > 0 for r in successes),
+        "omega_median": float(np.median(omega)) if omega.size else float("nan"),
+        "omega_p90": float(np.percentile(omega, 90)) if omega.size else float("nan"),
+        "ratio_median": float(np.median(ratio)) if ratio.size else float("nan"),
+        "ratio_p90": float(np.percentile(ratio, 90)) if ratio.size else float("nan"),
+        "wall_median": float(np.median([r["wall"] for r in rows])),
+        "mpc_cases": len(loops),
+        "mpc_success": sum(r["mpc_success"] for r in loops),
+        "mpc_raised": sum(r["mpc_raised"] is not None for r in loops),
+        "mpc_wall_median": float(np.median([r["mpc_wall"] for r in loops])) if loops else 0.0,
+    }
+
+
+def report(cases: int = 50, seed: int = 0, closed_loop: bool = True, quiet: bool = False):
+    """Run and print the robustness benchmark; returns ``(rows, summary)``."""
+    rows = []
+    for k, overrides in enumerate(random_cases(cases, seed)):
+        row = run_case(overrides, closed_loop)
+        rows.append(row)
+        if not quiet:
+            print(_case_line(k, row), flush=True)
+    figures = summary(rows)
+    if not quiet:
+        print(_summary_text(figures, seed))
+    return rows, figures
+
+
+def _case_line(k: int, row: dict) -> str:
+    o = row["overrides"]
+    heave = o.get("top.heave")
+    wave = f"heave {heave['amplitude']:.2f} m/{heave['period']:.1f} s" if heave else "no heave"
+    text = (
+        f"case {k:>3}: n = {o['model.elements']:>2}, U = {o['top.tow.surge_speed']:.2f}, "
+        f"{len(o['seabed.hills'])} hill(s), {wave}: "
+    )
+    if row["raised"]:
+        return text + f"RAISED {row['raised']}"
+    text += (
+        f"{'ok' if row['success'] else 'FAILED'} Omega {row['omega']:.3g} m (locked "
+        f"{row['locked']:.3g} m), bound {row['bound_time']:.0f} s, {row['wall']:.1f} s"
+    )
+    if not row["success"]:
+        text += f" [{row['status']}]"
+    if "mpc_success" in row:
+        text += (
+            f"; mpc {'RAISED ' + row['mpc_raised'] if row['mpc_raised'] else ''}"
+            f"{'ok' if row['mpc_success'] else 'failed'} Omega {row.get('mpc_omega', np.nan):.3g}"
+            f" m, {row['mpc_wall']:.1f} s"
+        )
+    return text
+
+
+def _summary_text(f: dict, seed: int) -> str:
+    return "\n".join(
+        [
+            f"robustness: {f['cases']} random variants of paper_hill (seed {seed}), default "
+            "optimize(); mpc() on the heaving ones",
+            f"  success            {f['success']}/{f['cases']} "
+            f"({100 * f['success'] / max(f['cases'], 1):.0f} %)",
+            f"  raised             {f['raised']}",
+            f"  goal met           {f['goal']}/{f['cases']} (Omega <= {OMEGA_GOAL} m or "
+            f">= {GAIN_GOAL:g}x better than locked)",
+            f"  Omega              median {f['omega_median']:.3g} m, "
+            f"90th pct {f['omega_p90']:.3g} m",
+            f"  Omega / locked     median {f['ratio_median']:.3g}, 90th pct {f['ratio_p90']:.3g}",
+            f"  bound-limited      {f['bound_limited']}",
+            f"  wall time          median {f['wall_median']:.1f} s per optimize",
+            f"  mpc                {f['mpc_success']}/{f['mpc_cases']} succeeded, "
+            f"{f['mpc_raised']} raised, median {f['mpc_wall_median']:.1f} s",
+        ]
+    )
