@@ -1,6 +1,7 @@
 """The seabed of eq. 40 and the objective of eq. 39 (cable_ocp.simulation.seabed).
 
-The clearance error is the integrand of eq. 39, with the seabed delta below the end's start.
+The clearance error is the integrand of eq. 39, with the seabed under the end's start delta below
+it.
 """
 
 from __future__ import annotations
@@ -17,24 +18,28 @@ HILLS = (Hill(height=15.0, x0=70.0, y0=20.0, width_x=20.0, width_y=20.0),)
 
 @pytest.mark.parametrize("delta", [0.0, 5.0, 12.5])
 def test_clearance_error_is_the_paper_integrand(delta):
-    """e = z_E + z_sb - z(x, y) - delta with z_sb = -(z_E(0) - delta), for any delta (eq. 39)."""
+    """e = clearance over the seabed - delta, the seabed under the start delta below the end."""
     rng = np.random.default_rng(7)
     end = np.column_stack(
         [rng.uniform(0, 140, 50), rng.uniform(-10, 40, 50), rng.uniform(-300, -280, 50)]
     )
-    z_sb = -(end[0, 2] - delta)
-    paper = end[:, 2] + z_sb - seabed_height(HILLS, end[:, 0], end[:, 1]) - delta
-    assert np.allclose(clearance_error(HILLS, end), paper, atol=1e-12)
+    level = end[0, 2] - delta - seabed_height(HILLS, end[0, 0], end[0, 1])  # the flat level
+    clearance = end[:, 2] - (level + seabed_height(HILLS, end[:, 0], end[:, 1]))
+    assert clearance[0] == pytest.approx(delta, abs=1e-12)
+    assert np.allclose(clearance_error(HILLS, end), clearance - delta, atol=1e-12)
 
 
 def test_an_end_that_follows_the_hill_has_zero_objective():
-    """The end starts delta above the flat level and keeps delta above the hill: Omega = 0.
+    """The end starts delta above the seabed and keeps delta above the hill: Omega = 0.
 
-    (A start over a hill's flank is ``delta - z(x_E(0), y_E(0))`` above it: eq. 39 measures from
-    the flat level.)
+    Also from a start over the hill's flank (x = 40 m, 5.5 m up): e(0) = 0 there.
     """
     t = np.linspace(0.0, 210.0, 2101)
-    x, y = t - 100.0, np.full(t.shape, 20.0)  # from flat ground over the hill top at 170 s
+    for x in (t - 100.0, t / 2 + 40.0):  # from flat ground over the hill top; from its flank
+        y = np.full(t.shape, 20.0)
+        z = -295.0 + seabed_height(HILLS, x, y)
+        assert rms_objective(t, clearance_error(HILLS, np.column_stack([x, y, z]))) < 1e-12
+    x, y = t - 100.0, np.full(t.shape, 20.0)
     start = -295.0
     z = start + seabed_height(HILLS, x, y)
     error = clearance_error(HILLS, np.column_stack([x, y, z]))
@@ -78,7 +83,7 @@ def test_hills_add():
 def test_clearance_error_follows_the_seabed():
     end = np.array([[0.0, 0.0, -295.0], [70.0, 20.0, -290.0], [300.0, 0.0, -295.5]])
     under_start = 15 * np.exp(-((70 / 20) ** 2) - (20 / 30) ** 2)  # the hill's foot, 4.6e-5 m
-    expected = [-under_start, 5.0 - 15.0, -0.5]
+    expected = [0.0, 5.0 - 15.0 + under_start, -0.5 + under_start]  # measured from the start
     np.testing.assert_allclose(clearance_error([HILL], end), expected, rtol=1e-12, atol=1e-14)
 
 

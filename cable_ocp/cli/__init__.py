@@ -302,7 +302,7 @@ def _validate(args) -> int:
 
 
 def _bench(args) -> int:
-    from cable_ocp.studies import bench, bench_simulate
+    from cable_ocp.studies import bench, bench_simulate, robustness
     from cable_ocp.studies.moordyn_compare import moordyn_report
 
     if args.hessian:
@@ -314,8 +314,11 @@ def _bench(args) -> int:
         "moordyn": moordyn_report,
         "ocp": bench.ocp_report,
         "ocp-speed": bench.ocp_speed_report,
+        "robustness": lambda _, quick: robustness.report(
+            args.cases or (6 if quick else 50), args.seed
+        ),
     }
-    for name in args.only or list(parts):
+    for name in args.only or [part for part in parts if part != "robustness"]:
         parts[name](models_dir(), quick=args.quick)
         print()
     return 0
@@ -426,8 +429,17 @@ def build_parser() -> argparse.ArgumentParser:
     bench.add_argument(
         "--only",
         nargs="+",
-        choices=["rk4", "simulate", "moordyn", "ocp", "ocp-speed"],
-        help="run only these parts",
+        choices=["rk4", "simulate", "moordyn", "ocp", "ocp-speed", "robustness"],
+        help="run only these parts (robustness runs only when named)",
+    )
+    bench.add_argument(
+        "--cases",
+        type=_integer(1, 10_000),
+        default=None,
+        help="robustness: random scenes to draw (default 50, 6 with --quick)",
+    )
+    bench.add_argument(
+        "--seed", type=int, default=0, help="robustness: seed of the random scenes (default 0)"
     )
     bench.add_argument(
         "--hessian", action="store_true", help="IPOPT exact vs limited-memory Hessian instead"

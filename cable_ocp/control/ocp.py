@@ -35,7 +35,7 @@ from cable_ocp.simulation.integrate import (
     step_function,
 )
 from cable_ocp.simulation.progress import IterationLog, check_verbosity
-from cable_ocp.simulation.seabed import seabed_height
+from cable_ocp.simulation.seabed import clearance_reference, seabed_height
 
 NLP_FUNCTIONS = ("nlp_f", "nlp_g", "nlp_grad_f", "nlp_jac_g", "nlp_hess_l", "nlp_grad")
 
@@ -155,7 +155,7 @@ def ocp_step(
     return function, step_compile_report(model, step, derivatives=True)
 
 
-def _interval_function(step_function, step, steps, hills, end_height0) -> ca.Function:
+def _interval_function(step_function, step, steps, hills, reference) -> ca.Function:
     """``(x, stage inputs, bias) -> (x_end, integral of (e + bias)^2)`` over one interval.
 
     ``bias`` (1 x steps+1) is added to the clearance error at the RK4 points: the correction that
@@ -168,7 +168,7 @@ def _interval_function(step_function, step, steps, hills, end_height0) -> ca.Fun
     states = step_function.mapaccum(steps)(x, stages)
     points = ca.horzcat(x, states)
     xe = ca.SX.sym("xe", size)
-    error = xe[2] - end_height0 - seabed_height(hills, xe[0], xe[1])
+    error = xe[2] - seabed_height(hills, xe[0], xe[1]) - reference
     errors = ca.Function("e", [xe], [error]).map(steps + 1)(points) + bias
     weights = np.full(steps + 1, step)
     weights[[0, -1]] = step / 2
@@ -230,7 +230,11 @@ class ShootingProblem:
         step_function, report = ocp_step(model, step, settings.compiled)
         self.compile_time = report.compile_time if report is not None else 0.0
         interval = _interval_function(
-            step_function, step, per_interval, problem.scene.seabed.hills, problem.x0[2]
+            step_function,
+            step,
+            per_interval,
+            problem.scene.seabed.hills,
+            clearance_reference(problem.scene.seabed.hills, problem.x0),
         )
         if settings.shooting == "single":
             costs = interval.mapaccum(settings.intervals)(ca.DM(problem.x0), inputs, bias_rows)[1]

@@ -8,7 +8,8 @@ a simulation that can be trusted, where does it keep the end? :func:`verify_prof
    that simulation, not a measure of the profile: it is reported, and a run that leaves the
    scene's ``numerics.constraint_tolerance`` at the scene's step is tried again at half and a
    quarter of the step (the same output times) before the profile is declared unverifiable;
-3. how long the winch rode a bound: a bound-limited optimum is a success that says so.
+3. how long the winch rode a bound (its angle's Bernstein coefficients on the bound, with any
+   heave feedforward): a bound-limited optimum is a success that says so.
 """
 
 from __future__ import annotations
@@ -17,7 +18,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from cable_ocp.drive.bounds import angle_bounds, violation
+from cable_ocp.drive.bounds import LinearBounds, violation
 from cable_ocp.model.cable import CableModel
 from cable_ocp.simulation.integrate import SimulationError, bond_residuals
 from cable_ocp.simulation.run import simulate
@@ -25,7 +26,8 @@ from cable_ocp.simulation.trajectory import Trajectory
 
 # Halvings of the scene's step tried when a run at it leaves its bonds or blows up.
 STEP_HALVINGS = 2
-# The winch counts as riding a bound while its angle is within this of it (rad).
+# The winch counts as riding a bound while its angle's Bernstein coefficients are within this of
+# it (rad, 0.5 mm of line on a 0.5 m drum).
 BOUND_RIDE = 1e-3
 
 
@@ -58,7 +60,12 @@ class Verification:
 
 
 def verify_profile(
-    scene, control, parameters: np.ndarray, quiet: bool = True, compiled: bool = False
+    scene,
+    control,
+    bounds: LinearBounds,
+    parameters: np.ndarray,
+    quiet: bool = True,
+    compiled: bool = False,
 ) -> Verification:
     """Check the bounds of a profile and simulate the scene's own model under it.
 
@@ -67,6 +74,8 @@ def verify_profile(
     scene : Scene
         Heave compensation (a feedforward of the optimisation) is the scene's.
     control : KnotSpline or HermiteIntervals
+    bounds : LinearBounds
+        The winch bounds on the control's parameters (for the time spent on them).
     parameters : array
         The profile's parameters (rad, rad/s).
     quiet : bool
@@ -115,7 +124,7 @@ def verify_profile(
             None,
             trial.numerics.step,
             float(residual.max()),
-            bound_time(scene, trajectory),
+            bounds.active_time(parameters, BOUND_RIDE),
             note,
         )
     reason = (
@@ -123,12 +132,3 @@ def verify_profile(
         f"of it: {'; '.join(drifted)}"
     )
     return Verification(None, reason, step / 2**STEP_HALVINGS)
-
-
-def bound_time(scene, trajectory: Trajectory) -> float:
-    """Time (s) that the winch angle of a run spent within :data:`BOUND_RIDE` of a bound."""
-    low, high = angle_bounds(scene)
-    phi = trajectory.winch_angle
-    riding = (phi <= low + BOUND_RIDE) | (phi >= high - BOUND_RIDE)
-    both = riding[:-1] & riding[1:]
-    return float(np.sum(np.diff(trajectory.time)[both]))

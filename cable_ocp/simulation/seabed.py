@@ -3,11 +3,13 @@
 The height is measured from the flat seabed (m, up). The same function serves numpy arrays and
 CasADi expressions, so the optimiser differentiates the very formula the simulation reports.
 
-The clearance ``delta`` (``seabed.clearance``) is the paper's: the flat seabed lies ``delta`` below
-the end's starting position, ``z_sb = -(z_E(0) - delta)`` (eq. 39), so ``delta`` is the end's
-starting clearance and the clearance the objective asks it to keep over the seabed. In eq. 39,
-``z_E + z_sb - z(x, y) - delta = z_E(t) - z_E(0) - z(x_E, y_E)``: ``delta`` cancels, so it places
-the seabed (in plots) but does not change ``e(t)``, Omega or the optimal winch.
+The clearance ``delta`` (``seabed.clearance``) is the end's starting clearance over the seabed
+under it, and the clearance the objective asks it to keep: the seabed under the start lies
+``delta`` below the end, so ``e(t) = z_E(t) - z(x_E, y_E) - (z_E(0) - z(x_E(0), y_E(0)))``
+(eq. 39, where the paper's seabed is flat under the start). ``delta`` cancels, so it places the
+seabed (in plots) but does not change ``e(t)``, Omega or the optimal winch; ``e(0) = 0`` even where
+a hill already rises under the start (the paper's form then asked for an error of the hill's
+height at t = 0, which no winch can undo).
 """
 
 from __future__ import annotations
@@ -41,20 +43,29 @@ def seabed_height(hills, x, y):
     return total
 
 
+def clearance_reference(hills, start) -> float:
+    """``z_E(0) - z(x_E(0), y_E(0))`` (m): the end's start over the seabed's height under it.
+
+    Parameters
+    ----------
+    start : array (3,) or longer (a state: its first three entries), m
+    """
+    return float(start[2] - seabed_height(hills, start[0], start[1]))
+
+
 def clearance_error(hills, end_positions: np.ndarray) -> np.ndarray:
     """Deviation of the end from the clearance ``delta`` over the seabed, ``e(t)`` (eq. 39), m.
 
-    ``e = z_E + z_sb - z(x_E, y_E) - delta = z_E(t) - z_E(0) - z(x_E(t), y_E(t))`` with the seabed
-    depth ``z_sb = -(z_E(0) - delta)`` of eq. 39: the end starts ``delta`` above the flat seabed and
-    should stay ``delta`` above the seabed, which may rise under it. ``delta`` cancels, so it is not
-    an argument.
+    ``e = z_E(t) - z(x_E(t), y_E(t)) - (z_E(0) - z(x_E(0), y_E(0)))``: the end starts ``delta``
+    above the seabed under it and should stay ``delta`` above the seabed, which may rise under
+    it. ``delta`` cancels, so it is not an argument.
 
     Parameters
     ----------
     end_positions : array (k, 3), m
     """
     x, y, z = end_positions.T
-    return z - z[0] - seabed_height(hills, x, y)
+    return z - seabed_height(hills, x, y) - clearance_reference(hills, end_positions[0])
 
 
 def rms_objective(time: np.ndarray, error: np.ndarray) -> float:

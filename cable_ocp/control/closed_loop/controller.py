@@ -5,7 +5,7 @@ model) the winch angle is a C1 piecewise cubic (Hermite) with the angle and its 
 ``M + 1`` interval nodes as decision variables; the first node is held at the angle and rate the
 winch has now. The NLP's parameters are everything that changes from one sample to the next: the
 reduced state estimate, the forecast top position and velocity, the end offset (measured end minus
-the reduced end, :mod:`.projection`), the clearance reference ``z_E(0)`` and the end
+the reduced end, :mod:`.projection`), the clearance reference ``z_E(0) - z(E(0))`` and the end
 force over the horizon. The seabed is known and built in.
 
 Objective: ``1/H int e^2 dt + w 1/H int (r_D phi')^2 dt`` (trapezoidal on the RK4 grid),

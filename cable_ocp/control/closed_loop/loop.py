@@ -30,7 +30,7 @@ from cable_ocp.model.cable import CableModel
 from cable_ocp.model.layout import INPUTS
 from cable_ocp.simulation.integrate import SimulationError
 from cable_ocp.simulation.progress import Progress
-from cable_ocp.simulation.seabed import clearance_error, rms_objective
+from cable_ocp.simulation.seabed import clearance_error, clearance_reference, rms_objective
 
 # Relative slack when checking that one time span is a whole multiple of another.
 MULTIPLE_TOLERANCE = 1e-9
@@ -217,7 +217,7 @@ def mpc(
     angles = [applied.angle]
     planned = [np.zeros(1)]
     limited = 0
-    reference = float(x[2])
+    reference = clearance_reference(scene.seabed.hills, x)
     guess = np.zeros(controller.size)
     sample_times, solve_times, iterations, statuses, failures = [], [], [], [], []
     plant_failure = None
