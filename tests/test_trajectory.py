@@ -1,6 +1,7 @@
 """Trajectory files (cable_ocp.simulation.trajectory): a run saved and loaded back is the same run.
 
-Truncated, garbled or ill-fitting files are refused with the file named.
+netCDF (result format 2) with units on every variable; files of format 1 (npz + json) still
+load. Truncated, garbled or ill-fitting files are refused with the file named.
 """
 
 from __future__ import annotations
@@ -10,20 +11,68 @@ import zipfile
 
 import numpy as np
 import pytest
+import xarray as xr
+from legacy_results import write_trajectory
 
+from cable_ocp.scene.labelled import FORMAT
 from cable_ocp.scene.schema import load_scene
+from cable_ocp.simulation.labelled import state_names
 from cable_ocp.simulation.run import simulate
 from cable_ocp.simulation.trajectory import Trajectory
 
 
-def test_trajectory_round_trip(tmp_path, models_dir):
-    run = simulate(load_scene(models_dir / "paper_flat.toml", {"numerics.duration": 10.0}))
+@pytest.fixture(scope="module")
+def flat_run(models_dir):
+    return simulate(load_scene(models_dir / "paper_flat.toml", {"numerics.duration": 10.0}))
+
+
+def test_trajectory_round_trip(tmp_path, flat_run):
+    run = flat_run
     written = run.save(tmp_path / "run")
-    assert [p.name for p in written] == ["run.npz", "run.json"]
+    assert written == tmp_path / "run.nc" and [p.name for p in tmp_path.iterdir()] == ["run.nc"]
     loaded = Trajectory.load(tmp_path / "run")
     assert loaded.equals(run)
     assert loaded.omega == run.omega and loaded.state_names == run.state_names
     np.testing.assert_array_equal(loaded.end, run.end)
+    assert Trajectory.load(written).equals(run)  # the file's own name works too
+
+
+def test_trajectory_file_has_units_on_every_variable(tmp_path, flat_run):
+    """What a user of open_dataset sees: named dimensions, coordinates, CF units, long names."""
+    with xr.open_dataset(flat_run.save(tmp_path / "run")) as data:
+        assert set(data.dims) == {"time", "element", "joint", "component", "angle"}
+        for name, variable in data.variables.items():
+            assert variable.attrs.get("units"), name
+            assert variable.attrs.get("long_name"), name
+        assert data["time"].attrs["units"] == "s" and data["tension"].attrs["units"] == "N"
+        assert data["velocity"].attrs["units"] == "m s-1"
+        assert list(data["component"].values) == ["x", "y", "z"]
+        assert data.sizes["joint"] == data.sizes["element"] + 1 == 17
+        # The end E is joint 0; its position is element 0's lower end, A_0.
+        end = data["joint_position"].sel(joint=0)
+        np.testing.assert_array_equal(end.values, flat_run.end)
+        np.testing.assert_array_equal(data["position"].sel(element=0).values, flat_run.end)
+        assert data.attrs["scene_name"] == "paper_flat" and data.attrs["cable_ocp_format"] == FORMAT
+
+
+def test_a_trajectory_of_format_1_still_loads(tmp_path, flat_run):
+    write_trajectory(flat_run, tmp_path / "old")
+    assert Trajectory.load(tmp_path / "old").equals(flat_run)
+
+
+def test_a_newer_or_foreign_file_is_named_with_its_version(tmp_path):
+    run = _trajectory()
+    data = run.to_xarray()
+    data.attrs["cable_ocp_format"] = FORMAT + 1
+    data.to_netcdf(tmp_path / "new.nc")
+    with pytest.raises(ValueError, match=rf"new\.nc: written in result format {FORMAT + 1} by"):
+        Trajectory.load(tmp_path / "new")
+    xr.Dataset({"a": ("t", [1.0])}).to_netcdf(tmp_path / "other.nc")
+    with pytest.raises(ValueError, match=r"other\.nc: not a cable_ocp result"):
+        Trajectory.load(tmp_path / "other.nc")
+    (tmp_path / "bad.nc").write_bytes(b"not netCDF at all")
+    with pytest.raises(ValueError, match=r"bad\.nc: not a readable netCDF file"):
+        Trajectory.load(tmp_path / "bad")
 
 
 def _trajectory(omega=0.25):
@@ -31,7 +80,7 @@ def _trajectory(omega=0.25):
     rng = np.random.default_rng(1)
     return Trajectory(
         time=np.linspace(0, 1, k),
-        states=rng.normal(size=(k, 6)),
+        states=rng.normal(size=(k, 2 * 5 * (n + 1))),
         inputs=rng.normal(size=(k, 15)),
         joints=rng.normal(size=(k, 3, n + 2)),
         tensions=rng.normal(size=(k, n + 1)),
@@ -39,14 +88,21 @@ def _trajectory(omega=0.25):
         clearance_error=rng.normal(size=k),
         omega=omega,
         scene_name="test",
-        state_names=[f"q{i}" for i in range(6)],
+        state_names=state_names(n + 1, 5),
     )
 
 
 @pytest.mark.parametrize("omega", [0.25, float("nan")])
-def test_trajectory_round_trip_with_strict_json(tmp_path, omega):
+def test_trajectory_round_trip_with_nan(tmp_path, omega):
     run = _trajectory(omega)
     run.save(tmp_path / "t")
+    assert Trajectory.load(tmp_path / "t").equals(run)
+
+
+@pytest.mark.parametrize("omega", [0.25, float("nan")])
+def test_format_1_round_trip_with_strict_json(tmp_path, omega):
+    run = _trajectory(omega)
+    write_trajectory(run, tmp_path / "t")
     meta = (tmp_path / "t.json").read_text()
     assert "NaN" not in meta
     assert json.loads(meta)["omega"] == (None if np.isnan(omega) else omega)
@@ -55,6 +111,16 @@ def test_trajectory_round_trip_with_strict_json(tmp_path, omega):
 
 def test_trajectory_load_names_a_truncated_or_garbled_file(tmp_path):
     _trajectory().save(tmp_path / "t")
+    netcdf = tmp_path / "t.nc"
+    data = netcdf.read_bytes()
+    for size in (0, 10, len(data) // 2):
+        netcdf.write_bytes(data[:size])
+        with pytest.raises(ValueError, match=r"t\.nc: not a readable"):
+            Trajectory.load(tmp_path / "t")
+
+
+def test_format_1_load_names_a_truncated_or_garbled_file(tmp_path):
+    write_trajectory(_trajectory(), tmp_path / "t")
     npz, meta = tmp_path / "t.npz", tmp_path / "t.json"
     data, text = npz.read_bytes(), meta.read_text()
     for size in (0, 10, len(data) // 2, len(data) - 30):
@@ -75,7 +141,7 @@ def test_trajectory_load_names_a_truncated_or_garbled_file(tmp_path):
 
 def test_trajectory_load_rejects_arrays_that_do_not_fit(tmp_path):
     run = _trajectory()
-    run.save(tmp_path / "t")
+    write_trajectory(run, tmp_path / "t")
     arrays = {name: getattr(run, name) for name in ("time", "states", "inputs", "joints")}
     arrays |= {"tensions": run.tensions[:, :2], "winch_angle": run.winch_angle,
                "clearance_error": run.clearance_error}  # fmt: skip
@@ -92,5 +158,5 @@ def test_trajectory_load_rejects_arrays_that_do_not_fit(tmp_path):
 
 
 def test_trajectory_load_of_a_missing_file_names_it(tmp_path):
-    with pytest.raises(ValueError, match=r"nothing\.npz: not a readable trajectory"):
+    with pytest.raises(ValueError, match=r"nothing\.nc: no such file"):
         Trajectory.load(tmp_path / "nothing")

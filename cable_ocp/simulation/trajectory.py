@@ -1,4 +1,4 @@
-"""Results of a simulation: the :class:`Trajectory`, with saving to npz + json and loading."""
+"""Results of a simulation: the :class:`Trajectory`, kept as a labelled Dataset in netCDF."""
 
 from __future__ import annotations
 
@@ -9,9 +9,11 @@ from dataclasses import dataclass, fields
 from pathlib import Path
 
 import numpy as np
+import xarray as xr
 
 from cable_ocp.model.layout import INPUTS
-from cable_ocp.scene.output import json_text
+from cable_ocp.scene import labelled as results
+from cable_ocp.simulation import labelled
 
 ARRAY_FIELDS = (
     "time", "states", "inputs", "joints", "tensions", "winch_angle", "clearance_error",
@@ -73,41 +75,43 @@ class Trajectory:
         """Tension at the top (k,), N."""
         return self.tensions[:, -1]
 
-    def save(self, path: str | Path) -> tuple[Path, Path]:
-        """Write ``path.npz`` (arrays) and ``path.json`` (scalars and names).
+    def to_xarray(self) -> xr.Dataset:
+        """The run as an ``xarray.Dataset`` over (time, element, joint, component, angle).
 
-        A NaN ``omega`` is written as JSON ``null`` (the file is strict JSON).
-
-        Returns
-        -------
-        the two paths written
+        Every variable carries ``units`` and ``long_name`` (:mod:`cable_ocp.simulation.labelled`).
         """
-        path = Path(path)
-        arrays = path.with_suffix(".npz")
-        meta = path.with_suffix(".json")
-        np.savez_compressed(arrays, **{name: getattr(self, name) for name in ARRAY_FIELDS})
-        meta.write_text(
-            json_text(
-                {
-                    "omega": self.omega,
-                    "scene_name": self.scene_name,
-                    "state_names": self.state_names,
-                }
-            )
-        )
-        return arrays, meta
+        return labelled.to_xarray(self)
+
+    def save(self, path: str | Path) -> Path:
+        """Write the run to netCDF, ``path.nc`` (see :meth:`to_xarray`); returns the path."""
+        return results.write(self.to_xarray(), Path(path).with_suffix(".nc"))
 
     @classmethod
     def load(cls, path: str | Path) -> Trajectory:
-        """Read a trajectory written by :meth:`save` (``path.npz`` and ``path.json``).
+        """Read a trajectory written by :meth:`save` (``path.nc``).
+
+        Results of cable_ocp 0.1 (``path.npz`` and ``path.json``, result format 1) are read
+        when there is no ``path.nc``.
 
         Raises
         ------
         ValueError
-            Naming the file, if it is missing, truncated or garbled, or the arrays do not fit
-            together.
+            Naming the file, if it is missing, truncated or garbled, of a newer format, or the
+            arrays do not fit together.
         """
         path = Path(path)
+        netcdf = path.with_suffix(".nc")
+        if netcdf.exists() or not (path.with_suffix(".npz").exists() or
+                                   path.with_suffix(".json").exists()):  # fmt: skip
+            dataset = results.read(netcdf, labelled.KIND)
+            try:
+                arrays = labelled.from_dataset(dataset)
+                _check_shapes({name: arrays[name] for name in ARRAY_FIELDS})
+            except (ValueError, KeyError, TypeError) as error:
+                raise ValueError(
+                    f"{netcdf}: not a readable trajectory ({type(error).__name__}: {error})"
+                ) from None
+            return cls(**arrays)
         arrays_path, meta_path = path.with_suffix(".npz"), path.with_suffix(".json")
         try:
             with np.load(arrays_path) as data:

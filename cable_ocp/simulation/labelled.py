@@ -1,0 +1,133 @@
+"""A :class:`~cable_ocp.simulation.trajectory.Trajectory` as a labelled ``xarray.Dataset``.
+
+The state and input vectors are split into named quantities by their layout (CONVENTIONS.md §3):
+``position`` and ``velocity`` of each element's lower end ``A_i`` over (time, element,
+component), its ``euler_angle`` and ``euler_angle_rate`` over (time, element, angle) with the angles
+``psi``, ``theta`` (and ``phi`` with torsion); the inputs as ``top_position``, ``top_velocity``,
+``top_acceleration``, ``top_length`` (and its rate and acceleration) and ``end_force``. The joints
+``A_0`` (the end E) .. ``A_{n+1}`` (the top) are ``joint_position`` over (time, joint,
+component); bond tensions are ``tension`` over (time, element), element i's bond at its upper end
+``A_{i+1}``. Every variable has CF ``units`` and ``long_name``; :func:`from_dataset` puts the
+vectors back together exactly.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import xarray as xr
+
+from cable_ocp.model.layout import INPUT_SIZE, INPUTS
+from cable_ocp.scene.labelled import COMPONENT, DIMENSIONLESS, describe, to_dataset
+
+KIND = "Trajectory"
+ANGLES = ("psi", "theta", "phi")  # the Euler angles of an element, in state order
+# Inputs by name (the layout of cable_ocp.model.layout.INPUTS): (index, dims, units, long name).
+INPUT_VARIABLES = {
+    "top_position": (INPUTS.top, "m", "position of the top point A_{n+1}"),
+    "top_velocity": (INPUTS.top_velocity, "m s-1", "velocity of the top point"),
+    "top_acceleration": (INPUTS.top_acceleration, "m s-2", "acceleration of the top point"),
+    "top_length": (INPUTS.top_length, "m", "length of the top element, set by the winch"),
+    "top_length_rate": (INPUTS.top_length_rate, "m s-1", "rate of the top element's length"),
+    "top_length_acceleration": (
+        INPUTS.top_length_acceleration, "m s-2", "acceleration of the top element's length"
+    ),
+    "end_force": (INPUTS.end_force, "N", "external force at the end E"),
+}  # fmt: skip
+STATE_VARIABLES = {  # (derivative?, coordinates, units, long name)
+    "position": (False, "component", "m", "position of the lower end A_i of element i"),
+    "velocity": (True, "component", "m s-1", "velocity of the lower end A_i of element i"),
+    "euler_angle": (False, "angle", "rad", "Euler angles of element i (psi in the x-z plane, theta "
+              "out of it, phi the twist)"),
+    "euler_angle_rate": (True, "angle", "rad s-1", "rates of the Euler angles of element i"),
+}  # fmt: skip
+
+
+def state_names(elements: int, dofs: int) -> list[str]:
+    """Names of the state entries, ``x_0 .. theta_n`` then ``d_x_0 ..`` (CONVENTIONS.md §3)."""
+    coords = [*COMPONENT, *ANGLES][:dofs]
+    names = [f"{c}_{i}" for i in range(elements) for c in coords]
+    return names + [f"d_{name}" for name in names]
+
+
+def to_xarray(trajectory) -> xr.Dataset:
+    """The trajectory as a Dataset (see the module docstring).
+
+    Raises
+    ------
+    ValueError
+        If ``state_names`` are not the model's layout (the states cannot then be named).
+    """
+    time, states = trajectory.time, trajectory.states
+    elements = trajectory.tensions.shape[1]
+    dofs = states.shape[1] // (2 * elements)
+    if trajectory.state_names != state_names(elements, dofs):
+        raise ValueError(
+            f"state_names {trajectory.state_names[:3]}...: not the layout of {elements} elements "
+            f"with {dofs} DOF (x_0, y_0, ..., d_x_0, ...), so the states cannot be labelled"
+        )
+    blocks = states.reshape(time.size, 2, elements, dofs)
+    angles = ANGLES[: dofs - 3]
+    variables = {}
+    for name, (rate, coordinate, units, long_name) in STATE_VARIABLES.items():
+        part = slice(0, 3) if coordinate == "component" else slice(3, dofs)
+        variables[name] = (("time", "element", coordinate), blocks[:, int(rate), :, part],
+                           units, long_name)  # fmt: skip
+    for name, (index, units, long_name) in INPUT_VARIABLES.items():
+        dims = ("time", "component") if isinstance(index, slice) else ("time",)
+        variables[name] = (dims, trajectory.inputs[:, index], units, long_name)
+    joints = trajectory.joints.transpose(0, 2, 1)
+    joint_name = "position of joint A_j (A_0 the end E, A_{n+1} the top)"
+    variables["joint_position"] = (("time", "joint", "component"), joints, "m", joint_name)
+    tension_name = "bond force at the upper end A_{i+1} of element i"
+    variables["tension"] = (("time", "element"), trajectory.tensions, "N", tension_name)
+    dataset = to_dataset(
+        trajectory,
+        KIND,
+        {"time": ("time",), "winch_angle": ("time",), "clearance_error": ("time",)},
+        skip=("states", "inputs", "joints", "tensions", "state_names"),
+    )
+    for name, (dims, data, units, long_name) in variables.items():
+        dataset[name] = describe(xr.Variable(dims, data), units, long_name)
+    labels = {
+        "element": (np.arange(elements), "element i (0 carries the end E, n hangs from the top)"),
+        "joint": (np.arange(elements + 1), "joint A_j (0 the end E, n+1 the top)"),
+        "component": (list(COMPONENT), "component in the world frame (z up)"),
+        "angle": (list(angles), "Euler angle (CONVENTIONS.md §3)"),
+    }
+    for dim, (values, long_name) in labels.items():
+        dataset.coords[dim] = describe(xr.Variable(dim, values), DIMENSIONLESS, long_name)
+    dataset["time"].attrs.update(units="s", long_name="time", standard_name="time")
+    return dataset
+
+
+def from_dataset(dataset: xr.Dataset) -> dict:
+    """The fields of a Trajectory from its Dataset.
+
+    Raises
+    ------
+    ValueError, KeyError
+        A variable is missing or does not fit.
+    """
+    time = dataset["time"].values
+    elements, angles = dataset.sizes["element"], dataset.sizes["angle"]
+    dofs = 3 + angles
+    blocks = np.empty((time.size, 2, elements, dofs))
+    for name, (rate, coordinate, _, _) in STATE_VARIABLES.items():
+        part = slice(0, 3) if coordinate == "component" else slice(3, dofs)
+        blocks[:, int(rate), :, part] = dataset[name].transpose("time", "element", coordinate)
+    inputs = np.empty((time.size, INPUT_SIZE))
+    for name, (index, _, _) in INPUT_VARIABLES.items():
+        inputs[:, index] = dataset[name].values
+    joints = dataset["joint_position"].transpose("time", "joint", "component").values
+    return {
+        "time": time,
+        "states": blocks.reshape(time.size, -1),
+        "inputs": inputs,
+        "joints": joints.transpose(0, 2, 1),
+        "tensions": dataset["tension"].transpose("time", "element").values,
+        "winch_angle": dataset["winch_angle"].values,
+        "clearance_error": dataset["clearance_error"].values,
+        "omega": float(dataset["omega"].values),
+        "scene_name": str(dataset.attrs["scene_name"]),
+        "state_names": state_names(elements, dofs),
+    }
