@@ -6,6 +6,8 @@ from dataclasses import replace
 
 import numpy as np
 import pytest
+import xarray as xr
+from legacy_results import write_ocp_result
 
 from cable_ocp.control.nelder_mead import NelderMeadSettings
 from cable_ocp.control.ocp import IpoptSettings
@@ -13,6 +15,7 @@ from cable_ocp.control.optimization import OcpResult, optimize
 from cable_ocp.drive.bounds import angle_bounds
 from cable_ocp.drive.controls import HermiteIntervals, KnotSpline
 from cable_ocp.drive.winch import spline_angle
+from cable_ocp.scene.labelled import fields_equal
 from cable_ocp.scene.schema import load_scene
 from cable_ocp.simulation.run import simulate
 
@@ -53,12 +56,28 @@ def test_winch_bounds_hold_along_the_trajectory(solved, small):
 
 
 def test_result_round_trip(solved, tmp_path):
+    """Through netCDF, field by field; every variable of the file has units and a long name."""
     result, _ = solved
-    result.save(tmp_path / "r")
+    assert result.save(tmp_path / "r") == tmp_path / "r" / "result.nc"
     back = OcpResult.load(tmp_path / "r")
+    assert fields_equal(back, result)
     assert np.array_equal(back.parameters, result.parameters)
     assert back.trajectory.equals(result.trajectory)
     assert back.omega == result.omega and back.status == result.status
+    with xr.open_dataset(tmp_path / "r" / "result.nc") as data:
+        assert all(
+            v.attrs.get("units") and v.attrs.get("long_name") for v in data.variables.values()
+        )
+        assert data["omega"].attrs["units"] == "m" and data["history"].attrs["units"] == "m2"
+        assert data["wall_time"].attrs["units"] == "s" and data.attrs["method"] == "ipopt"
+        assert data["trajectory_omega"] == data["omega"]  # the verified run's Omega
+        assert data["tension"].dims == ("time", "element")
+
+
+def test_a_result_of_format_1_still_loads(solved, tmp_path):
+    result, _ = solved
+    write_ocp_result(result, tmp_path / "r")
+    assert fields_equal(OcpResult.load(tmp_path / "r"), result)
 
 
 def test_infeasible_bounds_fail_loudly(small):
@@ -112,7 +131,7 @@ def test_a_result_saved_without_the_phase_times_loads(solved, tmp_path):
     import json
 
     result, _ = solved
-    result.save(tmp_path / "r")
+    write_ocp_result(result, tmp_path / "r")
     path = tmp_path / "r" / "result.json"
     meta = json.loads(path.read_text())
     del meta["compile_time"], meta["verification_time"]
@@ -209,7 +228,14 @@ def test_failed_result_saves_nan_as_null_and_loads_back(short, tmp_path):
     # A failed solve is still simulated on the scene's model (where it got to), never a success.
     assert not result.success and result.trajectory is not None
     result = replace(result, trajectory=None, omega=float("nan"), history=[1.0, float("nan")])
-    result.save(tmp_path / "r")
+    result.save(tmp_path / "netcdf")
+    back = OcpResult.load(tmp_path / "netcdf")
+    assert fields_equal(back, result) and back.trajectory is None
+    empty = replace(result, parameters=np.zeros(0), control="hermite(0)", history=[],
+                    refinements=[])  # fmt: skip
+    empty.save(tmp_path / "empty")
+    assert fields_equal(OcpResult.load(tmp_path / "empty"), empty)
+    write_ocp_result(result, tmp_path / "r")
     text = (tmp_path / "r" / "result.json").read_text()
     assert "NaN" not in text and '"omega": null' in text
     back = OcpResult.load(tmp_path / "r")
@@ -220,7 +246,7 @@ def test_failed_result_saves_nan_as_null_and_loads_back(short, tmp_path):
 @pytest.mark.parametrize("name", ["result.json", "result.npz", "trajectory.npz", "trajectory.json"])
 def test_load_names_a_truncated_file(solved, tmp_path, name):
     result, _ = solved
-    result.save(tmp_path / "r")
+    write_ocp_result(result, tmp_path / "r")
     path = tmp_path / "r" / name
     path.write_bytes(path.read_bytes()[: path.stat().st_size // 2])
     with pytest.raises(ValueError, match=name.replace(".", r"\.")):
@@ -229,9 +255,19 @@ def test_load_names_a_truncated_file(solved, tmp_path, name):
 
 def test_load_names_a_missing_file(solved, tmp_path):
     result, _ = solved
-    result.save(tmp_path / "r")
+    write_ocp_result(result, tmp_path / "r")
     (tmp_path / "r" / "result.npz").unlink()
     with pytest.raises(ValueError, match=r"result\.npz"):
+        OcpResult.load(tmp_path / "r")
+    with pytest.raises(ValueError, match=r"nothing/result\.nc: no such file"):
+        OcpResult.load(tmp_path / "nothing")
+
+
+def test_load_names_a_truncated_netcdf_file(solved, tmp_path):
+    result, _ = solved
+    path = result.save(tmp_path / "r")
+    path.write_bytes(path.read_bytes()[: path.stat().st_size // 2])
+    with pytest.raises(ValueError, match=r"result\.nc: not a readable"):
         OcpResult.load(tmp_path / "r")
 
 

@@ -9,19 +9,21 @@ keeps score (CONVENTIONS.md §5, "reduced models for optimisation").
 
 from __future__ import annotations
 
-import json
 import time
 import zipfile
 from collections.abc import Callable
-from dataclasses import asdict, dataclass, field, fields
+from dataclasses import dataclass, field, fields
 from pathlib import Path
 
 import numpy as np
+import xarray as xr
 
+from cable_ocp.control import labelled
 from cable_ocp.control.nelder_mead import NelderMeadSettings, nelder_mead_problem, solve_nelder_mead
 from cable_ocp.control.ocp import IpoptSettings, ShootingProblem, ipopt_problem
 from cable_ocp.control.problem import SolverOutcome, WinchProblem
 from cable_ocp.control.verification import Verification
+from cable_ocp.scene import labelled as results
 from cable_ocp.simulation.progress import check_verbosity
 from cable_ocp.simulation.trajectory import Trajectory
 
@@ -114,26 +116,22 @@ class OcpResult:
     heave_feedforward: bool = False
     notes: str = ""
 
-    def save(self, folder: str | Path) -> None:
-        """Write ``result.json``, ``result.npz`` and the trajectory into ``folder``.
+    def to_xarray(self) -> xr.Dataset:
+        """The result as an ``xarray.Dataset``, its verified trajectory over ``time`` included.
 
-        NaN (Omega of a profile that could not be verified) is written as JSON ``null``.
+        Every variable carries ``units`` and ``long_name`` (:mod:`cable_ocp.control.labelled`).
         """
+        return labelled.to_xarray(self)
+
+    def save(self, folder: str | Path) -> Path:
+        """Write the result to netCDF, ``folder/result.nc`` (see :meth:`to_xarray`)."""
         folder = Path(folder)
         folder.mkdir(parents=True, exist_ok=True)
-        if self.trajectory is not None:
-            self.trajectory.save(folder / "trajectory")
-        meta = {
-            k: _json_value(v)
-            for k, v in asdict(self).items()
-            if k not in ("parameters", "trajectory")
-        }
-        (folder / "result.json").write_text(json.dumps(meta, indent=1, allow_nan=False))
-        np.savez(folder / "result.npz", parameters=self.parameters)
+        return results.write(self.to_xarray(), folder / labelled.FILE)
 
     @classmethod
     def load(cls, folder: str | Path) -> OcpResult:
-        """Read a result written by :meth:`save`.
+        """Read a result written by :meth:`save` (``folder/result.nc``, or format 1).
 
         Raises
         ------
@@ -142,6 +140,23 @@ class OcpResult:
         """
         import typing
 
+        from cable_ocp.scene.records import control_parameters as check_control
+
+        netcdf = Path(folder) / labelled.FILE
+        if netcdf.exists() or not (Path(folder) / "result.json").exists():
+            dataset = results.read(netcdf, labelled.KIND)
+            try:
+                values = labelled.from_dataset(cls, dataset, Trajectory)
+                if values["method"] not in METHODS:
+                    raise ValueError(f"method = {values['method']!r:.40}: not a known method")
+                check_control(values["parameters"], values["control"])
+            except (ValueError, KeyError, TypeError) as error:
+                raise ValueError(
+                    f"{netcdf}: not a readable optimisation result ({type(error).__name__}: "
+                    f"{error})"
+                ) from None
+            return cls(**values)
+        # Result format 1 (cable_ocp 0.1): result.json, result.npz and the trajectory's files.
         from cable_ocp.scene.records import control_parameters, parse_json, record_fields
 
         folder = Path(folder)
