@@ -4,14 +4,18 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
+import xarray as xr
+from legacy_results import write_mpc_result
 
 from cable_ocp.control.closed_loop import mpc
 from cable_ocp.control.closed_loop.controller import hermite_basis
 from cable_ocp.control.closed_loop.forecast import BlendedHeight, HeightFilter, TopForecast
 from cable_ocp.control.closed_loop.projection import project_state
+from cable_ocp.control.closed_loop.result import MpcResult
 from cable_ocp.drive.drive import Drive
 from cable_ocp.model.cable import CableModel
 from cable_ocp.model.layout import INPUTS
+from cable_ocp.scene.labelled import fields_equal
 from cable_ocp.scene.schema import load_scene
 from cable_ocp.simulation.statics import equilibrium
 
@@ -188,11 +192,21 @@ def test_closed_loop_is_finite_holds_the_winch_bounds_and_beats_the_locked_winch
     assert r.real_time_factor > 0 and r.worst_solve_time == pytest.approx(r.solve_times.max())
 
 
-def test_closed_loop_result_saves(closed_loop, tmp_path):
-    closed_loop.save(tmp_path)
-    with np.load(tmp_path / "mpc.npz") as data:
-        np.testing.assert_array_equal(data["clearance_error"], closed_loop.clearance_error)
-    assert '"omega_m"' in (tmp_path / "mpc.json").read_text()
+def test_closed_loop_result_round_trip(closed_loop, tmp_path):
+    """Through netCDF, field by field; units and long names on every variable of the file."""
+    assert closed_loop.save(tmp_path / "new") == tmp_path / "new" / "mpc.nc"
+    assert fields_equal(MpcResult.load(tmp_path / "new"), closed_loop)
+    with xr.open_dataset(tmp_path / "new" / "mpc.nc") as data:
+        assert all(
+            v.attrs.get("units") and v.attrs.get("long_name") for v in data.variables.values()
+        )
+        assert data["end"].dims == ("time", "component") and data["solve_times"].dims == ("sample",)
+        assert data["references"].sel(reference="locked").attrs["units"] == "m"
+        assert data["angle_range"].attrs["units"] == "rad"
+    write_mpc_result(closed_loop, tmp_path / "old")  # format 1 (cable_ocp 0.1) still loads
+    assert fields_equal(MpcResult.load(tmp_path / "old"), closed_loop)
+    with pytest.raises(ValueError, match=r"nothing/mpc\.nc: no such file"):
+        MpcResult.load(tmp_path / "nothing")
 
 
 def test_quiet_prints_nothing(models_dir, capfd):
@@ -230,5 +244,6 @@ def test_mpc_command_writes_results_and_figures(models_dir, tmp_path, capsys):
     )  # fmt: skip
     assert args.run(args) == 0
     written = sorted(p.name for p in out.iterdir() if not p.name.startswith("."))
-    assert written == ["clearance.png", "mpc.json", "mpc.npz", "solve_times.png", "winch_angle.png"]
+    assert written == ["clearance.png", "mpc.nc", "solve_times.png", "summary.json",
+                       "winch_angle.png"]  # fmt: skip
     assert '"omega_m"' in capsys.readouterr().out

@@ -28,7 +28,7 @@ def add_mpc_command(subparsers) -> None:
         description="Closed-loop winch control of SCENE: every --sample seconds a receding-"
         "horizon OCP on a reduced model is solved from the measured state; the scene's own model "
         "(with its heave, e.g. --set top.heave.amplitude=1 --set top.heave.period=8) is the "
-        "plant. Writes mpc.json, mpc.npz and figures to --out.",
+        "plant. Writes mpc.nc (the run, netCDF), summary.json and figures to --out.",
     )
     parser.add_argument("scene", type=Path)
     parser.add_argument("--out", type=Path, required=True, help="results folder (atomic)")
@@ -95,6 +95,7 @@ def run_mpc_command(args) -> int:
         plots.clearance(result, path=folder / "clearance.png")
         plots.solve_times(result, path=folder / "solve_times.png")
         plots.winch_angle(result, path=folder / "winch_angle.png")
+        (folder / "summary.json").write_text(json.dumps(result.summary(), indent=1))
     summary = {k: v for k, v in result.summary().items() if k != "failures"}
     print(json.dumps(summary, indent=1))
     print(f"results and figures written to {Path(args.out).resolve()}")

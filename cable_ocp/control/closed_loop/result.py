@@ -1,17 +1,15 @@
-"""The result of a closed-loop run: :class:`MpcResult`, with saving to json + npz."""
+"""The result of a closed-loop run: :class:`MpcResult`, kept as a labelled Dataset in netCDF."""
 
 from __future__ import annotations
 
-import json
 from dataclasses import dataclass, field
 from pathlib import Path
 
 import numpy as np
+import xarray as xr
 
-ARRAYS = (
-    "time", "winch_angle", "planned_angle", "end", "top", "clearance_error",
-    "sample_times", "solve_times", "iterations",
-)  # fmt: skip
+from cable_ocp.control.closed_loop import labelled
+from cable_ocp.scene import labelled as results
 
 
 @dataclass(frozen=True, eq=False)
@@ -118,12 +116,27 @@ class MpcResult:
             "settings": self.settings,
         }
 
-    def save(self, folder: str | Path) -> None:
-        """Write ``mpc.json`` (figures, statuses) and ``mpc.npz`` (arrays) into ``folder``."""
+    def to_xarray(self) -> xr.Dataset:
+        """The run as an ``xarray.Dataset`` over (time, component, sample, reference, bound).
+
+        Every variable carries ``units`` and ``long_name``
+        (:mod:`cable_ocp.control.closed_loop.labelled`).
+        """
+        return labelled.to_xarray(self)
+
+    def save(self, folder: str | Path) -> Path:
+        """Write the run to netCDF, ``folder/mpc.nc`` (see :meth:`to_xarray`)."""
         folder = Path(folder)
         folder.mkdir(parents=True, exist_ok=True)
-        meta = {**self.summary(), "statuses": self.statuses}
-        (folder / "mpc.json").write_text(json.dumps(meta, indent=1))
-        arrays = {name: getattr(self, name) for name in ARRAYS}
-        arrays.update({f"reference {k}": v for k, v in self.references.items()})
-        np.savez_compressed(folder / "mpc.npz", **arrays)
+        return results.write(self.to_xarray(), folder / labelled.FILE)
+
+    @classmethod
+    def load(cls, folder: str | Path) -> MpcResult:
+        """Read a run written by :meth:`save` (or ``mpc.json`` + ``mpc.npz`` of cable_ocp 0.1).
+
+        Raises
+        ------
+        ValueError
+            Naming the file, if it is missing, truncated, garbled or of a newer format.
+        """
+        return labelled.load(cls, Path(folder))
