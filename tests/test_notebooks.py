@@ -46,3 +46,19 @@ def test_the_image_check_catches_a_notebook_that_shows_nothing(tmp_path, monkeyp
     monkeypatch.delenv("MPLBACKEND")
     NotebookClient(notebook, timeout=120, kernel_name="python3").execute(cwd=str(tmp_path))
     assert images(notebook.cells[0]) == 1
+
+
+WIDGET = "application/vnd.jupyter.widget-view+json"
+
+
+def test_progress_is_a_widget_in_a_notebook_and_absent_when_quiet(tmp_path, models_dir):
+    """tqdm.auto draws a simulation's progress as a Jupyter widget; quiet = True shows nothing."""
+    scene = f"co.load_scene({str(models_dir / 'hanging.toml')!r}, {{'numerics.duration': 2.0}})"
+    cells = [f"import cable_ocp as co\nscene = {scene}", "run = co.simulate(scene, quiet=False)",
+             "run = co.simulate(scene, quiet=True)"]  # fmt: skip
+    notebook = nbformat.v4.new_notebook(cells=[nbformat.v4.new_code_cell(c) for c in cells])
+    NotebookClient(notebook, timeout=300, kernel_name="python3").execute(cwd=str(tmp_path))
+    shown, quiet = notebook.cells[1].outputs, notebook.cells[2].outputs
+    assert any(WIDGET in out.get("data", {}) for out in shown), shown
+    assert not any(out.get("name") == "stderr" for out in shown)  # no text bar beside it
+    assert quiet == []

@@ -1,13 +1,22 @@
-"""Progress on stderr: a text bar for long runs, one line per iteration for optimisers."""
+"""Progress: a tqdm bar for long runs (a widget in Jupyter), one line per optimiser iteration."""
 
 from __future__ import annotations
 
 import sys
 import time
 
+from tqdm.auto import tqdm
+
+BAR_FORMAT = (
+    "{desc}: {percentage:3.0f}%|{bar}| {n:.4g}/{total:.4g} [{elapsed}<{remaining}{postfix}]"
+)
+
 
 class Progress:
-    """Report the progress of ``total`` units of work, or nothing when ``quiet``.
+    """Report the progress of ``total`` units of work with ``tqdm.auto``, or nothing when ``quiet``.
+
+    In a terminal a bar on stderr; in Jupyter a widget. Simulations, Nelder-Mead, the closed loop
+    and sweeps show their progress through it.
 
     Parameters
     ----------
@@ -15,30 +24,28 @@ class Progress:
     total : float
         Units of work (e.g. simulated seconds).
     quiet : bool
+        No bar at all: nothing is printed.
     """
 
-    WIDTH = 30
-
     def __init__(self, label: str, total: float, quiet: bool = False):
-        self.label, self.total, self.quiet = label, total, quiet
-        self.start = time.perf_counter()
+        self.total = float(total)
+        self.bar = None
+        if not quiet:
+            self.bar = tqdm(total=self.total, desc=label, file=sys.stderr, bar_format=BAR_FORMAT,
+                            dynamic_ncols=True, leave=True)  # fmt: skip
 
     def update(self, done: float, note: str = "") -> None:
-        """Redraw the bar at ``done`` units."""
-        if self.quiet:
+        """Move the bar to ``done`` units, with a ``note`` after it."""
+        if self.bar is None:
             return
-        fraction = min(max(done / self.total, 0.0), 1.0) if self.total else 1.0
-        filled = int(round(fraction * self.WIDTH))
-        elapsed = time.perf_counter() - self.start
-        bar = "#" * filled + "-" * (self.WIDTH - filled)
-        sys.stderr.write(f"\r{self.label} [{bar}] {100 * fraction:5.1f}% {elapsed:7.1f} s {note}")
-        sys.stderr.flush()
+        if note:
+            self.bar.set_postfix_str(note, refresh=False)
+        self.bar.update(min(max(float(done), 0.0), self.total) - self.bar.n)
 
     def close(self) -> None:
-        """End the line of the bar."""
-        if not self.quiet:
-            sys.stderr.write("\n")
-            sys.stderr.flush()
+        """Finish the bar (drawn once more at its last value)."""
+        if self.bar is not None:
+            self.bar.close()
 
 
 def check_verbosity(quiet: bool, verbose: bool) -> None:
