@@ -340,3 +340,84 @@ def test_cli_failure_while_writing_keeps_the_old_folder(tmp_path, monkeypatch, c
     assert "figure failed" in capsys.readouterr().err
     assert [p.name for p in tmp_path.iterdir()] == ["kept"]
     assert sorted(p.name for p in kept.iterdir()) == [".cable_ocp-results", "old.txt"]
+
+
+# --- issue 17: mpc weights, optimiser defaults, one exit code for a read-only --out ---------------
+
+
+@pytest.mark.parametrize("value", ["inf", "-inf", "nan", "-1", "1e400", "a"])
+def test_mpc_rate_weight_must_be_finite(tmp_path, monkeypatch, capsys, no_heavy_work, value):
+    from cable_ocp.control.closed_loop import loop
+
+    monkeypatch.setattr(loop, "mpc", lambda *a, **k: pytest.fail("refused before any work"))
+    err = assert_refused(["mpc", HANGING, "--out", tmp_path / "o", "--rate-weight", value], capsys)
+    assert "argument --rate-weight: " in err
+    assert not (tmp_path / "o").exists()
+
+
+def test_optimiser_defaults_are_the_methods_table(monkeypatch):
+    """Unset options are optimize()'s defaults: the CLI keeps no copy of them."""
+    from dataclasses import replace
+
+    parser = cli.build_parser()
+    args = parser.parse_args(["optimize", HANGING, "--out", "o"])
+    assert cli._ipopt_settings(args) == optimization.METHODS["ipopt"].default
+    assert cli._nelder_mead_settings(args) == optimization.METHODS["nelder-mead"].default
+    given = parser.parse_args(["optimize", HANGING, "--out", "o", "--elements", "5", "--step",
+                               "0.25", "--max-iter", "7"])  # fmt: skip
+    assert cli._ipopt_settings(given) == replace(
+        optimization.METHODS["ipopt"].default, elements=5, step=0.25, max_iter=7
+    )
+    ipopt = optimization.METHODS["ipopt"]
+    monkeypatch.setitem(optimization.METHODS, "ipopt",
+                        replace(ipopt, default=replace(ipopt.default, intervals=6)))  # fmt: skip
+    assert cli._ipopt_settings(args).intervals == 6
+
+
+def _sweep_file(tmp_path) -> Path:
+    path = tmp_path / "sweep.toml"
+    path.write_text(f'scene = "{HANGING}"\n[set]\n"numerics.duration" = 1.0\n')
+    return path
+
+
+# Every command that takes --out: (arguments before --out).
+OUT_COMMANDS = {
+    "simulate": ["simulate", HANGING],
+    "optimize": ["optimize", HANGING],
+    "compare": ["compare", HANGING],
+    "mpc": ["mpc", HANGING],
+    "sweep": ["sweep", "SWEEP"],
+    "validate": ["validate", HANGING],
+    "study step": ["study", "step", HANGING],
+    "study stability": ["study", "stability"],
+}
+
+
+@pytest.mark.parametrize("command", sorted(OUT_COMMANDS))
+def test_out_in_a_read_only_folder_is_exit_2_for_every_command(
+    tmp_path, monkeypatch, capsys, no_heavy_work, command
+):
+    """Bad input (README): one line naming the folder, exit 2, nothing written, no work done."""
+    import os
+
+    from cable_ocp.control.closed_loop import loop
+
+    monkeypatch.setattr(loop, "mpc", lambda *a, **k: pytest.fail("refused before any work"))
+    locked = tmp_path / "locked"
+    locked.mkdir()
+    real_access = os.access
+
+    def access(path, mode, *args, **kwargs):  # read-only for root too, who may write anywhere
+        if mode & os.W_OK and Path(path).resolve().is_relative_to(locked):
+            return False
+        return real_access(path, mode, *args, **kwargs)
+
+    monkeypatch.setattr(os, "access", access)
+    locked.chmod(0o555)
+    try:
+        args = [a if a != "SWEEP" else _sweep_file(tmp_path) for a in OUT_COMMANDS[command]]
+        err = assert_refused([*args, "--out", locked / "res"], capsys)
+        assert f"the folder {locked} is not writable" in err and err.count("\n") == 1
+        assert list(locked.iterdir()) == []
+    finally:
+        locked.chmod(0o755)

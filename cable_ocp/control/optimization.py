@@ -157,7 +157,12 @@ class OcpResult:
                 ) from None
             return cls(**values)
         # Result format 1 (cable_ocp 0.1): result.json, result.npz and the trajectory's files.
-        from cable_ocp.scene.records import control_parameters, parse_json, record_fields
+        from cable_ocp.scene.records import (
+            control_parameters,
+            control_size,
+            parse_json,
+            record_fields,
+        )
 
         folder = Path(folder)
         hints = typing.get_type_hints(cls)  # each field of result.json checked against its type
@@ -168,6 +173,7 @@ class OcpResult:
             meta = record_fields(parse_json(path.read_text()), types, _OPTIONAL_FIELDS)
             if meta["method"] not in METHODS:
                 raise ValueError(f"method = {meta['method']!r:.40}: not {' or '.join(METHODS)}")
+            control_size(meta["control"])
             path = folder / "result.npz"
             with np.load(path) as data:
                 parameters = np.asarray(data["parameters"], dtype=float)

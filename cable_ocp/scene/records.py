@@ -107,6 +107,22 @@ def record_fields(meta: Any, types: dict[str, Any], optional: set[str] = frozens
     return {name: _field(name, value, types[name]) for name, value in meta.items()}
 
 
+def control_size(control: str) -> int:
+    """The number of parameters of a control named ``kind(size)``, e.g. ``"hermite(84)"``.
+
+    Raises
+    ------
+    ValueError
+        Naming the field, if ``control`` is not of that form.
+    """
+    match = CONTROL.fullmatch(control)
+    if match is None:
+        raise ValueError(
+            f"control = {control!r:.40}: expected a name and a size, e.g. 'spline(14)'"
+        )
+    return int(match["size"])
+
+
 def control_parameters(parameters: np.ndarray, control: str) -> np.ndarray:
     """Check that winch ``parameters`` fit their ``control`` (``"hermite(84)"``: 84 numbers).
 
@@ -116,12 +132,7 @@ def control_parameters(parameters: np.ndarray, control: str) -> np.ndarray:
         Naming the field: a control not of the form ``kind(size)``, or parameters of another
         shape or not finite.
     """
-    match = CONTROL.fullmatch(control)
-    if match is None:
-        raise ValueError(
-            f"control = {control!r:.40}: expected a name and a size, e.g. 'spline(14)'"
-        )
-    size = int(match["size"])
+    size = control_size(control)
     if parameters.shape != (size,):
         raise ValueError(
             f"parameters of shape {parameters.shape}: control = {control!r} has {size} parameters"

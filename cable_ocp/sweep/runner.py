@@ -38,6 +38,7 @@ from cable_ocp.sweep.store import (
 
 ENGINE_TIMEOUT = 60.0  # s without a worker (or a scheduler) before the engine counts as lost
 POLL = 0.2  # s between looks at the engine while cases run
+RESULT_WAIT = 10.0  # s at most to fetch a finished case's result before looking at the engine
 WORKER_MEMORY = "about 100 MB"  # of one worker process, said when --workers is refused
 
 
@@ -229,7 +230,8 @@ def run_sweep(
 @contextmanager
 def _dask_quiet(active: bool):
     """Silence Dask's own logging (a lost scheduler's reconnect tracebacks) while closing."""
-    loggers = [logging.getLogger(name) for name in ("distributed", "tornado", "asyncio")]
+    names = [n for n in logging.root.manager.loggerDict if n.startswith("distributed")]
+    loggers = [logging.getLogger(n) for n in ("distributed", "tornado", "asyncio", *names)]
     levels = [logger.level for logger in loggers]
     if active:
         for logger in loggers:
@@ -280,6 +282,7 @@ def _run(spec, folder, todo, report, scheduler, workers, quiet, processes, engin
         progress.update(0, f"0/{len(todo)} on {report.workers} workers")
         arrivals = as_completed(futures, loop=client.loop)
         last_seen = time.monotonic()  # last time the engine had a worker
+        wait = min(engine_timeout, RESULT_WAIT)
         try:
             while not arrivals.is_empty():
                 batch = arrivals.next_batch(block=False)
@@ -287,7 +290,10 @@ def _run(spec, folder, todo, report, scheduler, workers, quiet, processes, engin
                     if future.status == "cancelled":  # not by us: the scheduler went away
                         continue
                     try:
-                        record = future.result()
+                        record = future.result(timeout=wait)
+                    except TimeoutError:  # its result died with its worker: computed again
+                        arrivals.add(future)
+                        continue
                     except (Exception, asyncio.CancelledError) as error:
                         if _engine_state(client):
                             continue  # not a result of the case: it did not run to the end
@@ -305,8 +311,6 @@ def _run(spec, folder, todo, report, scheduler, workers, quiet, processes, engin
                 )
                 if why:
                     raise EngineLost(why)
-                if batch:
-                    continue
                 count = _workers(client)
                 if count:
                     last_seen = time.monotonic()
@@ -316,7 +320,8 @@ def _run(spec, folder, todo, report, scheduler, workers, quiet, processes, engin
                         if count is None
                         else f"the Dask scheduler has had no worker for {engine_timeout:g} s"
                     )
-                time.sleep(POLL)
+                if not batch:
+                    time.sleep(POLL)
         except KeyboardInterrupt:
             report.interrupted = True
             client.cancel(list(futures))
