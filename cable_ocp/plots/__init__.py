@@ -1,4 +1,4 @@
-"""Figures of results (matplotlib): the paper's Fig. 14, 17 and 18 and more.
+"""Figures of results (matplotlib): the paper's Fig. 14, 17 and 18 and more; :func:`animate`.
 
 Every function takes one or more :class:`~cable_ocp.simulation.trajectory.Trajectory` objects and
 returns the figure. Importing this module never selects a matplotlib backend: matplotlib chooses one
@@ -23,6 +23,7 @@ import matplotlib.pyplot as plt
 import numpy as np
 from matplotlib.figure import Figure
 
+from cable_ocp.plots.animation import animate as animate  # a GIF of the run
 from cable_ocp.simulation.seabed import seabed_height
 from cable_ocp.simulation.trajectory import Trajectory
 
