@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import argparse
+import logging
 import math
 import sys
 from pathlib import Path
@@ -79,6 +80,19 @@ def summary(report: SweepReport) -> str:
     return "\n".join(lines)
 
 
+def _silence_dask() -> None:
+    """Keep Dask's own log lines (and asyncio's about its tasks) off this process's stderr.
+
+    What goes wrong reaches the user as a case's reason or the one line about a lost engine;
+    Dask's warnings about a lost worker or scheduler, with their tracebacks, would bury it.
+    """
+    import distributed  # noqa: F401 - its logging is configured on import, then overridden
+
+    names = [n for n in logging.root.manager.loggerDict if n.startswith("distributed")]
+    for name in ("distributed", "tornado", "asyncio", *names):
+        logging.getLogger(name).setLevel(logging.CRITICAL + 1)
+
+
 def run_sweep_command(args: argparse.Namespace) -> int:
     """Run ``cable-ocp sweep``; 0 when every case is ok, 3 otherwise, 130 after Ctrl-C.
 
@@ -89,6 +103,7 @@ def run_sweep_command(args: argparse.Namespace) -> int:
     from cable_ocp.sweep.spec import load_sweep
 
     check_engine(args.scheduler, args.workers)
+    _silence_dask()
     timeout = args.engine_timeout
     if timeout is not None and not (math.isfinite(timeout) and timeout > 0):
         raise ValueError(f"--engine-timeout {timeout}: must be finite and > 0 s")
