@@ -148,6 +148,39 @@ def test_quiet_and_verbose_reach_the_optimiser(
     assert calls[0]["quiet"] is quiet and calls[0]["verbose"] is verbose
 
 
+@pytest.mark.parametrize(("flags", "compiled"), [([], True), (["--interpreted"], False)])
+def test_simulate_compiles_unless_interpreted(tmp_path, monkeypatch, capsys, flags, compiled):
+    calls = []
+
+    def record(scene, **kwargs):
+        calls.append(kwargs)
+        raise ValueError("stopped by the test")
+
+    monkeypatch.setattr(simulation, "simulate", record)
+    code, _, err = run_cli(["simulate", HANGING, "--out", tmp_path / "o", *flags], capsys)
+    assert code == 2 and "stopped by the test" in err
+    assert calls[0]["compiled"] is compiled
+
+
+def test_simulate_animates_when_asked(tmp_path, monkeypatch, capsys):
+    """--animate writes animation.gif through plots.animate (drawn in tests/test_animation.py)."""
+    from cable_ocp import plots
+
+    calls = []
+
+    def record(trajectory, path, clearance_depth):
+        calls.append((trajectory.scene_name, path.name, clearance_depth))
+        path.write_bytes(b"GIF89a")
+
+    monkeypatch.setattr(plots, "animate", record)
+    out = tmp_path / "out"
+    args = ["simulate", HANGING, "--out", out, "--set", "numerics.duration=2.0", "--quiet",
+            "--interpreted", "--animate"]  # fmt: skip
+    assert run_cli(args, capsys)[0] == 0
+    assert calls == [("hanging", "animation.gif", 5.0)] and (out / "animation.gif").exists()
+    assert cli.build_parser().parse_args(["optimize", HANGING, "--out", "o", "--animate"]).animate
+
+
 @pytest.mark.parametrize("shooting", ["single", "multiple"])
 def test_shooting_option_reaches_the_ipopt_settings(tmp_path, monkeypatch, capsys, shooting):
     calls = []
@@ -294,7 +327,7 @@ def test_cli_simulate_writes_results(tmp_path, capsys):
             "--set", "numerics.duration=10.0", "--quiet"]  # fmt: skip
     assert cli.main(args) == 0
     names = {p.name for p in out.iterdir()}
-    written = {"trajectory.npz", "trajectory.json", "summary.json", ".cable_ocp-results"}
+    written = {"trajectory.nc", "summary.json", ".cable_ocp-results"}
     assert names == written | FIGURES
     assert all((out / f).stat().st_size > 1000 for f in FIGURES)
     summary = json.loads((out / "summary.json").read_text())

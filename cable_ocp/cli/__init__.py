@@ -56,10 +56,14 @@ def _simulate(args) -> int:
             f"--knots: {len(knots)} angles given; the scene has winch.knots = "
             f"{scene.winch.knots} (one angle phi_1..phi_p per knot, rad)"
         )
-    trajectory = simulate(scene, winch=knots, quiet=args.quiet)
+    # Compiled unless --interpreted: without a compiler or a writable cache, the interpreted
+    # model runs after the same warning as the API's.
+    trajectory = simulate(scene, winch=knots, quiet=args.quiet, compiled=not args.interpreted)
     hills = scene.seabed.hills
     with atomic_directory(args.out) as folder:
         trajectory.save(folder / "trajectory")
+        if args.animate:
+            plots.animate(trajectory, folder / "animation.gif", scene.seabed.clearance)
         plots.end_trajectory(trajectory, path=folder / "end_trajectory.png")
         plots.clearance(trajectory, scene.seabed.clearance, path=folder / "clearance.png")
         plots.cable_shapes(trajectory, hills=hills, clearance_depth=scene.seabed.clearance,
@@ -139,6 +143,8 @@ def _optimize(args) -> int:
         plots.winch_angle(pair, labels, bounds, path=folder / "winch_angle.png")
         plots.cable_shapes(pair[-1], hills=hills, clearance_depth=scene.seabed.clearance,
                            path=folder / "cable_shapes.png")  # fmt: skip
+        if args.animate:
+            plots.animate(pair[-1], folder / "animation.gif", scene.seabed.clearance)
     n = scene.model.elements
     omega = (
         f"Omega = {result.omega:.3g} m verified on n = {n}"
@@ -363,6 +369,9 @@ OUT_HELP = (
 )
 
 
+ANIMATE_HELP = "also write animation.gif: the cable, the end's path and the seabed over time"
+
+
 def build_parser() -> argparse.ArgumentParser:
     """The argument parser of ``cable-ocp``."""
     parser = argparse.ArgumentParser(prog="cable-ocp", description=__doc__)
@@ -377,6 +386,9 @@ def build_parser() -> argparse.ArgumentParser:
     sim.add_argument("--set", action="append", default=[], metavar="KEY=VALUE",
                      help="override a scene field, e.g. --set model.elements=30")  # fmt: skip
     sim.add_argument("--quiet", action="store_true", help="no progress bar")
+    interpreted = "the interpreted model (default: compiled to C, the library cached on disk)"
+    sim.add_argument("--interpreted", action="store_true", help=interpreted)
+    sim.add_argument("--animate", action="store_true", help=ANIMATE_HELP)
     sim.set_defaults(run=_simulate)
 
     val = commands.add_parser("validate", help="statics check against the analytic catenary")
@@ -392,6 +404,7 @@ def build_parser() -> argparse.ArgumentParser:
     opt.add_argument("--refinements", type=_integer(0, 100), default=3,
                      help="model-correction solves")  # fmt: skip
     _add_optimiser_options(opt)
+    opt.add_argument("--animate", action="store_true", help=ANIMATE_HELP)
     opt.set_defaults(run=_optimize)
 
     cmp = commands.add_parser("compare", help="IPOPT against Nelder-Mead in one table")

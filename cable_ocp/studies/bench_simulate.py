@@ -1,7 +1,10 @@
 """Benchmark of many simulations: end-to-end ``simulate`` against its integration, and a sweep.
 
-``cable-ocp bench --part simulate`` prints two tables:
+``cable-ocp bench --only simulate`` prints three tables:
 
+- the ``cable-ocp simulate`` command on ``end_force`` (n = 100), each run in a fresh process:
+  compiled (the default, with a warm disk cache) against ``--interpreted`` (what the command
+  ran before it compiled by default), in the same run;
 - ``simulate`` end to end (statics, integration with its bond checks, joints and tensions) with a
   warm cache, against the integration alone in the same run, and against ``simulate`` with the
   per-process caches emptied before each call (the model rebuilt, its library loaded from disk:
@@ -14,6 +17,8 @@
 from __future__ import annotations
 
 import os
+import subprocess
+import sys
 import tempfile
 import time
 from collections.abc import Callable
@@ -34,6 +39,8 @@ SIMULATE_CASES = (("paper_flat.toml", {}), ("end_force.toml", {}))
 SWEEP_SCENE = "paper_flat.toml"
 SWEEP_CURRENTS = np.linspace(0.0, 0.95, 20)  # m/s, across the tow (y)
 REPEATS = 3
+COMMAND_SCENE = "end_force.toml"
+QUICK_COMMAND = ("--set", "numerics.duration=20")  # 20 s of the 100 s run
 
 
 def _best(run: Callable[[], object], repeats: int = REPEATS) -> float:
@@ -132,7 +139,35 @@ def sweep_report(models_dir: Path) -> tuple[int, float, list[float]]:
     return libraries, first, later
 
 
+def _command_time(arguments: list[str]) -> float:
+    """Wall time (s) of ``cable-ocp simulate ARGUMENTS --out TMP --quiet`` in a fresh process."""
+    with tempfile.TemporaryDirectory() as folder:
+        command = [sys.executable, "-m", "cable_ocp.cli", "simulate", *arguments,
+                   "--out", str(Path(folder) / "out"), "--quiet"]  # fmt: skip
+        started = time.perf_counter()
+        subprocess.run(command, check=True, stdout=subprocess.DEVNULL)
+        return time.perf_counter() - started
+
+
+def command_report(models_dir: Path, quick: bool = False) -> tuple[float, float]:
+    """Print ``cable-ocp simulate`` on end_force (n = 100), compiled against ``--interpreted``.
+
+    Each run is a fresh process, figures and netCDF file included; the compiled library is built
+    (or loaded) by an untimed first run. Returns ``(compiled, interpreted)`` in seconds.
+    """
+    arguments = [str(models_dir / COMMAND_SCENE), *(QUICK_COMMAND if quick else ())]
+    _command_time(arguments)  # the library compiled or found in the disk cache
+    compiled = min(_command_time(arguments) for _ in range(2))
+    interpreted = _command_time([*arguments, "--interpreted"])
+    span = "20 s" if quick else "100 s"
+    print(f"cable-ocp simulate {COMMAND_SCENE} (n = 100, {span}), a fresh process each, same run")
+    print(f"{'compiled (default) [s]':>24}{'--interpreted [s]':>19}{'ratio':>8}")
+    print(f"{compiled:>24.2f}{interpreted:>19.2f}{interpreted / compiled:>7.1f}x\n")
+    return compiled, interpreted
+
+
 def report(models_dir: Path, quick: bool = False) -> None:
-    """``cable-ocp bench --only simulate``: both tables (the sweep also with ``quick``)."""
+    """``cable-ocp bench --only simulate``: the three tables (the sweep also with ``quick``)."""
+    command_report(models_dir, quick)
     simulate_report(models_dir, quick)
     sweep_report(models_dir)
