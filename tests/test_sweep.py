@@ -576,3 +576,13 @@ def test_claiming_a_folder_in_parallel_never_reads_half_a_manifest(tmp_path):
         thread.join()
     assert errors == []
     assert not list(out.glob(".*.tmp"))
+
+
+def test_a_sweep_folder_of_an_older_version_is_refused_with_how_to_resume(two_done, capsys):
+    spec, out = two_done
+    (out / ".cable_ocp-results").unlink()  # as cable_ocp 0.1 left its sweep folders
+    code, output, err = sweep_cli([spec.path, "--out", out, "--workers", "1", "--quiet"], capsys)
+    assert_one_line_exit_2(code, output, err, f"add an empty file {out / '.cable_ocp-results'}")
+    (out / ".cable_ocp-results").write_text("")
+    report = run_sweep(spec, out, quiet=True, processes=False)
+    assert report.ran == [] and report.skipped == [0, 1]

@@ -1,9 +1,10 @@
 """The command line: ``cable-ocp simulate|optimize|compare|mpc|sweep|validate|study|bench``.
 
 Every expected failure is one line ``cable-ocp COMMAND: error: ...`` on stderr and a non-zero exit
-code: 2 for bad input (arguments, scene files, a results folder that must not be replaced), 1 for
-a failing file system, 3 when the optimiser fails, 130 when interrupted. Bad input is refused
-before any simulation.
+code: 2 for bad input (arguments, scene and sweep files, a results folder that must not be
+written, one inside a read-only folder included), 1 for a failing file system, 3 when the
+optimiser fails (or a sweep case, or a sweep's Dask engine), 130 when interrupted. Bad input is
+refused before any simulation.
 """
 
 from __future__ import annotations
