@@ -29,6 +29,9 @@ def test_notebook_runs_and_shows_its_figures(path, monkeypatch):
         assert sum(images(cell) for _, cell in code) > 0, f"{path.name} plots but shows no image"
     blank = [i for i, cell in code if "plt.show()" in cell.source and images(cell) == 0]
     assert not blank, f"{path.name}: cells {blank} call plt.show() but show no image"
+    for i, cell in code:  # an animation is shown as the GIF it wrote
+        if "plots.animate(" in cell.source:
+            assert any("image/gif" in out.get("data", {}) for out in cell.outputs), (path.name, i)
 
 
 def test_the_image_check_catches_a_notebook_that_shows_nothing(tmp_path, monkeypatch):
