@@ -158,6 +158,8 @@ def _optimize(args) -> int:
         f"{result.evaluations}, wall {result.wall_time:.1f} s (build {result.build_time:.1f} s, "
         f"solver {result.solve_time:.1f} s of which functions {result.function_time:.1f} s)"
     )
+    if result.notes:
+        print(f"note: {result.notes}")
     print(f"results and figures written to {Path(args.out).resolve()}")
     if not result.success:
         print(f"cable-ocp optimize: the optimiser failed: {result.status}", file=sys.stderr)
