@@ -1,8 +1,9 @@
 """Parameter sweeps: many simulations or OCPs of one scene on Dask, one xarray Dataset out.
 
 ``spec`` reads and validates the sweep file, ``execute`` runs one case (on a worker), ``store``
-writes case files and assembles the Dataset, ``runner`` fans the cases out on Dask, ``command``
-is the ``cable-ocp sweep`` subcommand and ``benchmark`` times 1 against 2 workers.
+writes case files and assembles the Dataset, ``runner`` fans the cases out on Dask and
+``benchmark`` times 1 against 2 workers; the ``cable-ocp sweep`` command is in
+``cable_ocp.cli.sweep``.
 """
 
 from importlib import import_module

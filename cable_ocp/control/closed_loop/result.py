@@ -43,7 +43,8 @@ class MpcResult:
     success : bool
         Every solve succeeded and the plant ran to the end.
     limited_steps : int
-        Plant steps at which the soft limiter changed the commanded angle (within 0.5 rad of a
+        Plant steps at which the soft limiter changed the commanded angle (within
+        :data:`cable_ocp.control.closed_loop.plant.LIMITER_BAND` of a
         bound, :mod:`.plant`).
     angle_range : (float, float), rad
         The winch range the applied angle is held in.
@@ -56,7 +57,8 @@ class MpcResult:
     build_time : float, s
         Building the NLP (and loading the compiled steps).
     settings : dict
-        horizon, sample, elements, step, heave_feedback, forecast_window, rate_weight.
+        horizon, sample, elements, step, heave_feedback, heave_filter, heave_margin,
+        rate_weight, max_iter, plant_elements, plant_step (with their units in the keys).
     references : dict of str to array (k,)
         Clearance errors of reference runs on the same plant and time grid (``"locked"``,
         ``"open-loop"``, ``"open-loop + heave feedback"``), m.
