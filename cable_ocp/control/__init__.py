@@ -1,2 +1,5 @@
-"""Winch control: the WinchProblem, direct shooting + IPOPT (single by default, multiple shooting
-on request), the paper's Nelder-Mead, the verification on the scene's model, closed-loop MPC."""
+"""Winch control: the WinchProblem and its solvers.
+
+Direct shooting + IPOPT (single shooting by default, multiple shooting on request), the paper's
+Nelder-Mead, the verification on the scene's model, and closed-loop MPC.
+"""
