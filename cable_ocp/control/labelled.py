@@ -2,11 +2,11 @@
 
 Every field of the result is a variable or an attribute (by its type,
 :mod:`cable_ocp.scene.labelled`): ``parameters`` over ``parameter``, ``history`` over
-``iteration`` (an evaluation for Nelder-Mead), ``refinements`` over ``solve``, the numbers as 0-d variables, the strings
-(``method``, ``control``, ``status``, ``notes``) as attributes. The verified trajectory's
-variables (:mod:`cable_ocp.simulation.labelled`) join them over ``time``; where a name is the
-result's too (``omega``), the trajectory's is prefixed ``trajectory_``. A result without a
-trajectory has no ``time`` dimension.
+``iteration`` (an evaluation for Nelder-Mead), ``refinements`` over ``solve``, the numbers as
+0-d variables, the strings (``method``, ``control``, ``status``, ``notes``) as attributes. The
+verified trajectory's variables (:mod:`cable_ocp.simulation.labelled`) join them over ``time``;
+where a name is the result's too (``omega``), the trajectory's is prefixed ``trajectory_``. A
+result without a trajectory has no ``time`` dimension.
 """
 
 from __future__ import annotations
