@@ -205,9 +205,11 @@ def to_dataset(
                 key_dim = f"{f.name}_key"  # another mapping holds other keys
             coords[key_dim] = keys
             data = np.array([value[k] for k in keys], dtype=float)
-            if not keys:
+            if not keys:  # no values, so no value dimensions of known size
                 value_dims = [f"{f.name}_{i}" for i in range(len(value_dims))]
                 data = data.reshape((0,) * (1 + len(value_dims)))
+            elif len(value_dims) != data.ndim - 1:
+                value_dims = [f"{f.name}_{i}" for i in range(data.ndim - 1)]
             variables[f.name] = xr.Variable((key_dim, *value_dims), data)
         else:
             data = np.asarray(value)
@@ -346,11 +348,6 @@ def read(path: Path, kind: str) -> xr.Dataset:
             f"{package_version()} reads formats {FORMATS}: install a newer cable_ocp"
         )
     return dataset
-
-
-def legacy_note(path: Path) -> str:
-    """The tail of a message about a file of format 1, naming the format."""
-    return f"{path} is in result format 1 (npz + json, cable_ocp 0.1)"
 
 
 __all__ = [
