@@ -35,7 +35,7 @@ from cable_ocp.simulation.integrate import (
     step_function,
 )
 from cable_ocp.simulation.progress import IterationLog, check_verbosity
-from cable_ocp.simulation.seabed import clearance_reference, seabed_height
+from cable_ocp.simulation.seabed import clearance_reference, seabed_height, trapezoid_weights
 
 NLP_FUNCTIONS = ("nlp_f", "nlp_g", "nlp_grad_f", "nlp_jac_g", "nlp_hess_l", "nlp_grad")
 
@@ -109,6 +109,39 @@ class IpoptSettings:
             )
 
 
+def ipopt_options(
+    hessian: str, max_iter: int, tolerance: float, verbose: bool = False, extra: dict | None = None
+) -> dict:
+    """IPOPT's options for an Omega^2 objective (the open and the closed loop alike).
+
+    Parameters
+    ----------
+    hessian : str
+        ``"limited-memory"`` or ``"exact"``.
+    max_iter : int
+    tolerance : float
+        IPOPT's ``tol``.
+    verbose : bool
+        IPOPT's own log.
+    extra : dict, optional
+        Further options, passed as they are (they win).
+    """
+    return {
+        "hessian_approximation": hessian,
+        "max_iter": max_iter,
+        "tol": tolerance,
+        "print_level": 5 if verbose else 0,
+        "sb": "no" if verbose else "yes",
+        # Omega^2 in units of (1 cm)^2, so IPOPT's tolerances mean something in metres.
+        "obj_scaling_factor": 1e4,
+        # Stop once Omega^2 changes by less than 0.1 % over 5 acceptable iterations.
+        "acceptable_tol": 1e-4,
+        "acceptable_iter": 5,
+        "acceptable_obj_change_tol": 1e-3,
+        **(extra or {}),
+    }
+
+
 def make_control(scene, settings: IpoptSettings) -> KnotSpline | HermiteIntervals:
     """The control parametrisation the settings ask for."""
     duration = scene.numerics.duration
@@ -170,9 +203,7 @@ def _interval_function(step_function, step, steps, hills, reference) -> ca.Funct
     xe = ca.SX.sym("xe", size)
     error = xe[2] - seabed_height(hills, xe[0], xe[1]) - reference
     errors = ca.Function("e", [xe], [error]).map(steps + 1)(points) + bias
-    weights = np.full(steps + 1, step)
-    weights[[0, -1]] = step / 2
-    cost = ca.mtimes(errors**2, ca.DM(weights))
+    cost = ca.mtimes(errors**2, ca.DM(trapezoid_weights(step, steps + 1)))
     return ca.Function("interval", [x, stages, bias], [states[:, -1], cost])
 
 
@@ -258,20 +289,13 @@ class ShootingProblem:
         self.log = IterationLog("ipopt", quiet=quiet or verbose)
         self._callback = _History(self.history, self.log, self.lbg, self.ubg)
         options = {
-            "ipopt": {
-                "hessian_approximation": settings.hessian,
-                "max_iter": settings.max_iter,
-                "tol": settings.tolerance,
-                "print_level": 5 if verbose else 0,
-                "sb": "no" if verbose else "yes",
-                # Omega^2 in units of (1 cm)^2, so IPOPT's tolerances mean something in metres.
-                "obj_scaling_factor": 1e4,
-                # Stop once Omega^2 changes by less than 0.1 % over 5 acceptable iterations.
-                "acceptable_tol": 1e-4,
-                "acceptable_iter": 5,
-                "acceptable_obj_change_tol": 1e-3,
-                **settings.ipopt_options,
-            },
+            "ipopt": ipopt_options(
+                settings.hessian,
+                settings.max_iter,
+                settings.tolerance,
+                verbose,
+                settings.ipopt_options,
+            ),
             "print_time": verbose,
             "iteration_callback": self._callback,
         }

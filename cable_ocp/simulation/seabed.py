@@ -68,6 +68,13 @@ def clearance_error(hills, end_positions: np.ndarray) -> np.ndarray:
     return z - seabed_height(hills, x, y) - clearance_reference(hills, end_positions[0])
 
 
+def trapezoid_weights(step: float, count: int) -> np.ndarray:
+    """Weights (s) of the trapezoidal rule on ``count`` points ``step`` (s) apart."""
+    weights = np.full(count, step)
+    weights[[0, -1]] = step / 2
+    return weights
+
+
 def rms_objective(time: np.ndarray, error: np.ndarray) -> float:
     """``Omega = sqrt(1/T int_0^T e^2 dt)`` (eq. 39) by the trapezoidal rule, m."""
     span = time[-1] - time[0]

@@ -22,10 +22,12 @@ from dataclasses import dataclass
 import casadi as ca
 import numpy as np
 
+from cable_ocp.control.ocp import ipopt_options
 from cable_ocp.drive.controls import hermite_polynomials
+from cable_ocp.drive.drive import stage_times as rk4_stage_times
 from cable_ocp.model.cable import INPUT_SIZE, CableModel
 from cable_ocp.simulation.integrate import step_function
-from cable_ocp.simulation.seabed import seabed_height
+from cable_ocp.simulation.seabed import seabed_height, trapezoid_weights
 
 # Solve statuses that count as a solution.
 SOLVED = ("Solve_Succeeded", "Solved_To_Acceptable_Level")
@@ -134,7 +136,7 @@ class RecedingHorizon:
         self.size = 2 * (intervals + 1)
 
         step_times = np.arange(steps) * h
-        stage_times = (step_times[:, None] + np.array([0.0, h / 2, h])).ravel()
+        stage_times = rk4_stage_times(step_times, h)[0]
         grid = np.arange(steps + 1) * h
         b_stage = hermite_basis(stage_times, settings.sample, intervals)
         b_grid = hermite_basis(grid, settings.sample, intervals)
@@ -178,9 +180,7 @@ class RecedingHorizon:
         starts = ca.horzcat(x0, nodes[:, :-1])
         ends, costs = interval.map(intervals)(starts, local, fixed, offset, reference)
         rates = ca.sparsify(ca.DM(b_grid[1])) @ winch
-        weights = np.full(steps + 1, h)
-        weights[[0, -1]] = h / 2
-        effort = ca.dot(ca.DM(weights), (radius * rates) ** 2)
+        effort = ca.dot(ca.DM(trapezoid_weights(h, steps + 1)), (radius * rates) ** 2)
         objective = (ca.sum2(costs) + settings.rate_weight * effort) / settings.horizon
 
         rows, lower, upper = [], [], []
@@ -195,19 +195,12 @@ class RecedingHorizon:
         self.ubg = np.concatenate([np.zeros(continuity.numel()), *upper])
         variables = ca.vertcat(ca.vec(nodes), winch)
         options = {
-            "ipopt": {
-                "hessian_approximation": "limited-memory",
-                "max_iter": settings.max_iter,
-                "tol": settings.tolerance,
-                "print_level": 0,
-                "sb": "yes",
-                "obj_scaling_factor": 1e4,
-                "acceptable_tol": 1e-4,
-                "acceptable_iter": 5,
-                "acceptable_obj_change_tol": 1e-3,
-                "warm_start_init_point": "yes",
-                "mu_init": 1e-3,
-            },
+            "ipopt": ipopt_options(
+                "limited-memory",
+                settings.max_iter,
+                settings.tolerance,
+                extra={"warm_start_init_point": "yes", "mu_init": 1e-3},
+            ),
             "print_time": False,
             # IPOPT's trial points may blow the reduced model up (NaN); its line search backs
             # off, so CasADi's warning about them is noise (a real failure is in the status).
@@ -237,7 +230,7 @@ class RecedingHorizon:
         x = ca.MX.sym("x", model.state_size)
         winch = ca.MX.sym("winch", 4)
         fixed = ca.MX.sym("inputs", INPUT_SIZE, 3 * steps)
-        local_times = (np.arange(steps)[:, None] * h + np.array([0.0, h / 2, h])).ravel()
+        local_times = rk4_stage_times(np.arange(steps) * h, h)[0]
         bases = hermite_basis(local_times, self.settings.sample, 1)
         lengths = ca.vertcat(*[(radius * ca.DM(b) @ winch).T for b in bases]) + ca.DM(
             [model.spec.top_length, 0.0, 0.0]
@@ -254,9 +247,7 @@ class RecedingHorizon:
         zr = ca.SX.sym("zr")
         error = xe[2] + b[2] - zr - seabed_height(hills, xe[0] + b[0], xe[1] + b[1])
         errors = ca.Function("e", [xe, b, zr], [error]).map(steps + 1)(points, offset, reference)
-        weights = np.full(steps + 1, h)
-        weights[[0, -1]] = h / 2
-        cost = ca.mtimes(errors**2, ca.DM(weights))
+        cost = ca.mtimes(errors**2, ca.DM(trapezoid_weights(h, steps + 1)))
         return ca.Function("interval", [x, winch, fixed, offset, reference], [states[:, -1], cost])
 
     def parameters(self, x0, forecast, offset, reference, force) -> np.ndarray:

@@ -12,6 +12,7 @@ from __future__ import annotations
 
 import math
 import time
+from dataclasses import replace
 
 import numpy as np
 
@@ -24,8 +25,10 @@ from cable_ocp.control.closed_loop.forecast import BlendedHeight, HeightFilter, 
 from cable_ocp.control.closed_loop.plant import LIMITER_BAND, Plant
 from cable_ocp.control.closed_loop.projection import project_state
 from cable_ocp.control.closed_loop.result import MpcResult
-from cable_ocp.drive.bounds import angle_bounds
-from cable_ocp.drive.drive import end_force
+from cable_ocp.control.ocp import make_control
+from cable_ocp.control.optimization import METHODS, optimize
+from cable_ocp.drive.bounds import angle_bounds, winch_limits
+from cable_ocp.drive.drive import Drive, end_force
 from cable_ocp.model.cable import CableModel
 from cable_ocp.model.layout import INPUTS
 from cable_ocp.simulation.integrate import SimulationError
@@ -184,12 +187,7 @@ def mpc(
         raise ValueError(f"references = {references}: each must be 'locked' or 'open-loop'")
     started = time.perf_counter()
     low, high = angle_bounds(scene)
-    commanded_bounds = [(0, low, high)]
-    if scene.winch.rate_max is not None:
-        commanded_bounds.append((1, -scene.winch.rate_max, scene.winch.rate_max))
-    if scene.winch.acceleration_max is not None:
-        acc = scene.winch.acceleration_max
-        commanded_bounds.append((2, -acc, acc))
+    commanded_bounds = [limit[:3] for limit in winch_limits(scene)]
     settings = ControllerSettings(horizon, sample, elements, step, rate_weight, max_iter)
     controller = RecedingHorizon(scene, settings, commanded_bounds)
     plant = Plant(scene, (low, high))
@@ -363,31 +361,18 @@ def _references(scene, plant: Plant, names, time_grid) -> tuple[dict[str, np.nda
     if "locked" in names:
         run("locked", lambda t: tuple(np.zeros((3, np.size(t)))))
     if "open-loop" in names:
-        from cable_ocp.control.ocp import IpoptSettings, make_control
-        from cable_ocp.control.optimization import optimize
-
         calm = scene.updated({"top.heave.amplitude": 0.0})
-        settings = IpoptSettings(elements=3, step=0.5, intervals=_intervals(scene, 0.5))
+        default = METHODS["ipopt"].default
+        settings = replace(default, intervals=_intervals(scene, default.step))
         result = optimize(calm, "ipopt", settings, quiet=True)
         if not result.success:
             missing.append(f"reference 'open-loop' left out: {result.status}")
             return out, missing
         profile = make_control(calm, settings).angle_function(result.parameters)
         run("open-loop", profile)
-        top = plant.top
-
-        def compensated(t):
-            phi, rate, acc = profile(t)
-            position, velocity, acceleration = top(t)
-            start = top(np.zeros(1))[0][2]
-            r = plant.radius
-            return (
-                phi + (position[2] - start) / r,
-                rate + velocity[2] / r,
-                acc + acceleration[2] / r,
-            )
-
-        run("open-loop + heave feedback", compensated)
+        # The same profile with the heave paid out by eq. 38 (the drive's compensation).
+        compensated = scene.updated({"top.heave.compensation": True})
+        run("open-loop + heave feedback", Drive.from_scene(compensated, profile).winch_angle)
     return out, missing
 
 
