@@ -179,7 +179,7 @@ class WinchProblem:
 
         See :func:`cable_ocp.control.verification.verify_profile`: it never raises.
         """
-        return verify_profile(self.scene, self.control, self.bounds, parameters, quiet, compiled)
+        return verify_profile(self.scene, self.control, parameters, quiet, compiled)
 
 
 @dataclass(frozen=True)

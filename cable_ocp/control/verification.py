@@ -8,8 +8,9 @@ a simulation that can be trusted, where does it keep the end? :func:`verify_prof
    that simulation, not a measure of the profile: it is reported, and a run that leaves the
    scene's ``numerics.constraint_tolerance`` at the scene's step is tried again at half and a
    quarter of the step (the same output times) before the profile is declared unverifiable;
-3. how long the winch rode a bound (its angle's Bernstein coefficients on the bound, with any
-   heave feedforward): a bound-limited optimum is a success that says so.
+3. how long the winch rode a bound: a bound-limited optimum is a success that says so. With a heave
+   feedforward the profile rides the bound less the heave's reach (its largest pay-out), at the
+   wave crests and between them alike.
 """
 
 from __future__ import annotations
@@ -18,7 +19,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from cable_ocp.drive.bounds import LinearBounds, violation
+from cable_ocp.drive.bounds import angle_bounds, violation
 from cable_ocp.model.cable import CableModel
 from cable_ocp.simulation.integrate import SimulationError, bond_residuals
 from cable_ocp.simulation.run import simulate
@@ -60,12 +61,7 @@ class Verification:
 
 
 def verify_profile(
-    scene,
-    control,
-    bounds: LinearBounds,
-    parameters: np.ndarray,
-    quiet: bool = True,
-    compiled: bool = False,
+    scene, control, parameters: np.ndarray, quiet: bool = True, compiled: bool = False
 ) -> Verification:
     """Check the bounds of a profile and simulate the scene's own model under it.
 
@@ -74,8 +70,6 @@ def verify_profile(
     scene : Scene
         Heave compensation (a feedforward of the optimisation) is the scene's.
     control : KnotSpline or HermiteIntervals
-    bounds : LinearBounds
-        The winch bounds on the control's parameters (for the time spent on them).
     parameters : array
         The profile's parameters (rad, rad/s).
     quiet : bool
@@ -124,7 +118,7 @@ def verify_profile(
             None,
             trial.numerics.step,
             float(residual.max()),
-            bounds.active_time(parameters, BOUND_RIDE),
+            bound_time(scene, control, parameters, trajectory),
             note,
         )
     reason = (
@@ -132,3 +126,18 @@ def verify_profile(
         f"of it: {'; '.join(drifted)}"
     )
     return Verification(None, reason, step / 2**STEP_HALVINGS)
+
+
+def bound_time(scene, control, parameters: np.ndarray, trajectory: Trajectory) -> float:
+    """Time (s) that the winch rode a bound of its angle within :data:`BOUND_RIDE`.
+
+    The profile's own angle is compared with the bounds narrowed by the heave's reach (the
+    largest pay-out of a heave feedforward; none without one), so that a profile pressed on its
+    bound counts between the wave crests too.
+    """
+    low, high = angle_bounds(scene)
+    profile = control.basis(trajectory.time)[0] @ parameters
+    reach = float(np.max(np.abs(trajectory.winch_angle - profile)))
+    riding = (profile <= low + reach + BOUND_RIDE) | (profile >= high - reach - BOUND_RIDE)
+    both = riding[:-1] & riding[1:]
+    return float(np.sum(np.diff(trajectory.time)[both]))

@@ -110,17 +110,11 @@ class LinearBounds:
     matrix : array (rows, size)
     lower, upper : array (rows,)
         In rad, rad/s or rad/s^2 per row, tightened by the margin.
-    derivatives : array of int (rows,)
-        What each row bounds: 0 the angle, 1 the rate, 2 the acceleration.
-    spans : array (rows, 2), s
-        The sub-interval each row holds the bound on.
     """
 
     matrix: np.ndarray
     lower: np.ndarray
     upper: np.ndarray
-    derivatives: np.ndarray
-    spans: np.ndarray
 
     @classmethod
     def build(cls, scene, control, grid: np.ndarray, margin: float = BOUND_TOLERANCE / 2):
@@ -128,7 +122,7 @@ class LinearBounds:
         starts, ends = subintervals(control, grid)
         samples = starts[:, None] + np.linspace(0.0, 1.0, HEAVE_SAMPLES) * (ends - starts)[:, None]
         heave = _heave(scene, samples.ravel()).reshape(samples.shape)
-        matrices, lower, upper, derivatives, spans = [], [], [], [], []
+        matrices, lower, upper = [], [], []
         for derivative, low, high, _ in winch_limits(scene):
             rows = bernstein_rows(control, starts, ends, derivative)
             count = rows.shape[1]
@@ -137,27 +131,7 @@ class LinearBounds:
             matrices.append(rows.reshape(-1, control.size))
             lower.append(np.repeat(low + margin - shift_low, count))
             upper.append(np.repeat(high - margin - shift_high, count))
-            derivatives.append(np.full(starts.size * count, derivative))
-            spans.append(np.repeat(np.column_stack([starts, ends]), count, axis=0))
-        return cls(
-            np.vstack(matrices),
-            np.concatenate(lower),
-            np.concatenate(upper),
-            np.concatenate(derivatives),
-            np.vstack(spans),
-        )
-
-    def active_time(self, parameters: np.ndarray, within: float) -> float:
-        """Time (s) over which ``parameters`` hold an angle bound within ``within`` (rad).
-
-        The winch rides its bound there: the sub-intervals where a Bernstein coefficient of the
-        angle (heave feedforward included) lies on its bound.
-        """
-        values = self.matrix @ parameters
-        on = (values - self.lower < within) | (self.upper - values < within)
-        on &= self.derivatives == 0
-        spans = np.unique(self.spans[on], axis=0)
-        return float(np.sum(spans[:, 1] - spans[:, 0])) if spans.size else 0.0
+        return cls(np.vstack(matrices), np.concatenate(lower), np.concatenate(upper))
 
     def excess(self, parameters: np.ndarray) -> float:
         """Largest violation of the constraints by ``parameters`` (0 when they hold)."""
