@@ -70,7 +70,7 @@ def test_every_kind_of_field_goes_through_netcdf(tmp_path):
 def test_a_field_the_file_lacks_takes_its_default(tmp_path):
     data = labelled.to_dataset(_toy(), "Toy", {}).drop_vars("added")
     assert np.isnan(labelled.from_dataset(Toy, data)["added"])
-    with pytest.raises(ValueError, match="no count"):
+    with pytest.raises(ValueError, match=r"missing field\(s\) count"):
         labelled.from_dataset(Toy, data.drop_vars("count"))
 
 

@@ -2,8 +2,10 @@
 
 ``OcpResult.load`` and ``Trajectory.load`` refuse a file of result format 1 (json + npz) whose
 fields have the wrong type or shape, or whose JSON is nested too deeply for Python, with one
-``ValueError`` that names the file and the field. The results here are built directly and
-written as cable_ocp 0.1 did (tests/legacy_results.py): no solver runs.
+``ValueError`` that names the file and the field; ``OcpResult.load``, ``Trajectory.load`` and
+``MpcResult.load`` refuse a file of format 2 (netCDF) by the same checks. The results here are
+built directly, and written as cable_ocp 0.1 did (tests/legacy_results.py) or by ``save``: no
+solver runs.
 """
 
 from __future__ import annotations
@@ -12,10 +14,13 @@ import json
 
 import numpy as np
 import pytest
+import xarray as xr
 from legacy_results import write_ocp_result, write_trajectory
 
+from cable_ocp.control.closed_loop.result import MpcResult
 from cable_ocp.control.optimization import OcpResult
-from cable_ocp.scene.records import control_parameters, record_fields
+from cable_ocp.scene import labelled
+from cable_ocp.scene.records import check_field, control_parameters, record_fields
 from cable_ocp.simulation.labelled import state_names
 from cable_ocp.simulation.trajectory import Trajectory
 
@@ -147,26 +152,168 @@ def test_record_fields_and_control_parameters_directly():
         control_parameters(np.zeros(13), "spline(14)")
 
 
-@pytest.mark.xfail(
-    reason="format 2 (cable_ocp/scene/labelled.py, being rewritten elsewhere) coerces "
-    "success 'yes' to True and iterations 3.7 to 3 instead of refusing them",
-    strict=False,
-)
-def test_a_result_of_format_2_with_a_field_of_the_wrong_type_is_named(tmp_path):
-    """The netCDF result: the same fields, checked as strictly (success a string, parameters)."""
-    import xarray as xr
+def _rewrite(path, change) -> None:
+    """Rewrite the netCDF file ``path`` with one field changed (a variable or an attribute).
 
-    _result(_trajectory()).save(tmp_path / "r")
-    (path,) = (tmp_path / "r").glob("*.nc")
+    ``change`` is ``(name, value)``: a value None deletes the field; a tuple ``(dims, data)``
+    replaces a variable's array.
+    """
+    name, value = change
     data = xr.load_dataset(path)
-    assert OcpResult.load(tmp_path / "r").iterations == 12
-    for change in ({"success": "yes"}, {"iterations": 3.7}, {"method": "newton"}):
-        (name, value), bad = next(iter(change.items())), data.copy()
-        if name in bad.attrs:
-            bad.attrs[name] = value
+    if name in data.attrs:
+        if value is None:
+            del data.attrs[name]
         else:
-            bad[name] = value
-        path.unlink()
-        bad.to_netcdf(path)
-        with pytest.raises(ValueError, match=rf"{path.name}: not a readable optimisation result"):
-            OcpResult.load(tmp_path / "r")
+            data.attrs[name] = value
+    else:
+        data = data.drop_vars(name)
+        if value is not None:
+            data[name] = value
+    path.unlink()
+    data.to_netcdf(path)
+
+
+@pytest.fixture
+def saved_nc(tmp_path):
+    """A result of format 2 (result.nc, with its trajectory): the folder."""
+    _result(_trajectory()).save(tmp_path / "r")
+    return tmp_path / "r"
+
+
+def test_a_result_of_format_2_loads_back(saved_nc):
+    back = OcpResult.load(saved_nc)
+    assert back.iterations == 12 and back.success is True and back.control == "hermite(84)"
+    assert type(back.iterations) is int and type(back.omega) is float
+    assert back.history[0] == 1.0 and np.isnan(back.history[1]) and back.refinements == [0.01]
+    assert back.trajectory.equals(_trajectory())
+
+
+@pytest.mark.parametrize(
+    ("change", "message"),
+    [
+        (("success", "yes"), "success = 'yes': expected true or false"),
+        (("success", 1), "success = 1: expected true or false"),
+        (("heave_feedforward", 0.0), "heave_feedforward = 0.0: expected true or false"),
+        (("iterations", 3.7), "iterations = 3.7: expected an integer >= 0"),
+        (("iterations", np.inf), "iterations = inf: expected an integer >= 0"),
+        (("iterations", np.nan), "iterations = nan: expected an integer >= 0"),
+        (("iterations", -1), "iterations = -1: expected an integer >= 0"),
+        (("evaluations", True), "evaluations = True: expected an integer >= 0"),
+        (("iterations", ("n", [1, 2])), "iterations = [1, 2]: expected an integer >= 0"),
+        (("method", 5), "method = 5: expected a string"),
+        (("method", "newton"), "method = 'newton': not a known method"),
+        (("status", 1.5), "status = 1.5: expected a string"),
+        (("omega", "0.1"), "omega = '0.1': expected a finite number or NaN"),
+        (("wall_time", np.inf), "wall_time = inf: expected a finite number or NaN"),
+        (("omega_model", -np.inf), "omega_model = -inf: expected a finite number or NaN"),
+        (("history", 1.0), "history = 1.0: expected a list of a finite number or nulls"),
+        (("history", ("i", ["1.0", "x"])), "history[0] = '1.0': expected a finite number"),
+        (("refinements", ("i", [0.1, np.inf])), "refinements[1] = inf: expected a finite"),
+        (("control", "hermite"), "control = 'hermite': expected a name and a size"),
+        (("parameters", ("p", ["a", "b"])), "parameters = an array of <U1 of shape (2,): expected"),
+        (("parameters", ("p", np.full(84, np.nan))), "parameters: not all finite"),
+        (("omega", ("t", [1.0, 2.0])), "omega = [1.0, 2.0]: expected a finite number or NaN"),
+        (("trajectory_omega", "x"), "trajectory: omega = 'x': expected a finite number or NaN"),
+        (("scene_name", 7), "trajectory: scene_name = 7: expected a string"),
+        (("winch_angle", ("time", ["a", "b", "c"])), "trajectory: winch_angle = an array of <U1"),
+        (("tension", (("time", "element"), np.full((3, 3), "x"))), "of shape (3, 3): expected an"),
+        (("status", None), "missing field(s) status"),
+        (("iterations", None), "missing field(s) iterations"),
+        (("tension", None), "trajectory: missing field(s) tension"),
+    ],
+)
+def test_a_result_of_format_2_with_a_field_of_the_wrong_type_is_named(saved_nc, change, message):
+    """The netCDF result: the same fields, checked as strictly as format 1's, never coerced."""
+    path = saved_nc / "result.nc"
+    _rewrite(path, change)
+    with pytest.raises(ValueError) as error:
+        OcpResult.load(saved_nc)
+    assert str(error.value).startswith(f"{path}: not a readable optimisation result")
+    assert message in str(error.value) and "\n" not in str(error.value)
+
+
+@pytest.mark.parametrize("shape", [(2, 42), (3,), (85,), ()])
+def test_parameters_of_format_2_of_the_wrong_shape_are_named(saved_nc, shape):
+    path = saved_nc / "result.nc"
+    _rewrite(path, ("parameters", (("p", "q")[: len(shape)], np.zeros(shape))))
+    with pytest.raises(ValueError) as error:
+        OcpResult.load(saved_nc)
+    assert str(error.value).startswith(f"{path}: not a readable optimisation result")
+    assert f"parameters of shape {shape}: control = 'hermite(84)' has 84 parameters" in str(
+        error.value
+    )
+
+
+@pytest.mark.parametrize(
+    ("change", "message"),
+    [
+        (("omega", "x"), "omega = 'x': expected a finite number or NaN"),
+        (("scene_name", 7), "scene_name = 7: expected a string"),
+        (("time", ("time", ["a", "b", "c"])), "time = an array of <U1 of shape (3,): expected"),
+        (("scene_name", None), "missing field(s) scene_name"),
+    ],
+)
+def test_a_trajectory_of_format_2_with_a_field_of_the_wrong_type_is_named(
+    tmp_path, change, message
+):
+    path = _trajectory().save(tmp_path / "t")
+    assert Trajectory.load(tmp_path / "t").equals(_trajectory())
+    _rewrite(path, change)
+    with pytest.raises(ValueError) as error:
+        Trajectory.load(tmp_path / "t")
+    assert str(error.value).startswith(f"{path}: not a readable trajectory")
+    assert message in str(error.value)
+
+
+def _mpc() -> MpcResult:
+    k, s = 4, 2
+    return MpcResult(
+        time=np.linspace(0, 1, k), winch_angle=np.zeros(k), planned_angle=np.zeros(k),
+        end=np.zeros((k, 3)), top=np.ones((k, 3)), clearance_error=np.full(k, 0.1), omega=0.1,
+        sample_times=np.arange(s, dtype=float), solve_times=np.full(s, 0.01),
+        iterations=np.array([3, 4]), statuses=["Solve_Succeeded"] * s, failures=[],
+        success=True, limited_steps=0, angle_range=(-1.0, 1.0), real_time_factor=2.0,
+        worst_solve_time=0.01, wall_time=0.5, build_time=0.2, settings={"horizon_s": 2.0},
+        references={"locked": np.full(k, 0.2)}, reference_omegas={"locked": 0.2},
+    )  # fmt: skip
+
+
+@pytest.mark.parametrize(
+    ("change", "message"),
+    [
+        (("success", "yes"), "success = 'yes': expected true or false"),
+        (("limited_steps", 2.5), "limited_steps = 2.5: expected an integer >= 0"),
+        (("angle_range", ("bound", [-1.0, np.inf])), "angle_range[1] = inf: expected a finite"),
+        (("angle_range", ("b", [1.0, 2.0, 3.0])), "angle_range = [1.0, 2.0, 3.0]: expected 2"),
+        (("statuses", '["ok", 3]'), "statuses[1] = 3: expected a string"),
+        (("statuses", "[1"), "statuses: Expecting"),
+        (("settings", "[" * 100_000 + "]" * 100_000), "settings: JSON nested too deeply"),
+        (("settings", "[1, 2]"), "settings = [1, 2]: expected a mapping of names"),
+        (("reference_omegas", ("reference", ["x"])), "reference_omegas['locked'] = 'x'"),
+        (("iterations", ("sample", ["a", "b"])), "iterations = an array of <U1 of shape (2,)"),
+        (("omega", None), "missing field(s) omega"),
+    ],
+)
+def test_an_mpc_result_of_format_2_with_a_field_of_the_wrong_type_is_named(
+    tmp_path, change, message
+):
+    path = _mpc().save(tmp_path / "m")
+    assert labelled.fields_equal(MpcResult.load(tmp_path / "m"), _mpc())
+    _rewrite(path, change)
+    with pytest.raises(ValueError) as error:
+        MpcResult.load(tmp_path / "m")
+    assert str(error.value).startswith(f"{path}: not a readable closed-loop result")
+    assert message in str(error.value)
+
+
+def test_check_field_directly():
+    assert check_field("a", np.int64(3), int) == 3 and check_field("s", ["x"], list[str]) == ["x"]
+    assert check_field("t", [1, 2.5], tuple[float, float]) == (1.0, 2.5)
+    assert check_field("t", [1, None, 2], tuple[float, ...])[:1] == (1.0,)
+    assert np.isnan(check_field("v", float("nan"), float, nan=True))
+    with pytest.raises(ValueError, match="v = nan: expected a finite number or null"):
+        check_field("v", float("nan"), float)
+    with pytest.raises(ValueError, match=r"d\['k'\] = 'x': expected a finite number"):
+        check_field("d", {"k": "x"}, dict[str, float])
+    with pytest.raises(ValueError, match="a = 'x': expected an array of numbers"):
+        check_field("a", "x", np.ndarray)

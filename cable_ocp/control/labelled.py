@@ -58,5 +58,9 @@ def from_dataset(cls, dataset: xr.Dataset, trajectory_class) -> dict:
         names = [n for n in dataset.data_vars if "time" in dataset[n].dims or n.startswith(PREFIX)]
         run = dataset[names].rename({n: n[len(PREFIX) :] for n in names if n.startswith(PREFIX)})
         run.attrs = dict(dataset.attrs)
-        values["trajectory"] = trajectory_class(**run_labelled.from_dataset(run))
+        try:
+            run_values = run_labelled.from_dataset(run, trajectory_class)
+            values["trajectory"] = trajectory_class(**run_values)
+        except ValueError as error:
+            raise ValueError(f"trajectory: {error}") from None
     return values

@@ -35,6 +35,8 @@ from pathlib import Path
 import numpy as np
 import xarray as xr
 
+from cable_ocp.scene.records import check_field, parse_json
+
 FORMAT = 2
 FORMATS = "1 (npz + json, cable_ocp 0.1) and 2 (netCDF)"
 KIND = "cable_ocp_result"
@@ -227,56 +229,61 @@ def to_dataset(
 def from_dataset(cls: type, dataset: xr.Dataset, skip: Iterable[str] = ()) -> dict:
     """The field values of ``cls`` from a Dataset written by :func:`to_dataset`.
 
-    A field the file lacks takes its default (it was added after the file was written).
+    Each value is checked against the type its field declares, by the checks of result format
+    1 (:func:`cable_ocp.scene.records.check_field`; NaN is a float's null): a file edited to
+    ``success = "yes"`` or ``iterations = 3.7`` is refused, not coerced. A field the file lacks
+    takes its default (it was added after the file was written).
 
     Raises
     ------
     ValueError
-        A field without a default is missing, or a value does not fit its type.
+        Naming the field: one without a default is missing, or a value does not fit its type
+        (the caller adds the file).
     """
-    hints, values = _hints(cls), {}
+    hints, values, missing = _hints(cls), {}, []
     for f in fields(cls):
         if f.name in skip:
             continue
         how = _kind_of(hints[f.name])
         held = dataset.attrs if how in ("text", "json") else dataset.variables
-        if f.name not in held:
-            if f.default is not MISSING:
-                values[f.name] = f.default
-            elif f.default_factory is not MISSING:
-                values[f.name] = f.default_factory()
-            else:
-                raise ValueError(f"no {f.name}")
-            continue
-        if how == "text":
-            values[f.name] = str(held[f.name])
-        elif how == "json":
-            values[f.name] = json.loads(held[f.name])
-            if typing.get_origin(hints[f.name]) is tuple:
-                values[f.name] = tuple(values[f.name])
-        elif how == "mapping":
-            variable = dataset[f.name]
-            keys = [str(k) for k in variable[variable.dims[0]].values]
-            data = variable.values
-            scalar = typing.get_args(hints[f.name])[1] is float
-            values[f.name] = {k: float(d) if scalar else d for k, d in zip(keys, data, strict=True)}
+        if f.name in held:
+            stored = _stored(dataset, f.name, hints[f.name])
+            values[f.name] = check_field(f.name, stored, hints[f.name], nan=True)
+        elif f.default is not MISSING:
+            values[f.name] = f.default
+        elif f.default_factory is not MISSING:
+            values[f.name] = f.default_factory()
         else:
-            data = dataset.variables[f.name].values
-            values[f.name] = _typed(hints[f.name], data, how)
+            missing.append(f.name)
+    if missing:
+        raise ValueError(f"missing field(s) {', '.join(missing)}")
     return values
 
 
-def _typed(hint, data: np.ndarray, how: str):
-    """A stored array back to the field's type."""
+def _stored(dataset: xr.Dataset, name: str, hint):
+    """The field ``name`` (of type ``hint``) as stored, in Python's terms, to be checked."""
+    how = _kind_of(hint)
+    if how == "text":
+        return dataset.attrs[name]
+    if how == "json":
+        text = dataset.attrs[name]
+        if not isinstance(text, str):
+            raise ValueError(f"{name} = {text!r:.40}: expected JSON text")
+        try:
+            return parse_json(text)
+        except ValueError as error:
+            raise ValueError(f"{name}: {error}") from None
+    variable = dataset.variables[name]
     if how == "array":
-        return data
-    if how == "sequence":
-        item = typing.get_args(hint)[0]
-        converted = [item(v) for v in data.tolist()]
-        return tuple(converted) if typing.get_origin(hint) is tuple else converted
-    if data.ndim:
-        raise ValueError(f"expected a number, got an array of shape {data.shape}")
-    return hint(data.item())
+        return variable.values
+    if how == "mapping":
+        if variable.ndim == 0:
+            raise ValueError(f"{name} = {variable.values!r:.40}: expected values over keys")
+        keys = [str(k) for k in dataset[name][variable.dims[0]].values]
+        scalar = typing.get_args(hint)[1] is float
+        data = [d.tolist() if scalar else d for d in variable.values]
+        return dict(zip(keys, data, strict=True))
+    return variable.values.tolist()  # a number, or a list for a sequence
 
 
 def fields_equal(a, b) -> bool:

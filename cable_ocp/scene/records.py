@@ -1,9 +1,11 @@
 """Checks for the loaders of saved results: JSON read safely, each field of its declared type.
 
-A results file comes from disk and may be truncated, edited or not ours at all. The loaders
-(``OcpResult.load``, ``Trajectory.load``) read it through :func:`parse_json` and
-:func:`record_fields`, so that whatever is wrong is one ``ValueError`` naming the file and the
-field, never a ``RecursionError``, a ``TypeError`` later on, or a result that is quietly wrong.
+A results file comes from disk and may be truncated, edited or not ours at all. The loaders of
+result format 1 (``OcpResult.load``, ``Trajectory.load`` of json + npz) read it through
+:func:`parse_json` and :func:`record_fields`; those of format 2 (netCDF,
+:func:`cable_ocp.scene.labelled.from_dataset`) check each field with the same
+:func:`check_field`. Whatever is wrong is one ``ValueError`` naming the file and the field, never
+a ``RecursionError``, a ``TypeError`` later on, or a result that is quietly wrong.
 """
 
 from __future__ import annotations
@@ -50,23 +52,76 @@ def _number(value: Any) -> bool:
     return isinstance(value, int | float) and not isinstance(value, bool) and math.isfinite(value)
 
 
-def _field(name: str, value: Any, kind: Any) -> Any:
-    """``value`` of the field ``name`` as type ``kind``; ValueError if it is not one."""
-    if typing.get_origin(kind) is list:
-        (item,) = typing.get_args(kind) or (Any,)
+def _named(kind: Any) -> str:
+    return _EXPECTED.get(kind, "a value")
+
+
+def check_field(name: str, value: Any, kind: Any, nan: bool = False) -> Any:
+    """``value`` of the field ``name`` as type ``kind``, converted; ValueError if it is not one.
+
+    The one check of a saved field, for both result formats: JSON's values (format 1) and a
+    netCDF file's (format 2, with ``nan=True``).
+
+    Parameters
+    ----------
+    name : str
+        The field, as the error names it (``history[1]`` for an item).
+    value : any
+        The value read (NumPy scalars are taken as the Python ones).
+    kind : type
+        ``str``, ``bool``, ``int`` (a count, >= 0), ``float`` (finite, or null for NaN),
+        ``np.ndarray`` (of numbers), ``list[...]``, ``tuple[...]`` (of a fixed length, or with
+        ``...``), ``dict[str, ...]`` or ``dict``; any other type is left to its class.
+    nan : bool
+        Whether a float may be NaN itself (netCDF's null), not only null (JSON's).
+
+    Raises
+    ------
+    ValueError
+        Naming the field, the value and the type expected.
+    """
+    if isinstance(value, np.generic):
+        value = value.item()
+    origin, args = typing.get_origin(kind), typing.get_args(kind)
+    if origin is list:
+        (item,) = args or (Any,)
         if isinstance(value, list):
-            return [_field(f"{name}[{k}]", v, item) for k, v in enumerate(value)]
-        raise ValueError(f"{name} = {value!r:.40}: expected a list of {_EXPECTED[item]}s")
+            return [check_field(f"{name}[{k}]", v, item, nan) for k, v in enumerate(value)]
+        raise ValueError(f"{name} = {value!r:.40}: expected a list of {_named(item)}s")
+    if origin is tuple:
+        free = args[1:] == (Ellipsis,)  # tuple[float, ...]: any length
+        if not isinstance(value, list | tuple) or not (free or len(value) == len(args)):
+            size = "any number of" if free else len(args)
+            raise ValueError(f"{name} = {value!r:.40}: expected {size} values, each "
+                             f"{_named(args[0] if args else Any)}")  # fmt: skip
+        items = args[:1] * len(value) if free else args
+        return tuple(check_field(f"{name}[{k}]", v, t, nan) for k, (v, t) in
+                     enumerate(zip(value, items, strict=True)))  # fmt: skip
+    if kind is dict or origin is dict:
+        if not isinstance(value, dict) or not all(isinstance(k, str) for k in value):
+            raise ValueError(f"{name} = {value!r:.40}: expected a mapping of names")
+        if not args:
+            return value
+        return {k: check_field(f"{name}[{k!r}]", v, args[1], nan) for k, v in value.items()}
+    if kind is np.ndarray:
+        if isinstance(value, np.ndarray) and value.dtype.kind in "biuf":
+            return value
+        held = (f"an array of {value.dtype} of shape {value.shape}" if isinstance(value, np.ndarray)
+                else f"{value!r:.40}")  # fmt: skip
+        raise ValueError(f"{name} = {held}: expected an array of numbers")
     fits = {
         str: isinstance(value, str),
         bool: isinstance(value, bool),
         int: isinstance(value, int) and not isinstance(value, bool) and value >= 0,
-        float: value is None or _number(value),
+        float: value is None
+        or _number(value)
+        or (nan and isinstance(value, float) and math.isnan(value)),
     }
     if kind not in fits:
         return value  # a type a record does not declare: left to its class
     if not fits[kind]:
-        raise ValueError(f"{name} = {value!r:.40}: expected {_EXPECTED[kind]}")
+        expected = "a finite number or NaN" if nan and kind is float else _named(kind)
+        raise ValueError(f"{name} = {value!r:.40}: expected {expected}")
     if kind is float:
         return float("nan") if value is None else float(value)
     return value
@@ -80,8 +135,8 @@ def record_fields(meta: Any, types: dict[str, Any], optional: set[str] = frozens
     meta : any
         The JSON value read from the file (a dict if it is a record).
     types : dict
-        Field name -> type (``str``, ``bool``, ``int`` (>= 0), ``float`` (null is NaN) or
-        ``list[...]`` of those), e.g. from ``typing.get_type_hints`` of the record's class.
+        Field name -> type (those of :func:`check_field`), e.g. from ``typing.get_type_hints``
+        of the record's class.
     optional : set of str
         Fields that older files lack (the class's defaults fill them).
 
@@ -104,7 +159,7 @@ def record_fields(meta: Any, types: dict[str, Any], optional: set[str] = frozens
             if part
         )
         raise ValueError(detail)
-    return {name: _field(name, value, types[name]) for name, value in meta.items()}
+    return {name: check_field(name, value, types[name]) for name, value in meta.items()}
 
 
 def control_size(control: str) -> int:

@@ -18,6 +18,8 @@ import xarray as xr
 
 from cable_ocp.model.layout import INPUT_SIZE, INPUTS
 from cable_ocp.scene.labelled import COMPONENT, DIMENSIONLESS, describe, to_dataset
+from cable_ocp.scene.labelled import from_dataset as labelled_fields
+from cable_ocp.scene.records import check_field
 
 KIND = "Trajectory"
 ANGLES = ("psi", "theta", "phi")  # the Euler angles of an element, in state order
@@ -40,6 +42,8 @@ STATE_VARIABLES = {  # (derivative?, coordinates, units, long name)
               "out of it, phi the twist)"),
     "euler_angle_rate": (True, "angle", "rad s-1", "rates of the Euler angles of element i"),
 }  # fmt: skip
+# Fields kept as the named variables above, not as they are.
+SPLIT = ("states", "inputs", "joints", "tensions", "state_names")
 
 
 def state_names(elements: int, dofs: int) -> list[str]:
@@ -84,7 +88,7 @@ def to_xarray(trajectory) -> xr.Dataset:
         trajectory,
         KIND,
         {"time": ("time",), "winch_angle": ("time",), "clearance_error": ("time",)},
-        skip=("states", "inputs", "joints", "tensions", "state_names"),
+        skip=SPLIT,
     )
     for name, (dims, data, units, long_name) in variables.items():
         dataset[name] = describe(xr.Variable(dims, data), units, long_name)
@@ -100,15 +104,26 @@ def to_xarray(trajectory) -> xr.Dataset:
     return dataset
 
 
-def from_dataset(dataset: xr.Dataset) -> dict:
-    """The fields of a Trajectory from its Dataset.
+def from_dataset(dataset: xr.Dataset, cls: type | None = None) -> dict:
+    """The fields of a Trajectory (class ``cls``, by default ``Trajectory``) from its Dataset.
+
+    The fields stored as they are (``time``, ``omega``, ``scene_name``, ...) are read and
+    checked against their types by :func:`cable_ocp.scene.labelled.from_dataset`; the state,
+    input, joint and tension variables must be arrays of numbers.
 
     Raises
     ------
     ValueError, KeyError
         A variable is missing or does not fit.
     """
-    time = dataset["time"].values
+    if cls is None:
+        from cable_ocp.simulation.trajectory import Trajectory as cls  # it imports this module
+    values = labelled_fields(cls, dataset, skip=SPLIT)
+    for name in (*STATE_VARIABLES, *INPUT_VARIABLES, "joint_position", "tension"):
+        if name not in dataset.variables:
+            raise ValueError(f"missing field(s) {name}")
+        check_field(name, dataset[name].values, np.ndarray)
+    time = values["time"]
     elements, angles = dataset.sizes["element"], dataset.sizes["angle"]
     dofs = 3 + angles
     blocks = np.empty((time.size, 2, elements, dofs))
@@ -120,14 +135,10 @@ def from_dataset(dataset: xr.Dataset) -> dict:
         inputs[:, index] = dataset[name].values
     joints = dataset["joint_position"].transpose("time", "joint", "component").values
     return {
-        "time": time,
+        **values,
         "states": blocks.reshape(time.size, -1),
         "inputs": inputs,
         "joints": joints.transpose(0, 2, 1),
         "tensions": dataset["tension"].transpose("time", "element").values,
-        "winch_angle": dataset["winch_angle"].values,
-        "clearance_error": dataset["clearance_error"].values,
-        "omega": float(dataset["omega"].values),
-        "scene_name": str(dataset.attrs["scene_name"]),
         "state_names": state_names(elements, dofs),
     }
