@@ -243,6 +243,8 @@ def _case_line(k: int, row: dict) -> str:
             f"{'ok' if row['mpc_success'] else 'failed'} Omega {row.get('mpc_omega', np.nan):.3g}"
             f" m, {row['mpc_wall']:.1f} s"
         )
+        if not row["mpc_success"]:
+            text += f" [{row['mpc_status']}]"
     return text
 
 
