@@ -38,6 +38,28 @@ from cable_ocp.simulation.progress import IterationLog, check_verbosity
 from cable_ocp.simulation.seabed import clearance_reference, seabed_height, trapezoid_weights
 
 NLP_FUNCTIONS = ("nlp_f", "nlp_g", "nlp_grad_f", "nlp_jac_g", "nlp_hess_l", "nlp_grad")
+# IPOPT's statuses when Ctrl-C reached it: CasADi's own interrupt check, or a KeyboardInterrupt
+# in a Python callback.
+INTERRUPTED = ("User_Requested_Stop", "NonIpopt_Exception_Thrown")
+
+
+def interrupted_solve(solver: ca.Function, interrupted: bool = False, **arguments) -> dict:
+    """``solver(**arguments)``, re-raising a user's Ctrl-C as KeyboardInterrupt.
+
+    IPOPT turns an interrupt into a return status; a user's interrupt is never a solver's
+    failure, so it leaves here as the interrupt it was. ``interrupted`` (a callable) tells
+    whether a callback saw the KeyboardInterrupt.
+    """
+    try:
+        solution = solver(**arguments)
+    except RuntimeError as error:
+        if interrupted and interrupted():
+            raise KeyboardInterrupt from error
+        raise
+    status = solver.stats()["return_status"]
+    if status == INTERRUPTED[0] or (status in INTERRUPTED and interrupted and interrupted()):
+        raise KeyboardInterrupt
+    return solution
 
 
 @dataclass(frozen=True)
@@ -325,8 +347,11 @@ class ShootingProblem:
         bias = np.zeros(problem.grid.size) if bias is None else bias
         self.history.clear()
         self.log.restart()
+        self._callback.interrupted = False
         started = time.perf_counter()
-        solution = self.solver(
+        solution = interrupted_solve(
+            self.solver,
+            lambda: self._callback.interrupted,
             x0=np.concatenate([nodes.ravel(order="F"), parameters]),
             lbg=self.lbg,
             ubg=self.ubg,
@@ -360,6 +385,7 @@ class _History(ca.Callback):
     def __init__(self, history: list[float], log: IterationLog, lbg, ubg):
         ca.Callback.__init__(self)
         self.history, self.log, self.lbg, self.ubg = history, log, lbg, ubg
+        self.interrupted = False
         self.construct("history", {})
 
     def get_n_in(self):
@@ -383,6 +409,13 @@ class _History(ca.Callback):
         return ca.Sparsity(0, 0)
 
     def eval(self, arg):
+        try:
+            return self._record(arg)
+        except KeyboardInterrupt:
+            self.interrupted = True
+            raise
+
+    def _record(self, arg):
         objective = float(arg[ca.nlpsol_out().index("f")])
         g = np.array(arg[ca.nlpsol_out().index("g")]).ravel()
         violation = float(max(np.max(self.lbg - g), np.max(g - self.ubg), 0.0))

@@ -22,6 +22,7 @@ from cable_ocp.model.cable import INPUT_SIZE, CableModel
 from cable_ocp.model.compile import CompileReport
 from cable_ocp.model.compile import compiled as compile_function
 from cable_ocp.model.parametric import ParametricModel
+from cable_ocp.simulation.figures import apart
 from cable_ocp.simulation.progress import Progress
 
 SEGMENTS = 40  # progress updates (and blow-up checks) per run
@@ -340,9 +341,10 @@ def _check_block(model, block, norms, times, step, tolerance) -> None:
         )
     if first_off_bonds < times.size:
         k = first_off_bonds
+        residual, limit = apart(float(norms[k]), tolerance)
         raise SimulationError(
-            f"bond residual {norms[k]:.3g} m exceeds numerics.constraint_tolerance = "
-            f"{tolerance:g} m at t = {times[k]:.6g} s with step h = {step:g} s. Remedy: a smaller "
+            f"bond residual {residual} m exceeds numerics.constraint_tolerance = "
+            f"{limit} m at t = {times[k]:.6g} s with step h = {step:g} s. Remedy: a smaller "
             "numerics.step or other Baumgarte gains (numerics.baumgarte_alpha/beta); if the run "
             "is otherwise sound, a larger numerics.constraint_tolerance."
         )

@@ -73,7 +73,7 @@ def run_case(scene: Scene, task: str, method: str, settings: Any) -> dict[str, A
             record.update(
                 success=bool(result.success),
                 status="ok" if result.success else "failed",
-                reason="" if result.success else f"{method} did not converge: {result.status}",
+                reason="" if result.success else f"{method}: {result.status}",
                 omega_model=float(result.omega_model),
                 iterations=int(result.iterations),
                 evaluations=int(result.evaluations),

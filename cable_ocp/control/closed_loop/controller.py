@@ -22,7 +22,7 @@ from dataclasses import dataclass
 import casadi as ca
 import numpy as np
 
-from cable_ocp.control.ocp import ipopt_options
+from cable_ocp.control.ocp import interrupted_solve, ipopt_options
 from cable_ocp.drive.controls import hermite_polynomials
 from cable_ocp.drive.drive import stage_times as rk4_stage_times
 from cable_ocp.model.cable import INPUT_SIZE, CableModel
@@ -284,7 +284,8 @@ class RecedingHorizon:
         lbg[self._angle_rows] += margin * self._margin_ramp
         ubg[self._angle_rows] -= margin * self._margin_ramp
         started = time.perf_counter()
-        solution = self.solver(
+        solution = interrupted_solve(
+            self.solver,
             x0=np.concatenate([nodes.ravel(order="F"), guess]),
             p=parameters,
             lbx=lbx,

@@ -19,6 +19,7 @@ from cable_ocp.drive.drive import Drive, end_force
 from cable_ocp.drive.vessel import top_motion
 from cable_ocp.model.cable import CableModel
 from cable_ocp.model.layout import INPUTS
+from cable_ocp.simulation.figures import apart
 from cable_ocp.simulation.integrate import SimulationError, step_function
 from cable_ocp.simulation.statics import equilibrium
 
@@ -189,8 +190,9 @@ class Plant:
         residual = float(np.max(np.abs(self.model.output_values(x, u)["bond_residual"])))
         tolerance = self.scene.numerics.constraint_tolerance
         if residual > tolerance:
+            shown, limit = apart(residual, tolerance)
             return (
-                f"bond residual {residual:.4g} m over numerics.constraint_tolerance = "
-                f"{tolerance:g} m at t = {t:.6g} s at h = {h:g} s"
+                f"bond residual {shown} m over numerics.constraint_tolerance = {limit} m at "
+                f"t = {t:.6g} s at h = {h:g} s"
             )
         return None

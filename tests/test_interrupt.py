@@ -1,0 +1,85 @@
+"""Ctrl-C during a solve (issue 17 item 8): exit 130, the previous results untouched, never a
+solver failure; and messages that show by how much a tolerance was broken (item 9)."""
+
+import os
+import signal
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+import pytest
+
+from cable_ocp.simulation.figures import apart
+
+MODELS = Path(__file__).resolve().parents[1] / "models"
+TIMEOUT = 300  # s, for a whole command
+SMALL = ["--intervals", "8"]  # small_tow's 80 RK4 steps of the default optimisation model
+
+
+def _interrupt_when(command: list[str], marker: str) -> tuple[int, str]:
+    """Run ``command``, send SIGINT once ``marker`` appears on its stderr; (exit code, stderr)."""
+    process = subprocess.Popen(
+        [sys.executable, "-m", "cable_ocp.cli", *command],
+        stdout=subprocess.DEVNULL,
+        stderr=subprocess.PIPE,
+        text=True,
+    )
+    seen, started = [], time.monotonic()
+    for line in process.stderr:
+        seen.append(line)
+        if marker in line:
+            process.send_signal(signal.SIGINT)
+            break
+        if time.monotonic() - started > TIMEOUT:
+            process.kill()
+            pytest.fail(f"{marker!r} never appeared: {''.join(seen)[-2000:]}")
+    rest = process.stderr.read()
+    return process.wait(timeout=TIMEOUT), "".join(seen) + rest
+
+
+def _snapshot(folder: Path) -> dict[str, bytes]:
+    return {p.name: p.read_bytes() for p in sorted(folder.iterdir()) if p.is_file()}
+
+
+@pytest.mark.skipif(os.name != "posix", reason="SIGINT to a child process")
+def test_ctrl_c_during_ipopt_keeps_the_previous_results(tmp_path):
+    out = tmp_path / "results"
+    scene = str(MODELS / "small_tow.toml")
+    first = subprocess.run(
+        [
+            sys.executable,
+            "-m",
+            "cable_ocp.cli",
+            "optimize",
+            scene,
+            *SMALL,
+            "--out",
+            str(out),
+            "--quiet",
+        ],
+        capture_output=True,
+        text=True,
+        timeout=TIMEOUT,
+    )
+    assert first.returncode == 0, first.stderr
+    before = _snapshot(out)
+    code, stderr = _interrupt_when(["optimize", scene, *SMALL, "--out", str(out)], "ipopt")
+    assert code == 130, stderr
+    assert "interrupted" in stderr and "failed" not in stderr
+    assert _snapshot(out) == before
+
+
+@pytest.mark.skipif(os.name != "posix", reason="SIGINT to a child process")
+def test_ctrl_c_during_the_closed_loop_is_an_interrupt(tmp_path):
+    out = tmp_path / "loop"
+    command = ["mpc", str(MODELS / "small_tow.toml"), "--out", str(out), "--horizon", "10"]
+    code, stderr = _interrupt_when(command, "mpc")
+    assert code == 130, stderr
+    assert not out.exists() or not any(out.iterdir())
+
+
+def test_a_broken_tolerance_shows_its_excess():
+    assert apart(0.000100049, 1e-4) == ("0.00010005", "0.0001")
+    assert apart(0.00104, 1e-4) == ("0.00104", "0.0001")
+    assert apart(1e-4, 1e-4) == ("0.0001", "0.0001")
