@@ -9,10 +9,13 @@ from cable_ocp.drive.drive import Drive
 from cable_ocp.model.cable import CableModel
 from cable_ocp.scene.schema import load_scene
 from cable_ocp.simulation.integrate import (
+    RK4_STAGES,
+    WHOLE_STEP_LIMIT,
     SimulationError,
     integrate,
     reference_solution,
     step_count,
+    whole_step_fits,
 )
 from cable_ocp.simulation.statics import equilibrium, rest_inputs
 
@@ -188,3 +191,22 @@ def test_torsional_instability_is_caught(models_dir):
     with pytest.raises(SimulationError, match="twisted apart") as info:
         integrate(model, x0, drive, 20.0, 0.1, tolerance=1.0)
     assert "smaller numerics.step" in str(info.value)
+
+
+@pytest.mark.parametrize(
+    "scene_name, overrides",
+    [
+        ("hanging.toml", {"model.elements": 6}),
+        ("hanging.toml", {"model.elements": 30}),
+        ("hanging.toml", {"model.elements": 20, "environment.submerged": False}),
+        ("end_force.toml", {"model.elements": 4, "model.torsion": True}),
+    ],
+)
+def test_whole_step_decision_is_that_of_the_eliminated_rhs(models_dir, scene_name, overrides):
+    """The shortcut on the size before elimination decides as the eliminated size does."""
+    model = CableModel.from_scene(load_scene(models_dir / scene_name, overrides))
+    parametric = model.parametric
+    eliminated = parametric.rhs.n_instructions()
+    # Elimination removes far less than half of the instructions (17-20 %), never more.
+    assert parametric.rhs_size() / 2 < eliminated <= parametric.rhs_size()
+    assert whole_step_fits(parametric) == (RK4_STAGES * eliminated <= WHOLE_STEP_LIMIT)

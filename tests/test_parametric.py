@@ -73,3 +73,33 @@ def test_a_sweep_over_currents_compiles_once(models_dir, tmp_path, monkeypatch):
     assert parametric.parametric_model.cache_info().misses == 1
     # The runs did see their own numbers: the end trails downstream in each current.
     assert ends[1][1] > ends[0][1] + 1.0 and ends[2][1] > ends[1][1]
+
+
+def test_flat_functions_are_built_on_first_use(models_dir):
+    """The compiled structured path (5 DOF, n = 60) eliminates no flat Function's subexpressions."""
+    overrides = {"model.elements": 60, "numerics.duration": 1.0}
+    scene = load_scene(models_dir / "hanging.toml", overrides)
+    fresh = parametric.ParametricModel(structure_of(spec_from_scene(scene)))
+    built = {"rhs", "kkt_parts", "outputs", "energy", "_graph"} & set(vars(fresh))
+    assert not built, f"built up front: {built}"
+    model = CableModel.from_scene(scene)
+    simulate(scene, compiled=True)
+    eliminated = {"rhs", "kkt_parts", "outputs", "energy"} & set(vars(model.parametric))
+    assert not eliminated, f"built by a compiled simulation: {eliminated}"
+
+
+def test_outputs_before_elimination_are_the_same_numbers(models_dir):
+    """Common-subexpression elimination merges equal nodes: the outputs agree to the last bit."""
+    scene = load_scene(models_dir / "hanging.toml", SMALL)
+    model = parametric.ParametricModel(structure_of(spec_from_scene(scene)))
+    values = parameter_values(spec_from_scene(scene))
+    rng = np.random.default_rng(8)
+    u = rest_inputs(Drive.from_scene(scene))
+    x = rng.normal(size=model.state_size) * 0.1
+    x[3 : model.state_size // 2 : model.dofs] += np.pi / 2
+    plain = model.output_values(x, u, values)
+    assert "outputs" not in vars(model)
+    eliminated = model.outputs(x=x, u=u, p=values)
+    assert "outputs" in vars(model)
+    for name, value in eliminated.items():
+        np.testing.assert_array_equal(np.array(plain[name]), np.array(value), err_msg=name)

@@ -146,3 +146,18 @@ def test_a_heaving_tow_starts_moving_with_its_top():
     # The end rises with the top in the first quarter period.
     quarter = np.searchsorted(run.time, 2.0)
     assert run.end[quarter, 2] - run.end[0, 2] > 0.5
+
+
+@pytest.mark.parametrize("compiled", [False, True])
+def test_joints_and_tensions_in_blocks_are_those_of_one_call(monkeypatch, compiled):
+    """The outputs evaluated block by block (map's cost grows faster than its count) are exact."""
+    scene = load_scene(Path(__file__).resolve().parent.parent / "models" / "hanging.toml",
+                       {"model.elements": 6, "numerics.duration": 2.0})  # fmt: skip
+    run = simulate(scene, compiled=compiled)
+    model = simulation.CableModel.from_scene(scene)
+    whole = simulation.joints_and_tensions(model, run.states, run.inputs, compiled)
+    monkeypatch.setattr(simulation, "OUTPUT_BLOCK", 7)
+    blocks = simulation.joints_and_tensions(model, run.states, run.inputs, compiled)
+    assert len(run.states) % 7  # a shorter last block
+    for single, blocked in zip(whole, blocks, strict=True):
+        np.testing.assert_array_equal(blocked, single)

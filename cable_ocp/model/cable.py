@@ -265,9 +265,10 @@ class CableModel(ModelLayout):
         """The outputs at one state and input, by name (see :attr:`outputs`), as arrays.
 
         Evaluated on the parametric model with :attr:`parameters`: no bound Function is built
-        (binding the outputs of a model of n = 100 costs 0.7 s, evaluating them a millisecond).
+        (binding the outputs of a model of n = 100 costs 0.7 s, evaluating them a millisecond),
+        nor an eliminated one if none is built yet (:meth:`ParametricModel.output_values`).
         """
-        results = self.parametric.outputs(x=x, u=u, p=self.parameters)
+        results = self.parametric.output_values(x, u, self.parameters)
         return {name: np.array(value) for name, value in results.items()}
 
     @cached_property

@@ -13,7 +13,8 @@ one scene's values. The equations are those of CONVENTIONS.md §3-4.
 from __future__ import annotations
 
 from collections.abc import Callable
-from functools import lru_cache
+from functools import cached_property, lru_cache
+from types import SimpleNamespace
 
 import casadi as ca
 
@@ -24,6 +25,7 @@ from cable_ocp.model.layout import INPUT_SIZE, INPUTS, OUTPUT_NAMES
 from cable_ocp.model.parameters import is_on, symbolic_spec
 from cable_ocp.model.rfe import element_functions, element_rotation
 
+KKT_PART_NAMES = ("mass_matrix", "forces", "bond_jacobian", "bond_rhs")
 # Structures kept per process (each holds its symbolic graph and compiled Functions).
 STRUCTURE_CACHE_SIZE = 16
 
@@ -91,6 +93,8 @@ class ParametricModel(ModelLayout):
         ``(x, u, p) ->`` :data:`cable_ocp.model.layout.OUTPUT_NAMES`.
     energy : casadi.Function
         ``(x, u, p) ->`` kinetic plus potential energy (J), external force excluded.
+
+    The four Functions are built when first used (the compiled structured path needs few of them).
     """
 
     def __init__(self, structure):
@@ -100,7 +104,6 @@ class ParametricModel(ModelLayout):
         self.x = ca.SX.sym("x", self.state_size)
         self.u = ca.SX.sym("u", INPUT_SIZE)
         self._memo: dict = {}
-        self._build()
 
     def memo(self, key: tuple, build: Callable[[], object]):
         """A Function derived from this model (a compiled step), built once per ``key``."""
@@ -108,13 +111,73 @@ class ParametricModel(ModelLayout):
             self._memo[key] = build()
         return self._memo[key]
 
-    def function(self, name: str, outputs: list, output_names: list[str]) -> ca.Function:
-        """An SX Function of ``(x, u, p)`` with common subexpressions eliminated."""
+    def function(
+        self, name: str, outputs: list, output_names: list[str], cse: bool = True
+    ) -> ca.Function:
+        """An SX Function of ``(x, u, p)``, with common subexpressions eliminated by default."""
         return ca.Function(
-            name, [self.x, self.u, self.p], outputs, ["x", "u", "p"], output_names, {"cse": True}
+            name, [self.x, self.u, self.p], outputs, ["x", "u", "p"], output_names, {"cse": cse}
         )
 
-    def _build(self) -> None:
+    # The flat Functions are built when first used: at n = 100 the expressions take 0.8 s and
+    # eliminating their common subexpressions 4.8 s (rhs 1.6, kkt_parts 1.0, outputs 2.0), which
+    # the compiled structured path (cable_ocp.model.structured) mostly does without. Common
+    # subexpression elimination leaves 17 % fewer instructions (n = 15 and 100) and the same
+    # numbers: it merges nodes that compute the same operation on the same operands.
+    @cached_property
+    def rhs(self) -> ca.Function:
+        """``(x, u, p) -> x'`` (see the class attributes)."""
+        return self.function("rhs", [self._graph.xdot], ["xdot"])
+
+    @cached_property
+    def kkt_parts(self) -> ca.Function:
+        """``(x, u, p) ->`` mass matrix, forces, bond Jacobian and right-hand side."""
+        return self.function("kkt_parts", self._graph.kkt_parts, list(KKT_PART_NAMES))
+
+    @cached_property
+    def outputs(self) -> ca.Function:
+        """``(x, u, p) ->`` :data:`cable_ocp.model.layout.OUTPUT_NAMES`."""
+        return self.function("outputs", self._graph.outputs, list(OUTPUT_NAMES))
+
+    @cached_property
+    def energy(self) -> ca.Function:
+        """``(x, u, p) ->`` kinetic plus potential energy (J), external force excluded."""
+        graph = self._graph
+        energy = graph.potential + sum(
+            graph.element_energy(qi, qdi, li, self.p)
+            for qi, qdi, li in zip(graph.q, graph.qd, graph.lengths, strict=True)
+        )
+        energy += self._payload_energy(graph.q[0], graph.qd[0])
+        return self.function("energy", [energy], ["energy"])
+
+    def rhs_size(self) -> int:
+        """Instructions of :attr:`rhs` before common-subexpression elimination (an upper bound)."""
+        return self.memo(
+            ("rhs", "uneliminated"),
+            lambda: self.function("rhs", [self._graph.xdot], ["xdot"], cse=False).n_instructions(),
+        )
+
+    def output_values(self, x, u, p) -> dict[str, ca.DM]:
+        """The outputs at one point, by name: :attr:`outputs` evaluated numerically.
+
+        Until :attr:`outputs` is built, an un-eliminated twin is evaluated instead: the same
+        operations, so the same numbers, built in 0.06 s against 2 s at n = 100.
+        """
+        if "outputs" in self.__dict__:
+            return self.outputs(x=x, u=u, p=p)
+        plain = self.memo(
+            ("outputs", "uneliminated"),
+            lambda: self.function("outputs", self._graph.outputs, list(OUTPUT_NAMES), cse=False),
+        )
+        return plain(x=x, u=u, p=p)
+
+    def bond_residual(self) -> ca.SX:
+        """The bond residuals ``Phi`` (3 (n+1), m) as an SX expression of ``x, u, p``."""
+        return self._graph.outputs[OUTPUT_NAMES.index("bond_residual")]
+
+    @cached_property
+    def _graph(self) -> SimpleNamespace:
+        """The SX expressions of every flat Function, built on first use."""
         spec, p = self.spec, self.p
         element, element_energy = element_functions(spec.element, p)
         q, qd = self.coordinates(self.x)
@@ -164,39 +227,34 @@ class ParametricModel(ModelLayout):
 
         accelerations, bond_forces = thomas_solve(mass, forces, top_jacobians, bond_rhs)
         qdd = ca.vertcat(*accelerations)
-        # Common subexpression elimination: 17 % fewer instructions at n = 15 and 100.
-        self.rhs = self.function("rhs", [ca.vertcat(qd_all, qdd)], ["xdot"])
-        self.kkt_parts = self.function(
-            "kkt_parts",
-            [
-                ca.diagcat(*mass),
-                ca.vertcat(*forces),
-                ca.jacobian(ca.vertcat(*residual), q_all),
-                ca.vertcat(*bond_rhs),
-            ],
-            ["mass_matrix", "forces", "bond_jacobian", "bond_rhs"],
-        )
+        kkt_parts = [
+            ca.diagcat(*mass),
+            ca.vertcat(*forces),
+            ca.jacobian(ca.vertcat(*residual), q_all),
+            ca.vertcat(*bond_rhs),
+        ]
         joints = ca.horzcat(*[qi[POSITION] for qi in q], upper_points[-1])
         joint_velocities = ca.horzcat(*[qdi[POSITION] for qdi in qd], upper_rates[-1])
         tensions = ca.vertcat(*[ca.norm_2(f) for f in bond_forces])
-        self.outputs = self.function(
-            "outputs",
-            [
-                joints,
-                joint_velocities,
-                ca.vertcat(*residual),
-                ca.vertcat(*rate),
-                ca.horzcat(*bond_forces),
-                tensions,
-                qdd,
-            ],
-            list(OUTPUT_NAMES),
+        outputs = [
+            joints,
+            joint_velocities,
+            ca.vertcat(*residual),
+            ca.vertcat(*rate),
+            ca.horzcat(*bond_forces),
+            tensions,
+            qdd,
+        ]
+        return SimpleNamespace(
+            xdot=ca.vertcat(qd_all, qdd),
+            kkt_parts=kkt_parts,
+            outputs=outputs,
+            potential=potential,
+            element_energy=element_energy,
+            q=q,
+            qd=qd,
+            lengths=lengths,
         )
-        energy = potential + sum(
-            element_energy(qi, qdi, li, p) for qi, qdi, li in zip(q, qd, lengths, strict=True)
-        )
-        energy += self._payload_energy(q[0], qd[0])
-        self.energy = self.function("energy", [energy], ["energy"])
 
     def _spring_energies(self, q, qd, axes, axis_rates) -> tuple[ca.SX, ca.SX]:
         """Bending (and torsion) potential and Rayleigh dissipation of the joints."""

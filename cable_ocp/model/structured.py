@@ -157,7 +157,7 @@ def structured_rhs(model: ParametricModel) -> ca.Function:
     """
 
     def build() -> ca.Function:
-        x, u, p, xdot, _, _ = _structured_graph(model)
+        x, u, p, xdot, _, _ = _shared_graph(model)
         return ca.Function("rhs", [x, u, p], [xdot], ["x", "u", "p"], ["xdot"])
 
     return model.memo(("structured", "rhs"), build)
@@ -171,7 +171,7 @@ def structured_outputs(model: ParametricModel) -> ca.Function:
     """
 
     def build() -> ca.Function:
-        x, u, p, _, forces, joints = _structured_graph(model)
+        x, u, p, _, forces, joints = _shared_graph(model)
         tensions = ca.sqrt(ca.sum1(forces**2)).T
         return ca.Function(
             "joints_tensions",
@@ -205,6 +205,11 @@ def compiled_structured(model: CableModel, which: str, count: int | None = None)
         lambda: library if count is None else library.map(count),
     )
     return model.memo(("structured", which, "compiled", count), lambda: model.bind(mapped))
+
+
+def _shared_graph(model: ParametricModel) -> tuple[ca.MX, ...]:
+    """:func:`_structured_graph`, built once per model for the right-hand side and the outputs."""
+    return model.memo(("structured", "graph"), lambda: _structured_graph(model))
 
 
 def _structured_graph(model: ParametricModel) -> tuple[ca.MX, ...]:
