@@ -17,8 +17,11 @@ TIMEOUT = 300  # s, for a whole command
 SMALL = ["--intervals", "8"]  # small_tow's 80 RK4 steps of the default optimisation model
 
 
-def _interrupt_when(command: list[str], marker: str) -> tuple[int, str]:
-    """Run ``command``, send SIGINT once ``marker`` appears on its stderr; (exit code, stderr)."""
+def _interrupt_when(command: list[str], marker: str, delay: float = 0.0) -> tuple[int, str]:
+    """Run ``command``, send SIGINT ``delay`` s after ``marker`` appears on its stderr.
+
+    Returns (exit code, stderr).
+    """
     process = subprocess.Popen(
         [sys.executable, "-m", "cable_ocp.cli", *command],
         stdout=subprocess.DEVNULL,
@@ -29,6 +32,7 @@ def _interrupt_when(command: list[str], marker: str) -> tuple[int, str]:
     for line in process.stderr:
         seen.append(line)
         if marker in line:
+            time.sleep(delay)
             process.send_signal(signal.SIGINT)
             break
         if time.monotonic() - started > TIMEOUT:
@@ -43,7 +47,8 @@ def _snapshot(folder: Path) -> dict[str, bytes]:
 
 
 @pytest.mark.skipif(os.name != "posix", reason="SIGINT to a child process")
-def test_ctrl_c_during_ipopt_keeps_the_previous_results(tmp_path):
+@pytest.mark.parametrize("delay", [0.0, 0.05, 0.3])  # in IPOPT's callback, its C code, later
+def test_ctrl_c_during_ipopt_keeps_the_previous_results(tmp_path, delay):
     out = tmp_path / "results"
     scene = str(MODELS / "small_tow.toml")
     first = subprocess.run(
@@ -64,7 +69,8 @@ def test_ctrl_c_during_ipopt_keeps_the_previous_results(tmp_path):
     )
     assert first.returncode == 0, first.stderr
     before = _snapshot(out)
-    code, stderr = _interrupt_when(["optimize", scene, *SMALL, "--out", str(out)], "ipopt")
+    command = ["optimize", scene, *SMALL, "--out", str(out)]
+    code, stderr = _interrupt_when(command, "ipopt", delay)
     assert code == 130, stderr
     assert "interrupted" in stderr and "failed" not in stderr
     assert _snapshot(out) == before

@@ -15,6 +15,8 @@ objective is ``Omega^2`` of eq. 39 by the trapezoidal rule over the RK4 steps.
 
 from __future__ import annotations
 
+import signal
+import threading
 import time
 from dataclasses import dataclass, field
 
@@ -38,26 +40,39 @@ from cable_ocp.simulation.progress import IterationLog, check_verbosity
 from cable_ocp.simulation.seabed import clearance_reference, seabed_height, trapezoid_weights
 
 NLP_FUNCTIONS = ("nlp_f", "nlp_g", "nlp_grad_f", "nlp_jac_g", "nlp_hess_l", "nlp_grad")
-# IPOPT's statuses when Ctrl-C reached it: CasADi's own interrupt check, or a KeyboardInterrupt
-# in a Python callback.
-INTERRUPTED = ("User_Requested_Stop", "NonIpopt_Exception_Thrown")
+# IPOPT's status when CasADi's interrupt check stopped it.
+INTERRUPTED = "User_Requested_Stop"
 
 
-def interrupted_solve(solver: ca.Function, interrupted: bool = False, **arguments) -> dict:
+def interrupted_solve(solver: ca.Function, **arguments) -> dict:
     """``solver(**arguments)``, re-raising a user's Ctrl-C as KeyboardInterrupt.
 
-    IPOPT turns an interrupt into a return status; a user's interrupt is never a solver's
-    failure, so it leaves here as the interrupt it was. ``interrupted`` (a callable) tells
-    whether a callback saw the KeyboardInterrupt.
+    IPOPT turns an interrupt into a return status (``User_Requested_Stop``, or
+    ``NonIpopt_Exception_Thrown`` when CasADi's check or a Python callback met the
+    KeyboardInterrupt); a user's interrupt is never a solver's failure, so a SIGINT seen during
+    the solve leaves here as the interrupt it was. The handler is only watched from the main
+    thread (a Dask worker's solve cannot be interrupted this way anyway).
     """
+    seen = []
+    previous = signal.getsignal(signal.SIGINT)
+    watched = threading.current_thread() is threading.main_thread() and callable(previous)
+
+    def watch(number, frame):
+        seen.append(number)
+        previous(number, frame)
+
+    if watched:
+        signal.signal(signal.SIGINT, watch)
     try:
         solution = solver(**arguments)
-    except RuntimeError as error:
-        if interrupted and interrupted():
-            raise KeyboardInterrupt from error
+    except RuntimeError:
+        if seen:
+            raise KeyboardInterrupt from None
         raise
-    status = solver.stats()["return_status"]
-    if status == INTERRUPTED[0] or (status in INTERRUPTED and interrupted and interrupted()):
+    finally:
+        if watched:
+            signal.signal(signal.SIGINT, previous)
+    if seen or solver.stats()["return_status"] == INTERRUPTED:
         raise KeyboardInterrupt
     return solution
 
@@ -347,11 +362,9 @@ class ShootingProblem:
         bias = np.zeros(problem.grid.size) if bias is None else bias
         self.history.clear()
         self.log.restart()
-        self._callback.interrupted = False
         started = time.perf_counter()
         solution = interrupted_solve(
             self.solver,
-            lambda: self._callback.interrupted,
             x0=np.concatenate([nodes.ravel(order="F"), parameters]),
             lbg=self.lbg,
             ubg=self.ubg,
@@ -385,7 +398,6 @@ class _History(ca.Callback):
     def __init__(self, history: list[float], log: IterationLog, lbg, ubg):
         ca.Callback.__init__(self)
         self.history, self.log, self.lbg, self.ubg = history, log, lbg, ubg
-        self.interrupted = False
         self.construct("history", {})
 
     def get_n_in(self):
@@ -409,13 +421,6 @@ class _History(ca.Callback):
         return ca.Sparsity(0, 0)
 
     def eval(self, arg):
-        try:
-            return self._record(arg)
-        except KeyboardInterrupt:
-            self.interrupted = True
-            raise
-
-    def _record(self, arg):
         objective = float(arg[ca.nlpsol_out().index("f")])
         g = np.array(arg[ca.nlpsol_out().index("g")]).ravel()
         violation = float(max(np.max(self.lbg - g), np.max(g - self.ubg), 0.0))
