@@ -106,6 +106,7 @@ def test_the_winch_reach_does_not_depend_on_n(hill, elements):
     assert angle_bounds(scene) == (-16.0, 24.0)
 
 
+@pytest.mark.slow  # about a minute: n = 100 at h = 0.02 s (python -m pytest -m slow)
 def test_paper_hill_optimum_verified_on_converged_models(hill, validation):
     """The n = 15 optimum replayed at n = 30, 60, 100 (refused at n = 30 and 100 before)."""
     result = co.optimize(hill, quiet=True)
@@ -141,6 +142,7 @@ def test_optimize_returns_a_failure_instead_of_raising(hill, monkeypatch):
     assert "EquilibriumError" in result.status and "no static equilibrium" in result.status
 
 
+@pytest.mark.slow  # about a minute: a 210 s closed loop
 def test_mpc_keeps_its_plant_through_heave_into_the_bound(hill):
     """The plant raised at t = 160 s (bond residual 1.04e-3 m) when the heave feedback drove the
     winch into its bound: the soft limiter's bend jumped the acceleration inside a step."""
