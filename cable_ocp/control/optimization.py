@@ -193,26 +193,6 @@ _OPTIONAL_FIELDS = {
     "compile_time", "verification_time", "bound_time", "bond_residual", "verified_step",
     "heave_feedforward", "notes",
 }  # fmt: skip
-# Fields of OcpResult that hold floats which may be NaN.
-_FLOAT_FIELDS = ("omega", "omega_model", "history", "refinements", "bond_residual", "verified_step")
-
-
-def _json_value(value):
-    """A value for JSON: NaN and infinities as None, inside lists too."""
-    if isinstance(value, list):
-        return [_json_value(v) for v in value]
-    if isinstance(value, float) and not np.isfinite(value):
-        return None
-    return value
-
-
-def _from_json(name: str, value):
-    """Undo :func:`_json_value` for the field ``name`` (None back to NaN)."""
-    if name not in _FLOAT_FIELDS:
-        return value
-    if isinstance(value, list):
-        return [float("nan") if v is None else float(v) for v in value]
-    return float("nan") if value is None else float(value)
 
 
 def _timed_verify(problem: WinchProblem, quiet: bool, compiled: bool):
