@@ -12,6 +12,7 @@ from cable_ocp.control import optimization
 from cable_ocp.control import problem as problem_module
 from cable_ocp.control.closed_loop import plant as plant_module
 from cable_ocp.control.ocp import make_control
+from cable_ocp.control.optimization import OcpResult
 from cable_ocp.drive.bounds import angle_bounds
 from cable_ocp.drive.controls import HermiteIntervals
 from cable_ocp.drive.drive import Drive, stage_times
@@ -132,7 +133,7 @@ def test_paper_hill_optimum_verified_on_converged_models(hill, validation):
     assert abs(omegas[100] - omegas[60]) <= 0.005
 
 
-def test_optimize_returns_a_failure_instead_of_raising(hill, monkeypatch):
+def test_optimize_returns_a_failure_instead_of_raising(hill, monkeypatch, tmp_path):
     def no_equilibrium(*args, **kwargs):
         raise EquilibriumError("no static equilibrium found (test)")
 
@@ -140,6 +141,8 @@ def test_optimize_returns_a_failure_instead_of_raising(hill, monkeypatch):
     result = co.optimize(hill, quiet=True)
     assert not result.success and result.trajectory is None
     assert "EquilibriumError" in result.status and "no static equilibrium" in result.status
+    result.save(tmp_path / "failed")  # a failure is a result a user keeps, and reads back
+    assert OcpResult.load(tmp_path / "failed").status == result.status
 
 
 @pytest.mark.slow  # about a minute: a 210 s closed loop

@@ -467,7 +467,7 @@ def failed_result(
     return OcpResult(
         method=method,
         parameters=np.zeros(0),
-        control=getattr(settings, "control", "spline"),
+        control=f"{getattr(settings, 'control', 'spline')}(0)",  # no profile: no parameters
         trajectory=None,
         omega=float("nan"),
         omega_model=float("nan"),
