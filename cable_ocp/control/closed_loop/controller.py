@@ -33,18 +33,22 @@ from cable_ocp.simulation.seabed import seabed_height, trapezoid_weights
 SOLVED = ("Solve_Succeeded", "Solved_To_Acceptable_Level")
 
 
-def hermite_basis(s: np.ndarray, width: float, intervals: int) -> tuple[np.ndarray, ...]:
+def hermite_basis(s: np.ndarray, width: float, intervals: int, left=None) -> tuple[np.ndarray, ...]:
     """``B0, B1, B2`` (len(s), 2 (intervals + 1)) of the Hermite angle on ``[0, intervals width]``.
 
     Parameters ``[phi_0 .. phi_M, phi'_0 .. phi'_M]`` at the nodes ``k width`` (rad, rad/s);
     ``phi(s) = B0 p``, ``phi'(s) = B1 p``, ``phi''(s) = B2 p``. Times beyond the last node hold
-    the last cubic's end value (rate and acceleration 0).
+    the last cubic's end value (rate and acceleration 0). Where ``left`` (bool, or like ``s``) is
+    true, a time on a node belongs to the interval that ends there (the end stage of an RK4 step).
     """
     s = np.atleast_1d(np.asarray(s, dtype=float))
     end = intervals * width
     beyond = s > end + 1e-9 * max(end, 1.0)
     s = np.clip(s, 0.0, end)
-    k = np.minimum((s / width + 1e-9).astype(int), intervals - 1)
+    k = (s / width + 1e-9).astype(int)
+    if left is not None:
+        k = np.where(left, np.ceil(s / width - 1e-9).astype(int) - 1, k)
+    k = np.clip(k, 0, intervals - 1)
     u = s / width - k
     h00, h10, h01, h11 = hermite_polynomials(u)
     scale = np.array([1.0, 1.0 / width, 1.0 / width**2])[:, None]

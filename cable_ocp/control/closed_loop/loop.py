@@ -99,16 +99,16 @@ class _Plan:
         self.start, self.parameters = start, parameters
         self.sample, self.intervals = sample, intervals
 
-    def __call__(self, t: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-        bases = hermite_basis(np.asarray(t) - self.start, self.sample, self.intervals)
+    def __call__(self, t: np.ndarray, left=None) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        bases = hermite_basis(np.asarray(t) - self.start, self.sample, self.intervals, left)
         return tuple(b @ self.parameters for b in bases)
 
 
 def _command(plan: _Plan, reference: BlendedHeight | None, top, radius: float):
     """The commanded angle: the plan, plus the heave feedback when ``reference`` is given."""
 
-    def angle(t):
-        phi, rate, acc = plan(t)
+    def angle(t, left=None):
+        phi, rate, acc = plan(t, left)
         if reference is None:
             return phi, rate, acc
         position, velocity, acceleration = top(t)

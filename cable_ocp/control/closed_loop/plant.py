@@ -15,21 +15,20 @@ from dataclasses import dataclass
 import numpy as np
 
 from cable_ocp.control.closed_loop.projection import chain_state, plant_joints
-from cable_ocp.drive.drive import Drive, end_force
+from cable_ocp.drive.drive import Drive, end_force, stage_times
 from cable_ocp.drive.vessel import top_motion
+from cable_ocp.drive.winch import with_left
 from cable_ocp.model.cable import CableModel
 from cable_ocp.model.layout import INPUTS
 from cable_ocp.simulation.figures import apart
 from cable_ocp.simulation.integrate import SimulationError, step_function
 from cable_ocp.simulation.statics import equilibrium
 
-# Relative offset (of the step) that places the end stage of an RK4 step just before the step end.
-LEFT_LIMIT = 1e-6
 # Substeps per plant step tried in turn when a sample's run is in doubt (see Plant.advance).
 SUBSTEPS = (1, 4)
 # Width of the soft limiter at each end of the winch range (rad).
 LIMITER_BAND = 0.2
-AngleFunction = Callable[[np.ndarray], tuple[np.ndarray, np.ndarray, np.ndarray]]
+AngleFunction = Callable[..., tuple[np.ndarray, np.ndarray, np.ndarray]]
 
 
 @dataclass(frozen=True)
@@ -69,7 +68,7 @@ class Plant:
         self.low, self.high = angle_range
         self._runs: dict[tuple[int, int], object] = {}
 
-    def apply(self, angle: AngleFunction, t: np.ndarray) -> Applied:
+    def apply(self, angle: AngleFunction, t: np.ndarray, left=None) -> Applied:
         """Limit a commanded angle history to the winch range at the times ``t``.
 
         Within :data:`LIMITER_BAND` of a bound the angle bends smoothly towards it (``b tanh(x /
@@ -80,7 +79,7 @@ class Plant:
         bonds by 1e-3 m (a heaving paper_hill variant), and a quarter of the step only by 10x
         less.
         """
-        phi, rate, acceleration = (np.array(v, dtype=float) for v in angle(t))
+        phi, rate, acceleration = (np.array(v, dtype=float) for v in with_left(angle)(t, left))
         limited = np.zeros(phi.shape, dtype=bool)
         band = LIMITER_BAND
         for sign, edge in ((1.0, self.high - band), (-1.0, self.low + band)):
@@ -169,11 +168,10 @@ class Plant:
         h = self.step / substeps
         steps = count * substeps
         fine = start + np.arange(steps + 1) * h
-        # The end stage of a step takes the input's left limit: the plan's acceleration jumps
-        # at its nodes, which fall on step ends, and the right limit there cost 2e-3 m/s of
-        # bond rate per node.
-        stage_times = (fine[:-1, None] + np.array([0.0, h / 2, h * (1 - LEFT_LIMIT)])).ravel()
-        stages = self.inputs(self.apply(angle, stage_times), stage_times)
+        # The end stage of a step takes the input's left limit (drive.stage_times): the plan's
+        # acceleration jumps at its nodes, which fall on step ends.
+        times, left = stage_times(fine[:-1], h)
+        stages = self.inputs(self.apply(angle, times, left), times)
         key = (steps, substeps)
         if key not in self._runs:
             self._runs[key] = step_function(self.model, h, compiled=True).mapaccum(steps)
