@@ -10,7 +10,6 @@ from collections.abc import Callable
 from pathlib import Path
 
 import numpy as np
-from scipy.interpolate import CubicSpline
 
 TopMotionFunction = Callable[[np.ndarray], tuple[np.ndarray, np.ndarray, np.ndarray]]
 MIN_TABLE_ROWS = 4
@@ -104,6 +103,8 @@ def tabulated_top(time, points) -> TopMotionFunction:
     if np.any(np.diff(time) <= 0):
         row = int(np.argmax(np.diff(time) <= 0)) + 1
         raise ValueError(f"top.table: time must increase strictly; row {row} has t = {time[row]}")
+    from scipy.interpolate import CubicSpline  # here: only a tabulated motion needs SciPy
+
     spline = CubicSpline(time, points, axis=0, bc_type="natural")
     slope, curvature = spline.derivative(1), spline.derivative(2)
 

@@ -14,7 +14,6 @@ import inspect
 from collections.abc import Callable
 
 import numpy as np
-from scipy.interpolate import CubicSpline
 
 WinchAngleFunction = Callable[..., tuple[np.ndarray, np.ndarray, np.ndarray]]
 
@@ -53,6 +52,8 @@ def spline_angle(duration: float, knot_values) -> WinchAngleFunction:
     duration : float, s
     knot_values : array (p,), rad
     """
+    from scipy.interpolate import CubicSpline  # here: a locked winch runs without SciPy's import
+
     values = np.concatenate([[0.0], np.asarray(knot_values, dtype=float).ravel()])
     spline = CubicSpline(
         knot_times(duration, values.size - 1), values, bc_type=((1, 0.0), (2, 0.0))
@@ -89,6 +90,8 @@ def tabulated_angle(time, angles) -> WinchAngleFunction:
         raise ValueError("winch time series: times must start at 0 s and increase strictly")
     if angles[0] != 0.0:
         raise ValueError(f"winch time series: phi(0) = {angles[0]} rad; it must be 0")
+    from scipy.interpolate import CubicSpline
+
     spline = CubicSpline(time, angles, bc_type="natural")
     rate, acceleration = spline.derivative(1), spline.derivative(2)
 

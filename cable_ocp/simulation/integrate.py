@@ -14,7 +14,6 @@ from dataclasses import dataclass
 
 import casadi as ca
 import numpy as np
-from scipy.integrate import solve_ivp
 
 from cable_ocp.drive.drive import Drive
 from cable_ocp.model import structured
@@ -407,6 +406,8 @@ def reference_solution(
     -------
     array (len(times), state_size)
     """
+    from scipy.integrate import solve_ivp  # here: importing SciPy's integrators takes ~1 s
+
     rhs = model.rhs
 
     def f(t, x):
