@@ -11,6 +11,8 @@ from pathlib import Path
 
 import numpy as np
 
+from cable_ocp.drive.sea_state import sea_state_motion
+
 TopMotionFunction = Callable[[np.ndarray], tuple[np.ndarray, np.ndarray, np.ndarray]]
 MIN_TABLE_ROWS = 4
 
@@ -157,7 +159,7 @@ def heave(amplitude: float, period: float) -> TopMotionFunction:
 
 
 def top_motion(top) -> TopMotionFunction:
-    """The top motion a scene's ``[top]`` section describes (heave included)."""
+    """The top motion a scene's ``[top]`` section describes (heave and sea state included)."""
     if top.motion == "fixed":
         base = fixed_top(top.start)
     elif top.motion == "tow":
@@ -168,11 +170,18 @@ def top_motion(top) -> TopMotionFunction:
     else:
         time, points = read_table(top.table.file)
         base = tabulated_top(time, points)
-    if top.heave is None or top.heave.amplitude == 0:
+    waves = []
+    if top.heave is not None and top.heave.amplitude:
+        waves.append(heave(top.heave.amplitude, top.heave.period))
+    if top.heave is not None and top.heave.sea_state is not None:
+        waves.append(sea_state_motion(top.heave.sea_state))
+    if not waves:
         return base
-    vertical = heave(top.heave.amplitude, top.heave.period)
 
     def motion(t):
-        return tuple(a + b for a, b in zip(base(t), vertical(t), strict=True))
+        total = base(t)
+        for wave in waves:
+            total = tuple(a + b for a, b in zip(total, wave(t), strict=True))
+        return total
 
     return motion

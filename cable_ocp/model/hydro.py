@@ -5,8 +5,9 @@ Drag per unit length (CONVENTIONS.md §4, the MoorDyn convention)::
     f = -1/2 rho_w d C_dn |V_n| V_n - 1/2 rho_w pi d C_dt |V_t| V_t
 
 with ``V = v - v_current`` split into its part along the element axis (``V_t``) and across it
-(``V_n``). Added mass acts on the acceleration of each point of the axis with the coefficient
-``C_a`` across and ``C_at`` along the axis, through the kinetic energy of the entrained water
+(``V_n``); ``v_current`` is the current at the point's depth (:mod:`cable_ocp.model.current`).
+Added mass acts on the acceleration of each point of the axis with the coefficient ``C_a`` across
+and ``C_at`` along the axis, through the kinetic energy of the entrained water
 (:func:`cable_ocp.model.rfe.added_mass_energy`); ``C_at = C_a`` is the paper's isotropic eq. 28-32.
 """
 
@@ -38,9 +39,13 @@ class HydroCoefficients:
     added_mass_normal, added_mass_axial : float
         C_a and C_at (0 switches the term off).
     current : tuple of 3 float, m/s
-        Uniform current velocity.
+        Uniform current velocity (zero when a profile is given).
     quadrature_points : int
         Gauss-Legendre points per element for the drag.
+    current_z : tuple of float, m
+        Heights of the current profile's rows, from the surface down (empty: uniform current).
+    current_u, current_v : tuple of float, m/s
+        The profile's current along x and y at those heights.
     """
 
     water_density: float
@@ -52,6 +57,9 @@ class HydroCoefficients:
     added_mass_axial: float
     current: tuple[float, float, float]
     quadrature_points: int
+    current_z: tuple[float, ...] = ()
+    current_u: tuple[float, ...] = ()
+    current_v: tuple[float, ...] = ()
 
     @property
     def has_drag(self) -> bool:
@@ -84,9 +92,15 @@ def smooth_norm(v: ca.SX) -> ca.SX:
     return ca.sqrt(ca.dot(v, v) + SMOOTH_SPEED**2)
 
 
-def drag_force_density(velocity: ca.SX, axis: ca.SX, hydro: HydroCoefficients) -> ca.SX:
-    """Morison drag per unit length (N/m) on a point of the axis moving with ``velocity`` (m/s)."""
-    relative = velocity - ca.vertcat(*hydro.current)
+def drag_force_density(
+    velocity: ca.SX, axis: ca.SX, hydro: HydroCoefficients, current: ca.SX
+) -> ca.SX:
+    """Morison drag per unit length (N/m) on a point of the axis.
+
+    ``velocity`` and ``current`` (m/s) are the point's and the water's there
+    (:func:`cable_ocp.model.current.current_at`); ``axis`` the element's unit axis.
+    """
+    relative = velocity - current
     axial = ca.dot(relative, axis) * axis
     normal = relative - axial
     half_rho_d = 0.5 * hydro.water_density * hydro.diameter

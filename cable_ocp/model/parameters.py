@@ -9,7 +9,8 @@ model and its compiled libraries (a sweep over 20 currents compiles once). :func
 gives the ``p`` of a spec.
 
 A number that is zero stays a structural zero (a force switched off is not computed at all), except
-the current, which is always a parameter: still water and a current are the same structure.
+the current (uniform or the profile's rows), which is always a parameter: still water and a
+current are the same structure.
 """
 
 from __future__ import annotations
@@ -22,7 +23,7 @@ import casadi as ca
 import numpy as np
 
 # Numbers that are parameters even when zero (a field of this name anywhere in the spec).
-ALWAYS_PARAMETERS = ("current",)
+ALWAYS_PARAMETERS = ("current", "current_z", "current_u", "current_v")
 # What a parameter's place holds in a structure: any non-zero number would do.
 MARKER = 1.0
 

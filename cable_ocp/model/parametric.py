@@ -18,6 +18,7 @@ from types import SimpleNamespace
 
 import casadi as ca
 
+from cable_ocp.model.current import current_at
 from cable_ocp.model.hydro import smooth_norm
 from cable_ocp.model.kinematics import POSITION, relative_twist
 from cable_ocp.model.kkt import thomas_solve
@@ -202,7 +203,7 @@ class ParametricModel(ModelLayout):
         forces = [
             t[1] + chain_force[i * self.dofs : (i + 1) * self.dofs] for i, t in enumerate(terms)
         ]
-        mass[0], forces[0] = self.end_loads(mass[0], forces[0], qd[0], end_force)
+        mass[0], forces[0] = self.end_loads(mass[0], forces[0], q[0], qd[0], end_force)
 
         # Bond positions, rates and the quadratic part of their second derivative.
         upper_points = [qi[POSITION] + li * ei for qi, li, ei in zip(q, lengths, axes, strict=True)]
@@ -278,8 +279,8 @@ class ParametricModel(ModelLayout):
                 dissipation += 0.5 * spec.torsion_damping * torsion * twist_rate**2
         return potential, dissipation
 
-    def end_loads(self, mass, force, qd_end, end_force) -> tuple[ca.SX, ca.SX]:
-        """Add the external end force and the payload to element 0."""
+    def end_loads(self, mass, force, q_end, qd_end, end_force) -> tuple[ca.SX, ca.SX]:
+        """Add the external end force and the payload (drag in the current at E) to element 0."""
         spec, payload = self.spec, self.spec.payload
         translational = ca.vertcat(end_force, ca.SX.zeros(self.dofs - 3))
         force = force + translational
@@ -292,7 +293,8 @@ class ParametricModel(ModelLayout):
             weight = (payload.mass - water * payload.volume) * spec.gravity
             payload_force = ca.vertcat(0, 0, -weight)
             if is_on(water) and is_on(payload.drag_area):
-                relative = qd_end[POSITION] - ca.vertcat(*spec.element.hydro.current)
+                current = current_at(spec.element.hydro, q_end[2])
+                relative = qd_end[POSITION] - current
                 coeff = 0.5 * water * payload.drag_coefficient * payload.drag_area
                 payload_force = payload_force - coeff * smooth_norm(relative) * relative
             force = force + ca.vertcat(payload_force, ca.SX.zeros(self.dofs - 3))

@@ -12,6 +12,7 @@ from dataclasses import dataclass
 
 import casadi as ca
 
+from cable_ocp.model.current import current_at
 from cable_ocp.model.hydro import (
     HydroCoefficients,
     added_mass_tensor,
@@ -185,7 +186,8 @@ def element_functions(
     if hydro is not None and hydro.has_drag:
         for xi, weight in gauss_points(length, hydro.quadrature_points):
             jac = axis_point_jacobian(q, xi)
-            force = force + weight * jac.T @ drag_force_density(jac @ qd, axis, hydro)
+            current = current_at(hydro, q[2] + xi * axis[2])
+            force = force + weight * jac.T @ drag_force_density(jac @ qd, axis, hydro, current)
 
     axis_rate = ca.jtimes(axis, q, qd)
     axis_quadratic = ca.jtimes(axis_rate, q, qd)

@@ -47,7 +47,7 @@ def _element_solve(model: ParametricModel, end: bool) -> ca.Function:
     inputs = [q, qd, length, spring]
     if end:
         end_force = ca.SX.sym("end_force", 3)
-        mass, force = model.end_loads(mass, force, qd, end_force)
+        mass, force = model.end_loads(mass, force, q, qd, end_force)
         inputs.append(end_force)
     inputs.append(p)
     select = ca.SX(ca.DM.eye(dofs)[:3, :])

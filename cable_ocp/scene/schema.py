@@ -26,6 +26,7 @@ except ModuleNotFoundError:  # Python 3.10
 
 __all__ = [
     "Cable",
+    "CurrentRow",
     "EndLoad",
     "EndPayload",
     "Environment",
@@ -34,8 +35,10 @@ __all__ = [
     "ModelOptions",
     "Numerics",
     "Heave",
+    "RaoRow",
     "Scene",
     "SceneError",
+    "SeaState",
     "Seabed",
     "TableProfile",
     "TopMotion",
@@ -281,6 +284,20 @@ class Cable(_Validated):
         return self.shear_modulus * math.pi * self.diameter**4 / 32
 
 
+@_section("environment.current_profile")
+@dataclass(frozen=True)
+class CurrentRow(_Validated):
+    """One row of the current profile: the horizontal current at a height z.
+
+    Between rows the current is linear in z; above the first row and below the last it keeps
+    that row's value (``cable_ocp/model/current.py``).
+    """
+
+    z: float = _param(doc="Height of the row (the sea surface is 0).", le=0, unit="m")
+    u: float = _param(0.0, doc="Current along x.", unit="m/s")
+    v: float = _param(0.0, doc="Current along y.", unit="m/s")
+
+
 @_section("environment")
 @dataclass(frozen=True)
 class Environment(_Validated):
@@ -292,10 +309,28 @@ class Environment(_Validated):
         1025.0, doc="Water density rho_w (> 0 when submerged).", ge=0, unit="kg/m^3"
     )
     current: Vector3 = _param((0.0, 0.0, 0.0), "vec3", "Uniform current velocity.", unit="m/s")
+    current_profile: tuple[CurrentRow, ...] = _param(
+        (), "tuple", "Current by depth, rows from the surface down (none: uniform).",
+        item=CurrentRow,
+    )  # fmt: skip
 
     def _check_relations(self) -> None:
         if self.submerged and self.water_density <= 0:
             raise self._fail("water_density", "> 0 when environment.submerged is true")
+        rows = self.current_profile
+        for k in range(1, len(rows)):
+            if rows[k].z >= rows[k - 1].z:
+                raise SceneError(
+                    f"{self._path('current_profile')}[{k}].z",
+                    f" = {rows[k].z!r} is out of range: must be < {self._path('current_profile')}"
+                    f"[{k - 1}].z = {rows[k - 1].z!r} (m; rows from the surface down)",
+                )
+        if rows and any(self.current):
+            raise SceneError(
+                self._path("current"),
+                f" = {list(self.current)!r}: give a uniform current or "
+                "environment.current_profile, not both",
+            )
 
 
 @_section("hydrodynamics")
@@ -345,14 +380,83 @@ class TableProfile(_Validated):
     file: str = _param(kind="path", doc="CSV with columns t, x, y, z (s, m); absolute path.")
 
 
+@_section("top.heave.sea_state.rao")
+@dataclass(frozen=True)
+class RaoRow(_Validated):
+    """One row of the vessel's RAO table: its response per metre of wave amplitude at a frequency.
+
+    A response is ``gain a cos(w t + phi + phase)`` for a wave component ``a cos(w t + phi)``;
+    between rows the gains and phases are linear in w, beyond the table's ends they are held.
+    """
+
+    frequency: float = _param(doc="Angular frequency w.", gt=0, unit="rad/s")
+    heave: float = _param(1.0, doc="Heave gain.", ge=0, unit="m/m")
+    heave_phase: float = _param(0.0, doc="Heave phase lead.", unit="rad")
+    roll: float = _param(0.0, doc="Roll gain (about x).", ge=0, unit="rad/m")
+    roll_phase: float = _param(0.0, doc="Roll phase lead.", unit="rad")
+    pitch: float = _param(0.0, doc="Pitch gain (about y).", ge=0, unit="rad/m")
+    pitch_phase: float = _param(0.0, doc="Pitch phase lead.", unit="rad")
+
+
+@_section("top.heave.sea_state")
+@dataclass(frozen=True)
+class SeaState(_Validated):
+    """A JONSWAP sea state that moves the winch (``cable_ocp/drive/sea_state.py``).
+
+    Random-phase components of the spectrum, reproducible by ``seed``; the vessel heaves with
+    the sea surface, or responds through the ``rao`` table (heave, roll, pitch), and the winch at
+    ``winch_offset`` from the centre of roll and pitch follows (small angles, the vessel's heading
+    along x).
+    """
+
+    significant_height: float = _param(doc="Significant wave height H_s.", gt=0, unit="m")
+    peak_period: float = _param(doc="Spectral peak period T_p.", gt=0, unit="s")
+    peak_enhancement: float = _param(3.3, doc="JONSWAP peak enhancement gamma.", ge=1)
+    components: int = _param(100, "int", "Number of wave components.", ge=1, le=10000)
+    seed: int = _param(0, "int", "Seed of the components' frequencies and phases.", ge=0)
+    winch_offset: Vector3 = _param(
+        (0.0, 0.0, 0.0), "vec3", "Winch from the centre of roll and pitch.", unit="m"
+    )
+    rao: tuple[RaoRow, ...] = _param(
+        (), "tuple", "RAO rows by increasing frequency (none: heave with the surface).",
+        item=RaoRow,
+    )  # fmt: skip
+
+    def _check_relations(self) -> None:
+        for k in range(1, len(self.rao)):
+            if self.rao[k].frequency <= self.rao[k - 1].frequency:
+                raise SceneError(
+                    f"{self._path('rao')}[{k}].frequency",
+                    f" = {self.rao[k].frequency!r} is out of range: must be > "
+                    f"{self._path('rao')}[{k - 1}].frequency = {self.rao[k - 1].frequency!r} "
+                    "(rad/s; rows by increasing frequency)",
+                )
+
+
 @_section("top.heave")
 @dataclass(frozen=True)
 class Heave(_Validated):
-    """A sinusoidal heave of the vessel added to the top motion (the section switches it on)."""
+    """The vessel's heave at the winch: a sine, a sea state, or both (the section switches it on).
 
-    amplitude: float = _param(doc="Heave amplitude.", ge=0, unit="m")
-    period: float = _param(10.0, doc="Heave period.", gt=0, unit="s")
+    ``compensation`` applies to the winch's whole vertical motion, whatever its source.
+    """
+
+    amplitude: float | None = _param(
+        None, doc="Amplitude of a sinusoidal heave (needed without a sea state).", ge=0, unit="m",
+        optional=True,
+    )  # fmt: skip
+    period: float = _param(10.0, doc="Period of the sinusoidal heave.", gt=0, unit="s")
     compensation: bool = _param(False, "bool", "Heave compensated at the top by the winch.")
+    sea_state: SeaState | None = _param(
+        None, "section", "[top.heave.sea_state]", item=SeaState, optional=True
+    )
+
+    def _check_relations(self) -> None:
+        if self.amplitude is None and self.sea_state is None:
+            raise SceneError(
+                self._path("amplitude"),
+                ": missing required key (or give a sea state, [top.heave.sea_state])",
+            )
 
 
 @_section("top")
@@ -362,7 +466,7 @@ class TopMotion(_Validated):
 
     The profile's own numbers are in the sub-table of its name (``[top.tow]``, ``[top.table]``),
     which only that profile may have; ``[top.tow]`` may be left out for the paper's tow. A
-    ``[top.heave]`` table adds heave to any profile.
+    ``[top.heave]`` table adds heave to any profile: a sine, a sea state or both.
     """
 
     motion: str = _param("fixed", "choice", "Profile.", choices=("fixed", "tow", "table"))
@@ -377,6 +481,12 @@ class TopMotion(_Validated):
     def heave_compensated(self) -> bool:
         """Whether the winch compensates a heave of the top."""
         return self.heave is not None and self.heave.compensation
+
+    @property
+    def has_heave(self) -> bool:
+        """Whether the vessel heaves: a sine of non-zero amplitude or a sea state."""
+        heave = self.heave
+        return heave is not None and (bool(heave.amplitude) or heave.sea_state is not None)
 
     @property
     def tow_profile(self) -> TowProfile:

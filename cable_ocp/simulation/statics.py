@@ -20,6 +20,7 @@ import numpy as np
 from cable_ocp.drive.drive import Drive
 from cable_ocp.model import structured
 from cable_ocp.model.cable import CableModel, Payload
+from cable_ocp.model.current import current_values, has_current
 from cable_ocp.model.hydro import HydroCoefficients
 from cable_ocp.model.kinematics import axis_direction
 from cable_ocp.model.layout import INPUTS
@@ -71,8 +72,11 @@ def string_guess(model: CableModel, u: np.ndarray) -> np.ndarray:
     payload = (spec.payload.mass - spec.water_density * spec.payload.volume) * spec.gravity
     pull = np.outer(weight * below + payload, [0.0, 0.0, 1.0]) - u[INPUTS.end_force]
     hydro = spec.element.hydro
-    if hydro is not None and hydro.has_drag and np.any(hydro.current):
-        pull = _trailing_pulls(pull, lengths, hydro, spec.payload)
+    if hydro is not None and hydro.has_drag and has_current(hydro):
+        # The current at each element's middle and at E as if the line hung straight down.
+        heights = u[INPUTS.top][2] - (lengths.sum() - np.append(below, 0.0))
+        currents = current_values(hydro, heights)
+        pull = _trailing_pulls(pull, lengths, hydro, spec.payload, currents[:-1], currents[-1])
     norms = np.linalg.norm(pull, axis=1)
     pull[norms < 1e-9] = [0.0, 0.0, 1.0]
     pull /= np.linalg.norm(pull, axis=1, keepdims=True)
@@ -80,20 +84,25 @@ def string_guess(model: CableModel, u: np.ndarray) -> np.ndarray:
 
 
 def _trailing_pulls(
-    still: np.ndarray, lengths: np.ndarray, hydro: HydroCoefficients, payload: Payload
+    still: np.ndarray,
+    lengths: np.ndarray,
+    hydro: HydroCoefficients,
+    payload: Payload,
+    currents: np.ndarray,
+    end_current: np.ndarray,
 ) -> np.ndarray:
     """Directions (n+1, 3) that hold each element in the current, from the still-water pulls.
 
     ``still[i]`` holds the weight below the middle of element ``i`` and the end force; the drag of
     the payload and of the elements below ``i`` is subtracted, then element ``i`` turns by its own
-    normal drag (see :func:`string_guess`).
+    normal drag (see :func:`string_guess`). ``currents[i]`` (m/s) is the current at element ``i``,
+    ``end_current`` the current at E (the payload's).
     """
-    current = np.asarray(hydro.current, float)
     half_rho_d = 0.5 * hydro.water_density * hydro.diameter
     payload_drag = 0.5 * hydro.water_density * payload.drag_coefficient * payload.drag_area
-    drag_below = payload_drag * np.linalg.norm(current) * current
+    drag_below = payload_drag * np.linalg.norm(end_current) * end_current
     pulls = np.empty_like(still)
-    for i, length in enumerate(lengths):
+    for i, (length, current) in enumerate(zip(lengths, currents, strict=True)):
         loads = still[i] - drag_below
         turn = (
             length / 2 * half_rho_d * hydro.drag_normal * np.linalg.norm(np.cross(current, loads))
