@@ -13,10 +13,10 @@ else:
     import tomli as tomllib
 
 ROOT = Path(__file__).resolve().parent.parent
-SCENES = {"catenary", "end_force", "hanging", "paper_flat", "paper_hill", "small_tow"}
+SCENES = {"catenary", "end_force", "hanging", "paper_flat", "paper_hill", "small_tow", "survey"}
 
 
-def test_models_dir_holds_the_six_scenes_and_each_loads():
+def test_models_dir_holds_the_seven_scenes_and_each_loads():
     folder = bundled.models_dir()
     assert folder.is_dir()
     assert SCENES <= set(bundled.scene_names())
@@ -53,6 +53,10 @@ def test_pyproject_lists_every_subpackage_and_ships_the_data():
     found = {".".join(init.parent.relative_to(ROOT).parts) for init in inits}
     assert found | {"cable_ocp.models"} == set(setuptools["packages"])
     assert setuptools["package-dir"] == {"cable_ocp.models": "models"}
-    assert setuptools["package-data"]["cable_ocp.models"] == ["*.toml", "sweeps/*.toml"]
+    assert setuptools["package-data"]["cable_ocp.models"] == [
+        "*.toml",
+        "sweeps/*.toml",
+        "data/*.nc",
+    ]
     for pattern in setuptools["package-data"]["cable_ocp"]:
         assert list((ROOT / "cable_ocp").glob(pattern)), pattern

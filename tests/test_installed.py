@@ -35,6 +35,8 @@ assert spec.scene_path == models_dir() / "small_tow.toml", spec.scene_path
 assert sorted(bundled_sweeps()) == ["ocp_sample", "tow_speeds"], bundled_sweeps()
 example = load_sweep("tow_speeds")  # a bundled example by name; its scene beside it
 assert example.scene_path == models_dir() / "small_tow.toml" and len(example.cases) == 6
+survey = cable_ocp.load_scene(models_dir() / "survey.toml")  # its bathymetry grid ships too
+assert Path(survey.seabed.grid.file) == models_dir() / "data" / "survey_grid.nc", survey.seabed
 print("installed ok")
 """
 

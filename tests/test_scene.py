@@ -1,5 +1,6 @@
 import dataclasses
 import math
+import shutil
 from pathlib import Path
 
 import pytest
@@ -247,11 +248,13 @@ def test_the_three_required_tables_are_enough(tmp_path):
 
 
 @pytest.mark.parametrize("name", BUNDLED)
-def test_scene_mutants_load_or_raise_scene_error(tmp_path, mutants, name):
+def test_scene_mutants_load_or_raise_scene_error(tmp_path, mutants, name, models_dir):
     """Mutants of the bundled scene files load to a valid scene or raise SceneError, nothing else.
 
-    The mutations must exercise both outcomes: more than half of them refused, some loaded.
+    The mutations must exercise both outcomes: more than half of them refused, some loaded. The
+    data files the scenes name (bathymetry grids) lie beside the mutants as beside the scenes.
     """
+    shutil.copytree(models_dir / "data", tmp_path / "data")
     refused, loaded, wrong = 0, 0, []
     for k, (text, what) in enumerate(mutants(name)):
         path = tmp_path / f"mutant_{k}.toml"

@@ -60,15 +60,15 @@ def _simulate(args) -> int:
     # Compiled unless --interpreted: without a compiler or a writable cache, the interpreted
     # model runs after the same warning as the API's.
     trajectory = simulate(scene, winch=knots, quiet=args.quiet, compiled=not args.interpreted)
-    hills = scene.seabed.hills
+    seabed = scene.seabed
     with atomic_directory(args.out) as folder:
         trajectory.save(folder / "trajectory")
         if args.animate:
-            plots.animate(trajectory, folder / "animation.gif", scene.seabed.clearance)
+            plots.animate(trajectory, folder / "animation.gif", seabed.clearance)
         plots.end_trajectory(trajectory, path=folder / "end_trajectory.png")
-        plots.clearance(trajectory, scene.seabed.clearance, path=folder / "clearance.png")
-        plots.cable_shapes(trajectory, hills=hills, clearance_depth=scene.seabed.clearance,
-                           path=folder / "cable_shapes.png")  # fmt: skip
+        plots.clearance(trajectory, seabed.clearance, path=folder / "clearance.png",
+                        minimum_clearance=seabed.minimum_clearance)  # fmt: skip
+        plots.cable_shapes(trajectory, seabed=seabed, path=folder / "cable_shapes.png")
         plots.winch_angle(trajectory, bounds=(scene.winch.angle_min, scene.winch.angle_max),
                           path=folder / "winch_angle.png")  # fmt: skip
         summary = {
@@ -133,19 +133,19 @@ def _optimize(args) -> int:
     else:
         result = optimize(scene, "nelder-mead", _nelder_mead_settings(args), **output)
     locked = simulate(scene, quiet=True)
-    hills, bounds = scene.seabed.hills, (scene.winch.angle_min, scene.winch.angle_max)
+    seabed, bounds = scene.seabed, (scene.winch.angle_min, scene.winch.angle_max)
     labels = ["locked winch", f"optimised ({result.method})"]
     with atomic_directory(args.out) as folder:
         result.save(folder)
         pair = [locked, result.trajectory] if result.trajectory is not None else [locked]
         labels = labels[: len(pair)]
         plots.end_trajectory(pair, labels, path=folder / "end_trajectory.png")
-        plots.clearance(pair, scene.seabed.clearance, labels, path=folder / "clearance.png")
+        plots.clearance(pair, seabed.clearance, labels, folder / "clearance.png",
+                        seabed.minimum_clearance)  # fmt: skip
         plots.winch_angle(pair, labels, bounds, path=folder / "winch_angle.png")
-        plots.cable_shapes(pair[-1], hills=hills, clearance_depth=scene.seabed.clearance,
-                           path=folder / "cable_shapes.png")  # fmt: skip
+        plots.cable_shapes(pair[-1], seabed=seabed, path=folder / "cable_shapes.png")
         if args.animate:
-            plots.animate(pair[-1], folder / "animation.gif", scene.seabed.clearance)
+            plots.animate(pair[-1], folder / "animation.gif", seabed.clearance)
     n = scene.model.elements
     omega = (
         f"Omega = {result.omega:.3g} m verified on n = {n}"

@@ -10,7 +10,11 @@ a simulation that can be trusted, where does it keep the end? :func:`verify_prof
    quarter of the step (the same output times) before the profile is declared unverifiable;
 3. how long the winch rode a bound: a bound-limited optimum is a success that says so. With a heave
    feedforward the profile rides the bound less the heave's reach (its largest pay-out), at the
-   wave crests and between them alike.
+   wave crests and between them alike;
+4. the smallest clearance ``z_E - z_sb`` over the run's samples, always reported; a scene with a
+   hard minimum ``seabed.minimum_clearance`` fails a profile that takes the end closer than it
+   (by more than :data:`CLEARANCE_TOLERANCE`), naming where and by how much. An end that leaves
+   the bathymetry grid fails the profile at once (a smaller step would not bring it back).
 """
 
 from __future__ import annotations
@@ -23,6 +27,7 @@ from cable_ocp.drive.bounds import angle_bounds, violation
 from cable_ocp.model.cable import CableModel
 from cable_ocp.simulation.integrate import SimulationError, bond_residuals
 from cable_ocp.simulation.run import simulate
+from cable_ocp.simulation.seabed import OffGridError, clearance, clearance_reference
 from cable_ocp.simulation.trajectory import Trajectory
 
 # Halvings of the scene's step tried when a run at it leaves its bonds or blows up.
@@ -30,6 +35,9 @@ STEP_HALVINGS = 2
 # The winch counts as riding a bound while its angle's Bernstein coefficients are within this of
 # it (rad, 0.5 mm of line on a 0.5 m drum).
 BOUND_RIDE = 1e-3
+# How far (m) the end may come under seabed.minimum_clearance before the profile fails: the
+# verified run is the full model, the constraint was imposed on the optimiser's (often reduced) one.
+CLEARANCE_TOLERANCE = 1e-3
 
 
 @dataclass(frozen=True)
@@ -50,6 +58,11 @@ class Verification:
         Time the winch angle spent within :data:`BOUND_RIDE` of a bound.
     note : str
         How the run was obtained, when not at the scene's step (else empty).
+    minimum_clearance : float, m
+        Smallest clearance ``z_E - z_sb`` (= delta + e(t)) over the run's samples (NaN without a
+        run); also reported when it broke ``seabed.minimum_clearance``.
+    minimum_clearance_time : float, s
+        When it was reached (NaN without a run).
     """
 
     trajectory: Trajectory | None
@@ -58,6 +71,8 @@ class Verification:
     bond_residual: float = float("nan")
     bound_time: float = 0.0
     note: str = ""
+    minimum_clearance: float = float("nan")
+    minimum_clearance_time: float = float("nan")
 
 
 def verify_profile(
@@ -99,6 +114,8 @@ def verify_profile(
             )
         try:
             trajectory = simulate(trial, winch=angle, quiet=quiet, compiled=compiled)
+        except OffGridError as error:
+            return Verification(None, str(error), trial.numerics.step)
         except SimulationError as error:
             drifted.append(f"at h = {trial.numerics.step:g} s: {error}")
             continue
@@ -113,13 +130,16 @@ def verify_profile(
                 f"verified at h = {trial.numerics.step:g} s, since the run at the scene's step "
                 f"h = {step:g} s failed ({drifted[0]})"
             )
+        lowest, when, broken = lowest_clearance(scene.seabed, trajectory)
         return Verification(
-            trajectory,
-            None,
+            None if broken else trajectory,
+            broken,
             trial.numerics.step,
             float(residual.max()),
             bound_time(scene, control, parameters, trajectory),
             note,
+            lowest,
+            when,
         )
     reason = (
         f"no trustworthy full-model simulation at the scene's step or {STEP_HALVINGS} halvings "
@@ -141,3 +161,40 @@ def bound_time(scene, control, parameters: np.ndarray, trajectory: Trajectory) -
     riding = (profile <= low + reach + BOUND_RIDE) | (profile >= high - reach - BOUND_RIDE)
     both = riding[:-1] & riding[1:]
     return float(np.sum(np.diff(trajectory.time)[both]))
+
+
+def lowest_clearance(seabed, trajectory: Trajectory) -> tuple[float, float, str | None]:
+    """The smallest clearance ``z_E - z_sb`` over a run's samples, and whether it broke c_min.
+
+    Parameters
+    ----------
+    seabed : Seabed
+        The scene's ``[seabed]`` section.
+    trajectory : Trajectory
+
+    Returns
+    -------
+    clearance : float, m
+        The smallest ``delta + e(t)``.
+    time : float, s
+        When.
+    reason : str or None
+        Where and by how much the end broke ``seabed.minimum_clearance`` (beyond
+        :data:`CLEARANCE_TOLERANCE`); None when it held or the scene sets none.
+    """
+    end = trajectory.end
+    heights = clearance(seabed, end, clearance_reference(seabed, end[0]))
+    k = int(np.argmin(heights))
+    lowest, when = float(heights[k]), float(trajectory.time[k])
+    minimum = seabed.minimum_clearance
+    if minimum is None or lowest >= minimum - CLEARANCE_TOLERANCE:
+        return lowest, when, None
+    below = heights < minimum - CLEARANCE_TOLERANCE
+    span = trajectory.time[below]
+    reason = (
+        f"the end comes {lowest:.3g} m above the seabed at t = {when:g} s, (x, y) = "
+        f"({end[k, 0]:.1f}, {end[k, 1]:.1f}) m: {minimum - lowest:.3g} m under "
+        f"seabed.minimum_clearance = {minimum:g} m (under it for {span.size} samples in "
+        f"t = {span[0]:g}..{span[-1]:g} s)"
+    )
+    return lowest, when, reason

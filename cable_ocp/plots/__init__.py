@@ -24,7 +24,8 @@ import numpy as np
 from matplotlib.figure import Figure
 
 from cable_ocp.plots.animation import animate as animate  # a GIF of the run
-from cable_ocp.simulation.seabed import seabed_height
+from cable_ocp.scene.schema import Seabed
+from cable_ocp.simulation.seabed import bathymetry, clearance_reference, seabed_elevation
 from cable_ocp.simulation.trajectory import Trajectory
 
 
@@ -72,8 +73,12 @@ def clearance(
     clearance_depth: float = 5.0,
     labels: Sequence[str] | None = None,
     path: str | Path | None = None,
+    minimum_clearance: float | None = None,
 ) -> Figure:
-    """Height of the end above the seabed, ``delta + e(t)`` (eq. 39), against the target."""
+    """Height of the end above the seabed, ``delta + e(t)`` (eq. 39), against the target.
+
+    ``minimum_clearance`` (m, ``seabed.minimum_clearance``) draws the hard minimum c_min too.
+    """
     fig, ax = plt.subplots(figsize=(9, 4))
     for traj, label in _labelled(trajectories, labels):
         ax.plot(
@@ -84,6 +89,10 @@ def clearance(
     ax.axhline(
         clearance_depth, color="k", ls="--", lw=0.8, label=f"target delta = {clearance_depth} m"
     )
+    if minimum_clearance is not None:
+        ax.axhline(
+            minimum_clearance, color="r", lw=1.2, label=f"minimum c_min = {minimum_clearance} m"
+        )
     ax.set_ylabel("end height above the seabed [m]")
     ax.set_xlabel("t [s]")
     ax.grid(alpha=0.3)
@@ -94,29 +103,35 @@ def clearance(
 def cable_shapes(
     trajectory: Trajectory,
     times: Sequence[float] | None = None,
-    hills=(),
-    clearance_depth: float = 5.0,
+    seabed: Seabed | None = None,
     path: str | Path | None = None,
 ) -> Figure:
-    """Cable shapes in the xz plane at chosen times, with the seabed under the end (Fig. 18)."""
+    """Cable shapes in the xz plane at chosen times, with the seabed under the end (Fig. 18).
+
+    ``seabed`` is the scene's ``[seabed]`` section (default: flat, delta = 5 m under the start);
+    a grid's seabed is drawn where the grid reaches.
+    """
+    seabed = Seabed() if seabed is None else seabed
+    reference = clearance_reference(seabed, trajectory.end[0])
     times = np.linspace(0, trajectory.time[-1], 6) if times is None else np.asarray(times)
     fig, ax = plt.subplots(figsize=(10, 5))
-    seabed_level = trajectory.end[0, 2] - clearance_depth
     for t in times:
         k = int(np.argmin(np.abs(trajectory.time - t)))
         joints = trajectory.joints[k]
         (line,) = ax.plot(joints[0], joints[2], "-o", ms=2, label=f"t = {trajectory.time[k]:.0f} s")
-        ground = seabed_level + seabed_height(hills, joints[0, 0], joints[1, 0])
+        ground = seabed_elevation(seabed, joints[0, 0], joints[1, 0], reference)
         ax.plot(joints[0, 0], ground, "v", color=line.get_color())
-    x = np.linspace(trajectory.joints[:, 0].min() - 20, trajectory.joints[:, 0].max() + 20, 400)
+    low, high = trajectory.joints[:, 0].min() - 20, trajectory.joints[:, 0].max() + 20
+    grid = bathymetry(seabed)
+    if grid is not None:
+        low, high = max(low, grid.x[0]), min(high, grid.x[-1])
+    x = np.linspace(low, high, 400)
     path_y = np.interp(x, trajectory.end[:, 0], trajectory.end[:, 1])
+    if grid is not None:
+        path_y = np.clip(path_y, grid.y[0], grid.y[-1])
+    ground = seabed_elevation(seabed, x, path_y, reference)
     ax.fill_between(
-        x,
-        seabed_level - 5,
-        seabed_level + seabed_height(hills, x, path_y),
-        color="tan",
-        alpha=0.5,
-        label="seabed under the end's path",
+        x, ground.min() - 5, ground, color="tan", alpha=0.5, label="seabed under the end's path"
     )
     ax.set_xlabel("x [m]")
     ax.set_ylabel("z [m]")

@@ -24,6 +24,8 @@ try:
 except ModuleNotFoundError:  # Python 3.10
     import tomli as tomllib
 
+from cable_ocp.scene.bathymetry import GridError, read_grid
+
 __all__ = [
     "Cable",
     "CurrentRow",
@@ -40,6 +42,7 @@ __all__ = [
     "SceneError",
     "SeaState",
     "Seabed",
+    "SeabedGrid",
     "TableProfile",
     "TopMotion",
     "TowProfile",
@@ -577,21 +580,60 @@ class Hill(_Validated):
     width_y: float = _param(kind="float", doc="Width q along y.", gt=0, unit="m")
 
 
+@_section("seabed.grid")
+@dataclass(frozen=True)
+class SeabedGrid(_Validated):
+    """A bathymetry grid: the seabed's absolute elevation (CONVENTIONS.md §5, §6).
+
+    netCDF (``.nc``: ``variable`` over coordinates ``x``, ``y``) or CSV (``.csv``: columns x, y, z),
+    in the scene's frame (z up, the sea surface at 0); read and checked when the scene is loaded
+    (:mod:`cable_ocp.scene.bathymetry`).
+    """
+
+    file: str = _param(kind="path", doc="Grid file (.nc or .csv), relative to the scene file.")
+    variable: str = _param("elevation", "str", "Elevation variable of a netCDF file.")
+
+    def _check_relations(self) -> None:
+        try:
+            read_grid(self.file, self.variable)
+        except GridError as error:
+            raise SceneError(self._path("file"), f": {error}") from None
+
+
 @_section("seabed")
 @dataclass(frozen=True)
 class Seabed(_Validated):
-    """Seabed: the end's clearance delta (eq. 39) and the hills (none = flat).
+    """Seabed: hills (none = flat), an optional bathymetry grid, the clearance delta (eq. 39).
 
-    The flat seabed lies delta below the end's starting position; Omega measures how far the end
-    strays from delta above the seabed, which may rise under it. delta cancels from e(t) and
-    Omega (e = z_E(t) - z_E(0) - z_hill(x_E, y_E)): it is the starting clearance and places the
-    seabed in the plots.
+    Without a grid the seabed is relative (the paper's): its flat level lies delta below the end's
+    start, the hills rise from it, and delta cancels from e(t) = z_E(t) - z_hill(x_E, y_E) -
+    (z_E(0) - z_hill(x_E(0), y_E(0))). With a grid it is absolute (elevation of the grid plus the
+    hills, z up from the sea surface) and delta is the target: e(t) = z_E - z_sb(x_E, y_E) -
+    delta, from the hanging start on (CONVENTIONS.md §5). Either way the clearance z_E - z_sb is
+    delta + e(t).
     """
 
     clearance: float = _param(
-        5.0, doc="Starting clearance delta of the end (eq. 39).", ge=0, unit="m"
-    )
+        5.0, doc="Clearance delta: the end's start (no grid) or target (grid) (eq. 39).", ge=0,
+        unit="m",
+    )  # fmt: skip
     hills: tuple[Hill, ...] = _param((), "tuple", "Hills, summed.", item=Hill)
+    grid: SeabedGrid | None = _param(
+        None, "section", "[seabed.grid]", item=SeabedGrid, optional=True
+    )
+    minimum_clearance: float | None = _param(
+        None, doc="Hard minimum c_min of z_E - z_sb (<= clearance).", ge=0, unit="m",
+        optional=True,
+    )  # fmt: skip
+
+    def _check_relations(self) -> None:
+        if self.minimum_clearance is not None and self.minimum_clearance > self.clearance:
+            raise self._fail("minimum_clearance", f"<= seabed.clearance = {self.clearance!r}")
+
+    @property
+    def absolute(self) -> bool:
+        """Whether the seabed is absolute (a grid), so that delta is a target, not the start."""
+        return self.grid is not None
 
 
 @_section("numerics")

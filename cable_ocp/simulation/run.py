@@ -14,7 +14,12 @@ from cable_ocp.model import structured
 from cable_ocp.model.cable import CableModel
 from cable_ocp.model.layout import INPUTS
 from cable_ocp.simulation.integrate import evaluate_into, integrate
-from cable_ocp.simulation.seabed import clearance_error, rms_objective
+from cable_ocp.simulation.seabed import (
+    check_on_grid,
+    check_start,
+    clearance_error,
+    rms_objective,
+)
 from cable_ocp.simulation.statics import starting_state
 from cable_ocp.simulation.trajectory import Trajectory
 
@@ -170,6 +175,9 @@ def simulate(
     ValueError
         Before integrating: a winch of the wrong length or not finite, a winch that takes the top
         element out of its length range, an ``initial_state`` of the wrong shape or not finite.
+    OffGridError
+        A :class:`~cable_ocp.simulation.integrate.SimulationError`: the end starts off the
+        bathymetry grid or under the seabed (before integrating), or leaves the grid.
     """
     numerics = scene.numerics
     angle = winch_function(scene, winch)
@@ -184,6 +192,7 @@ def simulate(
     if initial_state is None:
         initial_state = starting_state(model, drive, compiled=compiled)
     x0 = initial_state
+    check_start(scene.seabed, x0[:3])
     run = integrate(
         model,
         x0,
@@ -196,7 +205,8 @@ def simulate(
         compiled=compiled,
     )
     joints, tensions = joints_and_tensions(model, run.states, run.inputs, compiled)
-    error = clearance_error(scene.seabed.hills, joints[:, :, 0])
+    check_on_grid(scene.seabed, joints[:, :, 0], run.time)
+    error = clearance_error(scene.seabed, joints[:, :, 0])
     return Trajectory(
         time=run.time,
         states=run.states,

@@ -1,38 +1,106 @@
-"""Seabed height under the end: flat, one Gaussian hill (paper eq. 40) or a sum of hills.
+"""The seabed under the end and the clearance the objective asks the end to keep (eq. 39, 40).
 
-The height is measured from the flat seabed (m, up). The same function serves numpy arrays and
-CasADi expressions, so the optimiser differentiates the very formula the simulation reports.
+The seabed is the scene's ``[seabed]`` section (:class:`~cable_ocp.scene.schema.Seabed`): a sum of
+Gaussian hills (eq. 40), plus, when it names one, a bathymetry grid interpolated by a bicubic
+B-spline (C2; CasADi's ``interpolant``). Every function here also takes a plain sequence of hills,
+a relative seabed. The same formulas serve numpy arrays and CasADi SX/MX expressions, so the
+optimiser differentiates exactly what the simulation reports.
 
-The clearance ``delta`` (``seabed.clearance``) is the end's starting clearance over the seabed
-under it, and the clearance the objective asks it to keep: the seabed under the start lies
-``delta`` below the end, so ``e(t) = z_E(t) - z(x_E, y_E) - (z_E(0) - z(x_E(0), y_E(0)))``
-(eq. 39, where the paper's seabed is flat under the start). ``delta`` cancels, so it places the
-seabed (in plots) but does not change ``e(t)``, Omega or the optimal winch; ``e(0) = 0`` even where
-a hill already rises under the start (the paper's form then asked for an error of the hill's
-height at t = 0, which no winch can undo).
+Two kinds of seabed (CONVENTIONS.md §5):
+
+- **relative** (no grid, the paper's): heights above a flat level that lies ``delta``
+  (``seabed.clearance``) below the end's start, so
+  ``e(t) = z_E(t) - z(x_E, y_E) - (z_E(0) - z(x_E(0), y_E(0)))``. ``delta`` cancels: it places
+  the seabed (in plots) but changes neither ``e(t)``, Omega nor the optimal winch; ``e(0) = 0``
+  even where a hill rises under the start (the paper's form then asked for an error of the hill's
+  height at t = 0, which no winch can undo);
+- **absolute** (a grid): elevations, z up from the sea surface, and ``delta`` is the target,
+  ``e(t) = z_E(t) - z(x_E, y_E) - delta``, from the hanging start on: ``e(0)`` is the start's
+  offset from the target, which Omega counts.
+
+Either way ``e(t) = z_E - z(x_E, y_E) - r`` with the reference ``r`` of
+:func:`clearance_reference`, and the clearance (height of the end above the seabed) is
+``z_E - z_sb = delta + e(t)``. Numerically, a point off the grid raises :class:`OffGridError`;
+symbolically the grid is held at its edge values outside (so a solver iterate that strays stays
+defined), and the verification's simulation judges the path.
 """
 
 from __future__ import annotations
 
+import functools
+
 import casadi as ca
 import numpy as np
 
+from cable_ocp.scene.bathymetry import BathymetryGrid, read_grid
+from cable_ocp.simulation.integrate import SimulationError
 
-def seabed_height(hills, x, y):
-    """Height of the seabed above its flat level at ``(x, y)`` (m).
 
-    ``z(x, y) = sum_k k_k exp(-((x - x0_k)/p_k)^2 - ((y - y0_k)/q_k)^2)`` (eq. 40).
+class OffGridError(SimulationError):
+    """The end (or a point asked for) left the bathymetry grid, or started under the seabed."""
+
+
+def bathymetry(seabed) -> BathymetryGrid | None:
+    """The grid a ``[seabed]`` section names (read once per file), or None (also for hills)."""
+    grid = getattr(seabed, "grid", None)
+    return None if grid is None else read_grid(grid.file, grid.variable)
+
+
+def _parts(seabed) -> tuple[tuple, BathymetryGrid | None]:
+    """The hills and the grid (or None) of a ``[seabed]`` section or a sequence of hills."""
+    if hasattr(seabed, "hills"):
+        return seabed.hills, bathymetry(seabed)
+    return tuple(seabed), None
+
+
+@functools.lru_cache(maxsize=16)
+def grid_surface(grid: BathymetryGrid) -> ca.Function:
+    """The grid's bicubic B-spline interpolant ``z(x, y)`` (m), a CasADi Function of ``[x; y]``."""
+    values = grid.elevation.ravel(order="F")  # x runs fastest
+    return ca.interpolant("bathymetry", "bspline", [grid.x, grid.y], values)
+
+
+def _grid_height(grid: BathymetryGrid, x, y):
+    surface = grid_surface(grid)
+    if isinstance(x, (ca.SX, ca.MX)) or isinstance(y, (ca.SX, ca.MX)):
+        x = ca.fmin(ca.fmax(x, grid.x[0]), grid.x[-1])
+        y = ca.fmin(ca.fmax(y, grid.y[0]), grid.y[-1])
+        return surface(ca.horzcat(x, y).T).T
+    x, y = np.broadcast_arrays(np.asarray(x, dtype=float), np.asarray(y, dtype=float))
+    outside = ~grid.contains(x, y)
+    if outside.any():
+        k = np.unravel_index(np.argmax(outside), x.shape)
+        raise OffGridError(
+            f"seabed.grid: the point (x, y) = ({x[k]:g}, {y[k]:g}) m is off the bathymetry grid "
+            f"of {grid.file} ({grid.extent()})"
+        )
+    values = np.asarray(surface(np.vstack([x.ravel(), y.ravel()]))).reshape(x.shape)
+    return values[()] if values.ndim == 0 else values
+
+
+def seabed_height(seabed, x, y):
+    """Height of the seabed at ``(x, y)`` (m): hills above the flat level, plus a grid's elevation.
+
+    ``z(x, y) = z_grid(x, y) + sum_k k_k exp(-((x - x0_k)/p_k)^2 - ((y - y0_k)/q_k)^2)``
+    (eq. 40); without a grid the first term is 0 and the height is relative to the flat level.
 
     Parameters
     ----------
-    hills : sequence of Hill
-        Each with ``height``, ``x0``, ``y0``, ``width_x``, ``width_y`` (m).
+    seabed : Seabed or sequence of Hill
+        The scene's ``[seabed]`` section, or hills (each with ``height``, ``x0``, ``y0``,
+        ``width_x``, ``width_y``, m).
     x, y : array or casadi expression, m
 
     Returns
     -------
     array or casadi expression, m
+
+    Raises
+    ------
+    OffGridError
+        A numeric point off the grid (a symbolic one is held at the grid's edge).
     """
+    hills, grid = _parts(seabed)
     symbolic = isinstance(x, (ca.SX, ca.MX)) or isinstance(y, (ca.SX, ca.MX))
     exp = ca.exp if symbolic else np.exp
     total = 0.0 * x
@@ -40,32 +108,146 @@ def seabed_height(hills, x, y):
         total = total + hill.height * exp(
             -(((x - hill.x0) / hill.width_x) ** 2) - ((y - hill.y0) / hill.width_y) ** 2
         )
+    if grid is not None:
+        total = total + _grid_height(grid, x, y)
     return total
 
 
-def clearance_reference(hills, start) -> float:
-    """``z_E(0) - z(x_E(0), y_E(0))`` (m): the end's start over the seabed's height under it.
+def clearance_reference(seabed, start) -> float:
+    """The reference ``r`` of ``e(t) = z_E(t) - z(x_E, y_E) - r`` (m).
+
+    Relative seabed: ``r = z_E(0) - z(x_E(0), y_E(0))``, the end's start over the seabed's height
+    under it. Absolute seabed (a grid): ``r = delta`` (``seabed.clearance``), the target.
 
     Parameters
     ----------
+    seabed : Seabed or sequence of Hill
     start : array (3,) or longer (a state: its first three entries), m
+        The end's starting position.
     """
-    return float(start[2] - seabed_height(hills, start[0], start[1]))
+    if getattr(seabed, "absolute", False):
+        return float(seabed.clearance)
+    return float(start[2] - seabed_height(seabed, start[0], start[1]))
 
 
-def clearance_error(hills, end_positions: np.ndarray) -> np.ndarray:
+def clearance_error(seabed, end_positions: np.ndarray) -> np.ndarray:
     """Deviation of the end from the clearance ``delta`` over the seabed, ``e(t)`` (eq. 39), m.
 
-    ``e = z_E(t) - z(x_E(t), y_E(t)) - (z_E(0) - z(x_E(0), y_E(0)))``: the end starts ``delta``
-    above the seabed under it and should stay ``delta`` above the seabed, which may rise under
-    it. ``delta`` cancels, so it is not an argument.
+    ``e = z_E(t) - z(x_E(t), y_E(t)) - r`` with ``r`` of :func:`clearance_reference` taken at the
+    first position: the end should stay ``delta`` above the seabed, which may rise under it.
 
     Parameters
     ----------
+    seabed : Seabed or sequence of Hill
     end_positions : array (k, 3), m
     """
     x, y, z = end_positions.T
-    return z - seabed_height(hills, x, y) - clearance_reference(hills, end_positions[0])
+    return z - seabed_height(seabed, x, y) - clearance_reference(seabed, end_positions[0])
+
+
+def seabed_elevation(seabed, x, y, reference):
+    """The seabed's elevation ``z_sb(x, y)`` (m, up from the sea surface), numeric or symbolic.
+
+    Absolute seabed: the grid plus the hills. Relative seabed: the hills on the flat level
+    ``r - delta`` that the end's start fixes.
+
+    Parameters
+    ----------
+    seabed : Seabed
+    x, y : array or casadi expression, m
+    reference : float or casadi expression, m
+        ``r`` of :func:`clearance_reference` at the run's start.
+    """
+    return seabed_height(seabed, x, y) + reference - seabed.clearance
+
+
+def clearance(seabed, end, reference):
+    """Height of the end above the seabed, ``z_E - z_sb(x_E, y_E) = delta + e`` (m).
+
+    Parameters
+    ----------
+    seabed : Seabed
+        The scene's ``[seabed]`` section (its ``clearance`` is delta).
+    end : array (k, 3) or (3,), or a casadi column whose first three entries are x_E, y_E, z_E
+        The end's positions, m.
+    reference : float or casadi expression, m
+        ``r`` of :func:`clearance_reference` at the run's start.
+
+    Returns
+    -------
+    array (k,) or float, or casadi expression, m
+    """
+    if isinstance(end, (ca.SX, ca.MX)):
+        x, y, z = end[0], end[1], end[2]
+    else:
+        x, y, z = np.moveaxis(np.asarray(end, dtype=float)[..., :3], -1, 0)
+    return z - seabed_elevation(seabed, x, y, reference)
+
+
+def clearance_margin(seabed, end, reference):
+    """How far the end is above the minimum clearance: ``z_E - z_sb(x_E, y_E) - c_min`` (m).
+
+    The hard constraint of ``seabed.minimum_clearance`` is ``clearance_margin >= 0`` at every
+    sample; numeric or symbolic, like :func:`clearance`.
+
+    Parameters
+    ----------
+    seabed : Seabed
+        With ``minimum_clearance`` set.
+    end, reference
+        As for :func:`clearance`.
+
+    Raises
+    ------
+    ValueError
+        ``seabed.minimum_clearance`` is not set.
+    """
+    if seabed.minimum_clearance is None:
+        raise ValueError("seabed.minimum_clearance is not set: the scene has no hard clearance")
+    return clearance(seabed, end, reference) - seabed.minimum_clearance
+
+
+def check_on_grid(seabed, end_positions: np.ndarray, time: np.ndarray) -> None:
+    """Raise :class:`OffGridError` if the end leaves the grid (no-op without a grid).
+
+    Parameters
+    ----------
+    seabed : Seabed or sequence of Hill
+    end_positions : array (k, 3), m
+    time : array (k,), s
+    """
+    grid = bathymetry(seabed)
+    if grid is None:
+        return
+    x, y = end_positions[:, 0], end_positions[:, 1]
+    outside = ~grid.contains(x, y)
+    if outside.any():
+        k = int(np.argmax(outside))
+        raise OffGridError(
+            f"seabed.grid: the end leaves the bathymetry grid of {grid.file} at t = "
+            f"{time[k]:g} s, (x, y) = ({x[k]:g}, {y[k]:g}) m ({grid.extent()}); extend the grid"
+        )
+
+
+def check_start(seabed, start: np.ndarray) -> None:
+    """Raise :class:`OffGridError` if the end starts off the grid or under an absolute seabed.
+
+    Parameters
+    ----------
+    seabed : Seabed or sequence of Hill
+    start : array (3,) or longer, m
+        The end's starting position (the hanging equilibrium).
+    """
+    if not getattr(seabed, "absolute", False):
+        return
+    check_on_grid(seabed, np.asarray(start[:3], dtype=float)[None, :], np.zeros(1))
+    height = float(start[2] - seabed_height(seabed, start[0], start[1]))
+    if height < 0:
+        raise OffGridError(
+            f"seabed.grid: the end starts {-height:.3g} m under the seabed at (x, y, z) = "
+            f"({start[0]:g}, {start[1]:g}, {start[2]:g}) m: the cable is longer than the water "
+            "there is deep; shorten cable.length or move top.start"
+        )
 
 
 def trapezoid_weights(step: float, count: int) -> np.ndarray:

@@ -1,0 +1,209 @@
+"""Bathymetry grids: the seabed's absolute elevation on a regular grid, read and checked once.
+
+A grid file holds the elevation z (m, up, the sea surface at z = 0) over local metric coordinates
+x, y (m), in the scene's frame (CONVENTIONS.md §3):
+
+- **netCDF** (``.nc``): a 2-D variable (``seabed.grid.variable``, default ``elevation``) over the
+  coordinates ``x`` and ``y``, in either order; each axis strictly monotone (a decreasing one is
+  flipped); a ``units`` attribute, where given, is metres;
+- **CSV** (``.csv``): columns x, y, z (an optional header line), one row per grid point in any
+  order, every (x, y) of the grid exactly once.
+
+Each axis needs :data:`MIN_AXIS_POINTS` points (a cubic B-spline). Every problem is a
+:class:`GridError` naming the file and, where there is one, the point; the scene turns it into a
+``SceneError`` on ``seabed.grid.file`` when the scene is loaded, before any symbolic work. Grids are
+read once per file version (path, size and modification time).
+"""
+
+from __future__ import annotations
+
+import functools
+import os
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+
+MIN_AXIS_POINTS = 4  # a cubic B-spline needs four points along each axis
+METRES = ("m", "metre", "metres", "meter", "meters")
+
+
+class GridError(ValueError):
+    """A bathymetry file that cannot be used; the message names the file and the point."""
+
+
+@dataclass(frozen=True, eq=False)
+class BathymetryGrid:
+    """The seabed's elevation on a rectilinear grid.
+
+    Attributes
+    ----------
+    file : str
+        Absolute path of the file it was read from.
+    x : array (nx,), m
+        Strictly increasing.
+    y : array (ny,), m
+        Strictly increasing.
+    elevation : array (nx, ny), m
+        ``z(x_i, y_j)``, up, the sea surface at 0; finite.
+    """
+
+    file: str
+    x: np.ndarray
+    y: np.ndarray
+    elevation: np.ndarray
+
+    def contains(self, x: np.ndarray, y: np.ndarray) -> np.ndarray:
+        """Whether each point ``(x, y)`` (m) lies on the grid, its edges included."""
+        return (self.x[0] <= x) & (x <= self.x[-1]) & (self.y[0] <= y) & (y <= self.y[-1])
+
+    def extent(self) -> str:
+        """The grid's span in words, for messages: ``x in [a, b] m, y in [c, d] m``."""
+        return f"x in [{self.x[0]:g}, {self.x[-1]:g}] m, y in [{self.y[0]:g}, {self.y[-1]:g}] m"
+
+
+def read_grid(path: str | os.PathLike, variable: str = "elevation") -> BathymetryGrid:
+    """Read and check a bathymetry file (netCDF or CSV, by its suffix).
+
+    Parameters
+    ----------
+    path : path-like
+        The ``.nc`` or ``.csv`` file.
+    variable : str
+        The elevation's variable in a netCDF file (a CSV's third column is the elevation).
+
+    Returns
+    -------
+    BathymetryGrid
+
+    Raises
+    ------
+    GridError
+        Unreadable file, unknown suffix, missing variable or coordinate, non-metric units, an axis
+        that is not strictly monotone or too short, a NaN or infinite elevation, a CSV that misses
+        or repeats a grid point; the message names the file and the point.
+    """
+    path = Path(path).resolve()
+    try:
+        stat = path.stat()
+    except OSError as error:
+        raise GridError(f"{path}: cannot read ({error.strerror})") from None
+    return _read_cached(str(path), variable, stat.st_size, stat.st_mtime_ns)
+
+
+@functools.lru_cache(maxsize=16)
+def _read_cached(path: str, variable: str, size: int, mtime: int) -> BathymetryGrid:
+    suffix = Path(path).suffix.lower()
+    if suffix == ".nc":
+        x, y, z = _read_netcdf(path, variable)
+    elif suffix == ".csv":
+        x, y, z = _read_csv(path)
+    else:
+        raise GridError(f"{path}: unknown bathymetry format {suffix!r}; expected .nc or .csv")
+    for name, axis in (("x", x), ("y", y)):
+        if axis.size < MIN_AXIS_POINTS:
+            raise GridError(
+                f"{path}: axis {name} has {axis.size} points; a cubic B-spline needs at least "
+                f"{MIN_AXIS_POINTS}"
+            )
+    bad = ~np.isfinite(z)
+    if bad.any():
+        i, j = np.argwhere(bad)[0]
+        raise GridError(
+            f"{path}: elevation is {z[i, j]} at (x, y) = ({x[i]:g}, {y[j]:g}) m "
+            f"({int(bad.sum())} non-finite points); fill or crop them"
+        )
+    for array in (x, y, z):
+        array.setflags(write=False)
+    return BathymetryGrid(path, x, y, z)
+
+
+def _monotone_axis(path: str, name: str, values: np.ndarray) -> tuple[np.ndarray, bool]:
+    """The axis strictly increasing, and whether it had to be flipped."""
+    values = np.asarray(values, dtype=float)
+    if values.ndim != 1:
+        raise GridError(f"{path}: coordinate {name} must be 1-D, got shape {values.shape}")
+    if not np.all(np.isfinite(values)):
+        k = int(np.argmax(~np.isfinite(values)))
+        raise GridError(f"{path}: coordinate {name}[{k}] = {values[k]} is not finite")
+    steps = np.diff(values)
+    if np.all(steps > 0):
+        return values, False
+    if np.all(steps < 0):
+        return values[::-1].copy(), True
+    k = int(np.argmax(steps <= 0) if steps[0] > 0 else np.argmax(steps >= 0))
+    raise GridError(
+        f"{path}: coordinate {name} is not strictly monotone at index {k + 1} "
+        f"({name} = {values[k]:g} then {values[k + 1]:g} m)"
+    )
+
+
+def _check_units(path: str, name: str, attributes) -> None:
+    units = attributes.get("units")
+    if units is not None and str(units).strip().lower() not in METRES:
+        raise GridError(f"{path}: {name} has units {units!r}; expected metres ('m')")
+
+
+def _read_netcdf(path: str, variable: str) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    import xarray as xr
+
+    try:
+        with xr.open_dataset(path) as data:
+            data = data.load()
+    except Exception as error:  # noqa: BLE001 - every reader failure is the file's problem
+        detail = f"{type(error).__name__}: {(str(error).splitlines() or [''])[0]}"
+        raise GridError(f"{path}: cannot read as netCDF ({detail})") from None
+    if variable not in data.data_vars:
+        found = ", ".join(map(str, data.data_vars)) or "none"
+        raise GridError(f"{path}: no variable {variable!r} (variables: {found})")
+    field = data[variable]
+    if set(field.dims) != {"x", "y"}:
+        raise GridError(
+            f"{path}: variable {variable!r} has dimensions {field.dims}; expected ('x', 'y')"
+        )
+    _check_units(path, variable, field.attrs)
+    axes = []
+    for name in ("x", "y"):
+        if name not in field.coords:
+            raise GridError(f"{path}: dimension {name} has no coordinate values")
+        _check_units(path, name, field.coords[name].attrs)
+        axis, flipped = _monotone_axis(path, name, field.coords[name].values)
+        if flipped:
+            field = field.isel({name: slice(None, None, -1)})
+        axes.append(axis)
+    z = np.array(field.transpose("x", "y").values, dtype=float)
+    return axes[0], axes[1], z
+
+
+def _read_csv(path: str) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    try:
+        data = np.genfromtxt(path, delimiter=",", comments="#")
+    except (OSError, ValueError) as error:
+        raise GridError(f"{path}: cannot read as CSV ({error})") from None
+    if data.ndim == 2 and np.all(np.isnan(data[0])):
+        data = data[1:]  # a header line
+    if data.ndim != 2 or data.shape[1] != 3:
+        raise GridError(f"{path}: expected 3 columns x, y, z (m), got shape {data.shape}")
+    bad = ~np.isfinite(data).all(axis=1)
+    if bad.any():
+        row = int(np.argmax(bad))
+        x, y, z = data[row]
+        raise GridError(
+            f"{path}: row {row + 1} of the data, (x, y, z) = ({x:g}, {y:g}, {z:g}) m, is not finite"
+        )
+    x, ix = np.unique(data[:, 0], return_inverse=True)
+    y, iy = np.unique(data[:, 1], return_inverse=True)
+    count = np.zeros((x.size, y.size), dtype=int)
+    np.add.at(count, (ix, iy), 1)
+    if (count > 1).any():
+        i, j = np.argwhere(count > 1)[0]
+        raise GridError(f"{path}: grid point (x, y) = ({x[i]:g}, {y[j]:g}) m is given twice")
+    if (count == 0).any():
+        i, j = np.argwhere(count == 0)[0]
+        raise GridError(
+            f"{path}: not a regular grid: point (x, y) = ({x[i]:g}, {y[j]:g}) m is missing "
+            f"({int((count == 0).sum())} of {x.size} x {y.size} missing)"
+        )
+    z = np.empty((x.size, y.size))
+    z[ix, iy] = data[:, 2]
+    return x, y, z

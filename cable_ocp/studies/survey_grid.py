@@ -1,0 +1,92 @@
+"""The synthetic bathymetry grid of the bundled ``survey`` scene (``models/data/survey_grid.nc``).
+
+A made-up site, not a real survey: a seabed 305 m deep and flat under the end's start (the
+300 m cable hangs from the surface with its end about 5 m above it), rising by a gentle slope
+along the tow, crossed by a ridge, with sand waves and a scour pit, and seeded small-scale relief
+(smoothed noise) such as a multibeam survey shows. Every feature is smooth on the 4 m grid, so the
+B-spline through it (CONVENTIONS.md §5) is the seabed the scene means.
+
+Regenerate the file (bit for bit, by its seed)::
+
+    python -m cable_ocp.studies.survey_grid models/data/survey_grid.nc
+"""
+
+from __future__ import annotations
+
+import argparse
+from pathlib import Path
+
+import numpy as np
+import xarray as xr
+from scipy.ndimage import gaussian_filter
+
+SPACING = 4.0  # m
+X_RANGE = (-60.0, 300.0)  # m, along the tow
+Y_RANGE = (-80.0, 120.0)  # m, across it
+BASE = -305.0  # m, the flat seabed under the start
+SEED = 16
+
+
+def _smoothstep(tau: np.ndarray) -> np.ndarray:
+    s = np.clip(tau, 0.0, 1.0)
+    return s**3 * (10 - 15 * s + 6 * s**2)
+
+
+def survey_elevation(x: np.ndarray, y: np.ndarray, seed: int = SEED) -> np.ndarray:
+    """Elevation of the synthetic site on the grid ``x`` by ``y`` (m, up; shape (nx, ny)).
+
+    Parameters
+    ----------
+    x, y : array, m
+        Strictly increasing axes, :data:`SPACING` apart.
+    seed : int
+        Seed of the small-scale relief.
+    """
+    X, Y = np.meshgrid(x, y, indexing="ij")
+    onset = _smoothstep((X - 20.0) / 40.0)  # flat under the start, features from x = 20 m on
+    slope = 0.03 * np.maximum(X - 20.0, 0.0) * onset  # 3 m per 100 m along the tow
+    across = (X - 105.0) * np.cos(np.radians(25.0)) + (Y - 20.0) * np.sin(np.radians(25.0))
+    ridge = 10.0 * np.exp(-((across / 14.0) ** 2)) * np.exp(-(((Y - 20.0) / 90.0) ** 2))
+    waves = 0.6 * np.sin(2 * np.pi * (X * 0.9 + Y * 0.44) / 30.0) * onset
+    pit = -2.5 * np.exp(-(((X - 150.0) / 12.0) ** 2) - ((Y - 32.0) / 10.0) ** 2)
+    relief = gaussian_filter(np.random.default_rng(seed).normal(0.0, 1.0, X.shape), sigma=2.0)
+    relief *= 0.25 / relief.std() * onset
+    return BASE + slope + ridge + waves + pit + relief
+
+
+def survey_grid(seed: int = SEED) -> xr.Dataset:
+    """The grid as a Dataset: ``elevation`` (m) over ``x``, ``y`` (m), CF attributes."""
+    x = np.arange(X_RANGE[0], X_RANGE[1] + SPACING / 2, SPACING)
+    y = np.arange(Y_RANGE[0], Y_RANGE[1] + SPACING / 2, SPACING)
+    metres = {"units": "m"}
+    return xr.Dataset(
+        {
+            "elevation": (
+                ("x", "y"),
+                survey_elevation(x, y, seed),
+                {**metres, "long_name": "seabed elevation, up from the sea surface"},
+            )
+        },
+        coords={
+            "x": ("x", x, {**metres, "long_name": "along the tow (local metric)"}),
+            "y": ("y", y, {**metres, "long_name": "across the tow (local metric)"}),
+        },
+        attrs={
+            "title": "synthetic bathymetry of the cable_ocp survey scene",
+            "source": f"cable_ocp.studies.survey_grid (seed {seed})",
+        },
+    )
+
+
+def main(argv: list[str] | None = None) -> int:
+    """Write the grid to the netCDF file named on the command line."""
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("path", type=Path, help="netCDF file to write")
+    args = parser.parse_args(argv)
+    survey_grid().to_netcdf(args.path)
+    print(f"wrote {args.path} ({args.path.stat().st_size / 1024:.0f} KiB)")
+    return 0
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())
