@@ -19,8 +19,17 @@ from cable_ocp.drive.drive import Drive, stage_times
 from cable_ocp.model.cable import CableModel
 from cable_ocp.scene.bundled import scene_path
 from cable_ocp.simulation.integrate import bond_residuals
-from cable_ocp.simulation.statics import EquilibriumError
-from cable_ocp.studies.robustness import meets_goal, random_cases, run_case
+from cable_ocp.simulation.seabed import seabed_height
+from cable_ocp.simulation.statics import EquilibriumError, equilibrium
+from cable_ocp.studies.robustness import (
+    SITE,
+    Ranges,
+    add_survey,
+    meets_goal,
+    on_site,
+    random_cases,
+    run_case,
+)
 
 HEAVE = {"top.heave": {"amplitude": 0.8, "period": 9.0}}
 
@@ -186,11 +195,53 @@ def test_drive_takes_a_users_smooth_callable(hill):
     assert u.shape == (15, 6)
 
 
+PAPER_HILL_ONLY = Ranges(site_share=0.0, sea_share=0.0)  # no grids and no sea states
+
+
 def test_seeded_random_scenes_solve(validation):
     """About six random variants of paper_hill: none raises, each succeeds and meets the goal."""
-    rows = [run_case(overrides, closed_loop=False) for overrides in random_cases(6, seed=11)]
+    cases = random_cases(6, seed=11, ranges=PAPER_HILL_ONLY)
+    rows = [run_case(overrides, closed_loop=False) for overrides in cases]
     raised = [r["raised"] for r in rows if r["raised"]]
     assert not raised, raised
     failed = [r["status"] for r in rows if not r["success"]]
     assert not failed, failed
     assert all(meets_goal(r) for r in rows), [(r["omega"], r["locked"]) for r in rows]
+
+
+def test_grids_and_sea_states_come_from_a_second_stream():
+    """Adding them leaves the paper_hill variants of a seed as they were (the earlier rounds')."""
+    survey = random_cases(30, seed=3)
+    plain = random_cases(30, seed=3, ranges=PAPER_HILL_ONLY)
+    sites = sum(SITE in case for case in survey)
+    seas = sum("sea_state" in case.get("top.heave", {}) for case in survey)
+    assert 4 <= sites <= 16 and 3 <= seas <= 14, (sites, seas)
+    for case, base in zip(survey, plain, strict=True):
+        heave = {k: v for k, v in case.get("top.heave", {}).items() if k != "sea_state"}
+        rest = {k: v for k, v in case.items() if k not in (SITE, "top.heave")}
+        assert rest == {k: v for k, v in base.items() if k != "top.heave"}
+        assert heave == base.get("top.heave", {})
+    assert random_cases(5, seed=3) == survey[:5]
+
+
+def test_a_random_site_puts_the_start_on_its_target_clearance(hill, tmp_path):
+    """The grid's flat part lies delta below the end's hanging start, less the hills there."""
+    case = add_survey({}, np.random.default_rng(2), Ranges(site_share=1.0, sea_share=0.0))
+    scene = hill.updated({"seabed.clearance": 6.0})
+    placed = on_site(scene, case[SITE], tmp_path / "site.nc")
+    assert placed.seabed.absolute
+    end = equilibrium(CableModel.from_scene(scene), Drive.from_scene(scene), compiled=True)
+    x, y, z = end.state[:3]
+    assert z - float(seabed_height(placed.seabed, x, y)) == pytest.approx(6.0, abs=1e-9)
+
+
+@pytest.mark.slow
+def test_a_random_grid_in_a_sea_state_solves():
+    """One case on a random grid, in a sea state on top of a sine: succeeds and meets the goal."""
+    survey = Ranges(site_share=1.0, sea_share=1.0, heave_share=1.0)
+    case = random_cases(1, seed=5, ranges=survey)[0]
+    assert SITE in case and {"amplitude", "sea_state"} <= set(case["top.heave"])
+    row = run_case(case, closed_loop=False)
+    assert row["raised"] is None, row["raised"]
+    assert row["success"], row["status"]
+    assert meets_goal(row), (row["omega"], row["locked"])

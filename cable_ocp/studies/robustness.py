@@ -2,10 +2,17 @@
 
 ``cable-ocp bench --only robustness [--cases N --seed S]`` draws N scenes that an offshore user
 would plausibly set (tow speed, sway, clearance, one to three Gaussian hills near the end's path, a
-uniform current, the number of elements, and in about a third of them a vessel heave), runs the
-default :func:`cable_ocp.optimize` on each (and :func:`cable_ocp.mpc` on the heaving ones), and
-prints how many succeeded, how many raised (which must be none), Omega against the locked winch,
-how many optima rode a winch bound, and the wall times.
+uniform current, the number of elements, in about a third of them a vessel heave; and, from a
+second stream of the same seed, a random bathymetry grid in about a third and a JONSWAP sea state
+in about a quarter), runs the default :func:`cable_ocp.optimize` on each (and
+:func:`cable_ocp.mpc` on the heaving ones), and prints how many succeeded, how many raised (which
+must be none), Omega against the locked winch, how many optima rode a winch bound, and the wall
+times.
+
+A grid case's overrides carry the site's relief under :data:`SITE` (not a scene key):
+:func:`run_case` writes its grid (:mod:`cable_ocp.studies.random_site`) into a temporary folder,
+with the flat part under the start ``delta`` below the end's hanging start (less any hill there),
+so that the end starts on its target clearance, and names it as ``seabed.grid``.
 
 A case *meets the goal* when it succeeded and its Omega is at most :data:`OMEGA_GOAL`, or at least
 :data:`GAIN_GOAL` times better than the locked winch's (where the winch's range does not allow
@@ -18,22 +25,30 @@ the goal's second half, and is counted as *reach-limited*.
 
 from __future__ import annotations
 
+import tempfile
 import time
 import traceback
 from dataclasses import dataclass
+from pathlib import Path
 
 import numpy as np
 
 from cable_ocp.control.closed_loop.loop import mpc
 from cable_ocp.control.optimization import optimize
 from cable_ocp.drive.bounds import angle_bounds
+from cable_ocp.drive.drive import Drive
+from cable_ocp.model.cable import CableModel
 from cable_ocp.scene.bundled import scene_path
 from cable_ocp.scene.schema import load_scene
 from cable_ocp.simulation.run import simulate
-from cable_ocp.simulation.seabed import rms_objective
+from cable_ocp.simulation.seabed import rms_objective, seabed_height
+from cable_ocp.simulation.statics import equilibrium
+from cable_ocp.studies.random_site import write_site
 
 OMEGA_GOAL = 0.01  # m
 GAIN_GOAL = 3.0  # locked Omega over the optimum's
+SITE = "site"  # key of a case's overrides that holds the relief of its random grid
+SURVEY_STREAM = 16  # second seed entry of the grids' and sea states' stream (issue 16)
 
 
 @dataclass(frozen=True)
@@ -58,6 +73,18 @@ class Ranges:
         Share of the scenes with a vessel heave.
     heave_amplitude : (float, float), m
     heave_period : (float, float), s
+    site_share : float
+        Share of the scenes on a random bathymetry grid (:mod:`~cable_ocp.studies.random_site`).
+    site_slope : (float, float)
+        Rise per metre along the tow.
+    ridge_height, ridge_x, ridge_width : (float, float), m
+    ridge_angle : (float, float), rad
+    sand_waves, sand_wavelength, roughness : (float, float), m
+    sea_share : float
+        Share of the scenes with a JONSWAP sea state (added to any sinusoidal heave).
+    significant_height : (float, float), m
+    peak_period : (float, float), s
+    peak_enhancement : (float, float)
     """
 
     surge_speed: tuple[float, float] = (0.7, 1.4)
@@ -73,6 +100,19 @@ class Ranges:
     heave_share: float = 1 / 3
     heave_amplitude: tuple[float, float] = (0.3, 1.0)
     heave_period: tuple[float, float] = (7.0, 12.0)
+    site_share: float = 1 / 3
+    site_slope: tuple[float, float] = (-0.02, 0.02)
+    ridge_height: tuple[float, float] = (1.0, 6.0)
+    ridge_x: tuple[float, float] = (40.0, 180.0)
+    ridge_width: tuple[float, float] = (10.0, 25.0)
+    ridge_angle: tuple[float, float] = (-0.6, 0.6)
+    sand_waves: tuple[float, float] = (0.0, 0.5)
+    sand_wavelength: tuple[float, float] = (20.0, 40.0)
+    roughness: tuple[float, float] = (0.05, 0.3)
+    sea_share: float = 1 / 4
+    significant_height: tuple[float, float] = (0.5, 2.5)
+    peak_period: tuple[float, float] = (6.0, 12.0)
+    peak_enhancement: tuple[float, float] = (1.0, 5.0)
 
 
 def random_overrides(rng: np.random.Generator, ranges: Ranges = Ranges()) -> dict:
@@ -111,10 +151,59 @@ def random_overrides(rng: np.random.Generator, ranges: Ranges = Ranges()) -> dic
     return overrides
 
 
+def add_survey(overrides: dict, rng: np.random.Generator, ranges: Ranges = Ranges()) -> dict:
+    """``overrides`` with a random grid (under :data:`SITE`) and a sea state, each by its share.
+
+    Every number is drawn whether used or not, so each case takes as many draws from ``rng``.
+    """
+
+    def uniform(bounds, digits=2):
+        return round(float(rng.uniform(*bounds)), digits)
+
+    site = {
+        "slope": uniform(ranges.site_slope, 4),
+        "ridge_height": uniform(ranges.ridge_height, 1),
+        "ridge_x": uniform(ranges.ridge_x, 0),
+        "ridge_angle": uniform(ranges.ridge_angle),
+        "ridge_width": uniform(ranges.ridge_width, 0),
+        "waves": uniform(ranges.sand_waves),
+        "wavelength": uniform(ranges.sand_wavelength, 0),
+        "roughness": uniform(ranges.roughness),
+        "seed": int(rng.integers(2**31)),
+    }
+    sea = {
+        "significant_height": uniform(ranges.significant_height),
+        "peak_period": uniform(ranges.peak_period, 1),
+        "peak_enhancement": uniform(ranges.peak_enhancement, 1),
+        "seed": int(rng.integers(2**31)),
+    }
+    overrides = dict(overrides)
+    if rng.uniform() < ranges.site_share:
+        overrides[SITE] = site
+    if rng.uniform() < ranges.sea_share:
+        overrides["top.heave"] = {**overrides.get("top.heave", {}), "sea_state": sea}
+    return overrides
+
+
 def random_cases(count: int, seed: int, ranges: Ranges = Ranges()) -> list[dict]:
-    """``count`` scene overrides drawn from ``ranges`` with the seed ``seed``."""
+    """``count`` scene overrides drawn from ``ranges`` with the seed ``seed``.
+
+    The ``paper_hill`` variants come from the stream of ``seed`` alone (the cases of earlier
+    rounds); the grids and sea states from a second stream, ``[seed, SURVEY_STREAM]``.
+    """
     rng = np.random.default_rng(seed)
-    return [random_overrides(rng, ranges) for _ in range(count)]
+    survey = np.random.default_rng([seed, SURVEY_STREAM])
+    return [add_survey(random_overrides(rng, ranges), survey, ranges) for _ in range(count)]
+
+
+def on_site(scene, relief: dict, path: Path):
+    """The scene on the random grid of ``relief``, written to ``path`` (module docstring)."""
+    model = CableModel.from_scene(scene)
+    end = equilibrium(model, Drive.from_scene(scene), compiled=True).state[:3]
+    hill = float(seabed_height(scene.seabed.hills, end[0], end[1]))
+    base = float(end[2]) - scene.seabed.clearance - hill
+    write_site(path, relief, base)
+    return scene.updated({"seabed.grid": {"file": str(path)}})
 
 
 def run_case(overrides: dict, closed_loop: bool = True) -> dict:
@@ -126,11 +215,25 @@ def run_case(overrides: dict, closed_loop: bool = True) -> dict:
         ``raised`` (the traceback's last line, or None), ``success``, ``status``, ``omega`` and
         ``locked`` (m, the locked winch on the scene's model), ``floor`` (m, :func:`reach_floor`),
         ``bound_time`` (s the verified
-        winch rode a bound), ``bond_residual`` (m), ``wall`` (s, optimize alone); with a heave,
-        the same for the closed loop under ``mpc_*``.
+        winch rode a bound), ``bond_residual`` (m), ``wall`` (s, optimize alone); with a heave
+        (a sine or a sea state), the same for the closed loop under ``mpc_*``.
     """
-    scene = load_scene(scene_path("paper_hill"), overrides)
-    row = {"overrides": overrides, "heave": scene.top.heave is not None, "raised": None}
+    with tempfile.TemporaryDirectory(prefix="cable_ocp-site-") as folder:
+        return _run_case(overrides, closed_loop, Path(folder) / "site.nc")
+
+
+def _run_case(overrides: dict, closed_loop: bool, site_file: Path) -> dict:
+    relief = overrides.get(SITE)
+    scene = load_scene(scene_path("paper_hill"), {k: v for k, v in overrides.items() if k != SITE})
+    row = {"overrides": overrides, "heave": scene.top.has_heave, "raised": None}
+    started = time.perf_counter()
+    try:
+        if relief is not None:
+            scene = on_site(scene, relief, site_file)
+    except Exception as error:  # noqa: BLE001 - the study's own failure, counted as a raise
+        row.update(success=False, status="raised", raised=f"writing the grid: {_last_line(error)}")
+        row["wall"] = time.perf_counter() - started
+        return row
     started = time.perf_counter()
     try:
         result = optimize(scene, quiet=True)
@@ -199,10 +302,21 @@ def summary(rows: list[dict]) -> dict:
         "ratio_median": float(np.median(ratio)) if ratio.size else float("nan"),
         "ratio_p90": float(np.percentile(ratio, 90)) if ratio.size else float("nan"),
         "wall_median": float(np.median([r["wall"] for r in rows])),
+        **_subset("grid", [r for r in rows if SITE in r["overrides"]]),
+        **_subset("sea", [r for r in rows if "sea_state" in r["overrides"].get("top.heave", {})]),
         "mpc_cases": len(loops),
         "mpc_success": sum(r["mpc_success"] for r in loops),
         "mpc_raised": sum(r["mpc_raised"] is not None for r in loops),
         "mpc_wall_median": float(np.median([r["mpc_wall"] for r in loops])) if loops else 0.0,
+    }
+
+
+def _subset(name: str, rows: list[dict]) -> dict:
+    """Cases, successes and goals met of a subset of the rows, keyed ``name_cases`` etc."""
+    return {
+        f"{name}_cases": len(rows),
+        f"{name}_success": sum(r["success"] for r in rows),
+        f"{name}_goal": sum(meets_goal(r) for r in rows),
     }
 
 
@@ -222,11 +336,17 @@ def report(cases: int = 50, seed: int = 0, closed_loop: bool = True, quiet: bool
 
 def _case_line(k: int, row: dict) -> str:
     o = row["overrides"]
-    heave = o.get("top.heave")
-    wave = f"heave {heave['amplitude']:.2f} m/{heave['period']:.1f} s" if heave else "no heave"
+    heave = o.get("top.heave", {})
+    waves = []
+    if "amplitude" in heave:
+        waves.append(f"heave {heave['amplitude']:.2f} m/{heave['period']:.1f} s")
+    if "sea_state" in heave:
+        sea = heave["sea_state"]
+        waves.append(f"sea Hs {sea['significant_height']:.2f} m/Tp {sea['peak_period']:.1f} s")
     text = (
         f"case {k:>3}: n = {o['model.elements']:>2}, U = {o['top.tow.surge_speed']:.2f}, "
-        f"{len(o['seabed.hills'])} hill(s), {wave}: "
+        f"{len(o['seabed.hills'])} hill(s){', grid' if SITE in o else ''}, "
+        f"{' + '.join(waves) or 'no heave'}: "
     )
     if row["raised"]:
         return text + f"RAISED {row['raised']}"
@@ -263,6 +383,10 @@ def _summary_text(f: dict, seed: int) -> str:
             f"  Omega / locked     median {f['ratio_median']:.3g}, 90th pct {f['ratio_p90']:.3g}",
             f"  bound-limited      {f['bound_limited']} (the winch rode a bound), of which "
             f"{f['reach_limited']} reach-limited (floor > locked / {GAIN_GOAL:g})",
+            f"  on a random grid   {f['grid_success']}/{f['grid_cases']} succeeded, "
+            f"{f['grid_goal']} met the goal",
+            f"  in a sea state     {f['sea_success']}/{f['sea_cases']} succeeded, "
+            f"{f['sea_goal']} met the goal",
             f"  wall time          median {f['wall_median']:.1f} s per optimize",
             f"  mpc                {f['mpc_success']}/{f['mpc_cases']} succeeded, "
             f"{f['mpc_raised']} raised, median {f['mpc_wall_median']:.1f} s",
