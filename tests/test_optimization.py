@@ -109,7 +109,7 @@ def test_single_and_multiple_shooting_find_the_same_winch(solved, small):
     2.218e-4 m both), and both hold the bounds."""
     single, _ = solved
     assert SETTINGS.shooting == "single"
-    multiple = optimize(small, "ipopt", replace(SETTINGS, shooting="multiple"), quiet=True)
+    multiple = optimize(small, "ipopt", replace(SETTINGS, shooting="multiple", solver="ipopt"), quiet=True)
     assert single.success and multiple.success, (single.status, multiple.status)
     assert abs(single.omega - multiple.omega) < 1e-5
 
@@ -143,7 +143,7 @@ def test_a_result_saved_without_the_phase_times_loads(solved, tmp_path):
 
 def test_exact_hessian_needs_the_interpreted_model():
     with pytest.raises(ValueError, match="second derivatives"):
-        IpoptSettings(hessian="exact", compiled=True)
+        IpoptSettings(solver="ipopt", hessian="exact", compiled=True)
 
 
 def test_unknown_method_is_rejected(small):

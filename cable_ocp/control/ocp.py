@@ -23,21 +23,16 @@ from dataclasses import dataclass, field
 import casadi as ca
 import numpy as np
 
+from cable_ocp.control.parameters import ProblemParameters, symbols
 from cable_ocp.control.problem import SolverOutcome, WinchProblem
 from cable_ocp.drive.controls import HermiteIntervals, KnotSpline
 from cable_ocp.drive.drive import stage_times
 from cable_ocp.model.cable import CableModel
 from cable_ocp.model.compile import CompileReport
-from cable_ocp.model.layout import INPUT_SIZE, INPUTS
-from cable_ocp.simulation.integrate import (
-    SimulationError,
-    stage_inputs,
-    step_compile_report,
-    step_count,
-    step_function,
-)
+from cable_ocp.model.layout import INPUT_SIZE
+from cable_ocp.simulation.integrate import step_compile_report, step_count, step_function
 from cable_ocp.simulation.progress import IterationLog, check_verbosity
-from cable_ocp.simulation.seabed import clearance_reference, seabed_height, trapezoid_weights
+from cable_ocp.simulation.seabed import seabed_height, trapezoid_weights
 
 NLP_FUNCTIONS = ("nlp_f", "nlp_g", "nlp_grad_f", "nlp_jac_g", "nlp_hess_l", "nlp_grad")
 # IPOPT's status when CasADi's interrupt check stopped it.
@@ -98,11 +93,16 @@ class IpoptSettings:
         ``"hermite"`` (piecewise cubic per control interval) or ``"spline"`` (the paper's knots).
     control_intervals : int or None
         Intervals of the Hermite control (None: as many as shooting intervals).
+    solver : str
+        ``"gauss-newton"``: Omega^2 is a least-squares, so a Gauss-Newton SQP
+        (:mod:`cable_ocp.control.gauss_newton`: exact first derivatives, QPs by DAQP) solves
+        the single-shooting NLP in a few iterations; ``"ipopt"``: IPOPT with ``hessian``.
     hessian : str
-        ``"limited-memory"`` (L-BFGS) or ``"exact"``.
+        IPOPT's Hessian: ``"limited-memory"`` (L-BFGS) or ``"exact"``.
     max_iter : int
     tolerance : float
-        IPOPT's ``tol``.
+        IPOPT's ``tol`` (Gauss-Newton stops on its own relative test,
+        :class:`cable_ocp.control.gauss_newton.GaussNewtonSettings`).
     threads : int
         Shooting intervals evaluated in parallel (multiple shooting only).
     compiled : bool
@@ -118,6 +118,7 @@ class IpoptSettings:
     intervals: int = 42
     control: str = "hermite"
     control_intervals: int | None = None
+    solver: str = "gauss-newton"
     hessian: str = "limited-memory"
     max_iter: int = 300
     tolerance: float = 1e-8
@@ -130,6 +131,18 @@ class IpoptSettings:
             raise ValueError(f"shooting = {self.shooting!r}: must be 'single' or 'multiple'")
         if self.control not in ("hermite", "spline"):
             raise ValueError(f"control = {self.control!r}: must be 'hermite' or 'spline'")
+        if self.solver not in ("gauss-newton", "ipopt"):
+            raise ValueError(f"solver = {self.solver!r}: must be 'gauss-newton' or 'ipopt'")
+        if self.solver == "gauss-newton" and (self.shooting != "single" or not self.compiled):
+            raise ValueError(
+                "solver = 'gauss-newton' works on the compiled single-shooting transcription: "
+                "set shooting='single' and compiled=True, or solver='ipopt'"
+            )
+        if self.solver == "gauss-newton" and self.hessian != "limited-memory":
+            raise ValueError(
+                f"hessian = {self.hessian!r} is IPOPT's (the Gauss-Newton solver uses 2 J^T J, "
+                "first derivatives only, not second derivatives): set solver='ipopt'"
+            )
         if self.hessian not in ("limited-memory", "exact"):
             raise ValueError(f"hessian = {self.hessian!r}: must be 'limited-memory' or 'exact'")
         for name in ("intervals", "max_iter", "threads"):
@@ -139,7 +152,7 @@ class IpoptSettings:
             raise ValueError(f"elements = {self.elements}: must be >= 1")
         if self.step is not None and self.step <= 0:
             raise ValueError(f"step = {self.step}: must be > 0 s")
-        if self.hessian == "exact" and self.compiled:
+        if self.solver == "ipopt" and self.hessian == "exact" and self.compiled:
             raise ValueError(
                 "hessian = 'exact' needs second derivatives, which the compiled step does not "
                 "carry: set compiled=False (interpreted) or hessian='limited-memory'"
@@ -225,31 +238,34 @@ def ocp_step(
     return function, step_compile_report(model, step, derivatives=True)
 
 
-def _interval_function(step_function, step, steps, hills, reference) -> ca.Function:
-    """``(x, stage inputs, bias) -> (x_end, integral of (e + bias)^2)`` over one interval.
+def _interval_function(step_function, step, steps, hills) -> ca.Function:
+    """``(x, stage inputs, bias, end offset, reference) -> (x_end, int e^2 dt)`` on one interval.
 
-    ``bias`` (1 x steps+1) is added to the clearance error at the RK4 points: the correction that
-    makes a reduced model reproduce the full model's error (see :class:`ShootingProblem`).
+    ``e = z_E + b_z - z_ref - z_sb(x_E + b_x, y_E + b_y) + bias`` at the RK4 points (eq. 39
+    with the named parameters of :mod:`cable_ocp.control.parameters`).
     """
     size = step_function.size1_in(0)
     x = ca.MX.sym("x", size)
-    stages = ca.MX.sym("stages", 15, 3 * steps)
+    stages = ca.MX.sym("stages", INPUT_SIZE, 3 * steps)
     bias = ca.MX.sym("bias", 1, steps + 1)
+    offset = ca.MX.sym("offset", 3)
+    reference = ca.MX.sym("reference")
     states = step_function.mapaccum(steps)(x, stages)
     points = ca.horzcat(x, states)
-    xe = ca.SX.sym("xe", size)
-    error = xe[2] - seabed_height(hills, xe[0], xe[1]) - reference
-    errors = ca.Function("e", [xe], [error]).map(steps + 1)(points) + bias
-    cost = ca.mtimes(errors**2, ca.DM(trapezoid_weights(step, steps + 1)))
-    return ca.Function("interval", [x, stages, bias], [states[:, -1], cost])
+    xe, b, zr = ca.SX.sym("xe", size), ca.SX.sym("b", 3), ca.SX.sym("zr")
+    error = xe[2] + b[2] - zr - seabed_height(hills, xe[0] + b[0], xe[1] + b[1])
+    errors = ca.Function("e", [xe, b, zr], [error]).map(steps + 1)(points, offset, reference)
+    cost = ca.mtimes((errors + bias) ** 2, ca.DM(trapezoid_weights(step, steps + 1)))
+    return ca.Function("interval", [x, stages, bias, offset, reference], [states[:, -1], cost])
 
 
 class ShootingProblem:
-    """The shooting NLP of a scene, built once and solved as often as needed.
+    """The shooting NLP of a winch problem for IPOPT, built once and solved as often as needed.
 
-    The NLP has a parameter, the bias ``b(t)`` on the RK4 grid, added to the clearance error:
-    ``Omega^2 = 1/T int (e(t) + b(t))^2 dt``. With ``b = 0`` it is the plain problem; the front door
-    sets ``b = e_full - e_reduced`` to correct a reduced model by the full one.
+    The NLP's parameters are the problem's named parameters
+    (:class:`cable_ocp.control.parameters.ProblemParameters`): the open loop sets them once (with
+    the bias ``b = e_full - e_reduced`` of model correction), a closed loop at every sample.
+    ``Omega^2 = 1/H int (e + b)^2 dt + w 1/H int (r_D phi')^2 dt`` over the horizon ``H``.
 
     Parameters
     ----------
@@ -259,6 +275,8 @@ class ShootingProblem:
         Print nothing.
     verbose : bool
         Print IPOPT's own log and timing table instead of one progress line per iteration.
+    rate_weight : float, s^2
+        Weight ``w`` of the pay-out speed (0 in the open loop).
     """
 
     def __init__(
@@ -267,6 +285,7 @@ class ShootingProblem:
         settings: IpoptSettings,
         quiet: bool = False,
         verbose: bool = False,
+        rate_weight: float = 0.0,
     ):
         check_verbosity(quiet, verbose)
         started = time.perf_counter()
@@ -276,55 +295,51 @@ class ShootingProblem:
         self.per_interval = per_interval = steps_per_interval(duration, step, settings.intervals)
         total_steps = per_interval * settings.intervals
 
-        step_times = problem.grid[:-1]
-        fixed = stage_inputs(problem.drive, step_times, step)
-        times, left = stage_times(step_times, step)
-        parameters = ca.MX.sym("winch", control.size)
-        radius = problem.scene.winch.drum_radius
-        winch_rows = ca.vertcat(
-            *[(radius * ca.sparsify(ca.DM(b)) @ parameters).T for b in control.basis(times, left)]
-        )
-        # The winch sets the top-element length with its rate and acceleration (three rows).
-        winch_inputs = ca.MX.zeros(INPUT_SIZE, fixed.shape[1])
-        winch_inputs[INPUTS.top_length : INPUTS.top_length_acceleration + 1, :] = winch_rows
-        inputs = ca.DM(fixed) + winch_inputs
-        bias = ca.MX.sym("bias", total_steps + 1)
+        values, named = symbols(model.state_size, total_steps)
+        winch = ca.MX.sym("winch", control.size)
+        inputs = stage_matrix(problem, named, winch)
         bias_rows = ca.horzcat(
             *[
-                bias[k * per_interval : (k + 1) * per_interval + 1].T
+                named["bias"][k * per_interval : (k + 1) * per_interval + 1].T
                 for k in range(settings.intervals)
             ]
         )
         step_function, report = ocp_step(model, step, settings.compiled)
         self.compile_time = report.compile_time if report is not None else 0.0
-        interval = _interval_function(
-            step_function,
-            step,
-            per_interval,
-            problem.scene.seabed.hills,
-            clearance_reference(problem.scene.seabed.hills, problem.x0),
-        )
+        interval = _interval_function(step_function, step, per_interval, problem.scene.seabed.hills)
+        arguments = (inputs, bias_rows, named["end_offset"], named["reference"])
         if settings.shooting == "single":
-            costs = interval.mapaccum(settings.intervals)(ca.DM(problem.x0), inputs, bias_rows)[1]
+            run = interval.mapaccum(settings.intervals)
+            costs = run(named["initial_state"], *arguments)[1]
             nodes, continuity = ca.MX(model.state_size, 0), ca.MX(0, 1)
         else:
             nodes = ca.MX.sym("nodes", model.state_size, settings.intervals)
-            starts = ca.horzcat(ca.DM(problem.x0), nodes[:, :-1])
+            starts = ca.horzcat(named["initial_state"], nodes[:, :-1])
             mapped = interval.map(settings.intervals, "thread", settings.threads)
-            ends, costs = mapped(starts, inputs, bias_rows)
+            ends, costs = mapped(starts, *arguments)
             continuity = ca.vec(ends - nodes)
-        objective = ca.sum2(costs) / duration
+            states = step_function.mapaccum(total_steps)(named["initial_state"], inputs)
+            self._rollout = ca.Function(
+                "rollout", [values, winch], [states[:, per_interval - 1 :: per_interval]]
+            )
+        radius = problem.scene.winch.drum_radius
+        rates = ca.sparsify(ca.DM(radius * control.basis(problem.grid)[1])) @ winch
+        effort = ca.dot(ca.DM(trapezoid_weights(step, problem.grid.size)), rates**2)
+        objective = (ca.sum2(costs) + rate_weight * effort) / duration
 
         bounds = problem.bounds
-        variables = ca.vertcat(ca.vec(nodes), parameters) if nodes.numel() else parameters
-        constraints = ca.densify(
-            ca.vertcat(continuity, ca.sparsify(ca.DM(bounds.matrix)) @ parameters)
-        )
-        self.lbg = np.concatenate([np.zeros(continuity.numel()), bounds.lower])
-        self.ubg = np.concatenate([np.zeros(continuity.numel()), bounds.upper])
+        variables = ca.vertcat(ca.vec(nodes), winch) if nodes.numel() else winch
+        self.node_count = nodes.numel()
+        constraints = ca.densify(ca.vertcat(continuity, ca.sparsify(ca.DM(bounds.matrix)) @ winch))
+        self.continuity = np.zeros(continuity.numel())
         self.history: list[float] = []
         self.log = IterationLog("ipopt", quiet=quiet or verbose)
-        self._callback = _History(self.history, self.log, self.lbg, self.ubg)
+        self._callback = _History(
+            self.history,
+            self.log,
+            np.concatenate([self.continuity, bounds.lower]),
+            np.concatenate([self.continuity, bounds.upper]),
+        )
         options = {
             "ipopt": ipopt_options(
                 settings.hessian,
@@ -335,46 +350,67 @@ class ShootingProblem:
             ),
             "print_time": verbose,
             "iteration_callback": self._callback,
+            # IPOPT's trial points may blow a reduced model up (NaN); its line search backs
+            # off, so CasADi's warning about them is noise (a real failure is in the status).
+            "show_eval_warnings": False,
         }
         self.solver = ca.nlpsol(
             "winch_ocp",
             "ipopt",
-            {"x": variables, "f": objective, "g": constraints, "p": bias},
+            {"x": variables, "f": objective, "g": constraints, "p": values},
             options,
         )
         self.build_time = time.perf_counter() - started
 
-    def solve(self, parameters: np.ndarray, bias: np.ndarray | None = None) -> SolverOutcome:
-        """Solve from the forward run of ``parameters`` with the given bias (m, on the grid).
+    def solve(
+        self,
+        values: ProblemParameters,
+        guess: np.ndarray,
+        fixed: dict[int, float] | None = None,
+        lower: np.ndarray | None = None,
+        upper: np.ndarray | None = None,
+    ) -> SolverOutcome:
+        """Solve from the winch parameters ``guess`` (rad, rad/s) under the parameter values.
 
-        The forward runs are interpreted: a reduced model's run is short, and a compiled one
-        would need a library of its own (without derivatives).
+        ``fixed`` pins winch parameters (index to value); ``lower``/``upper`` replace the
+        bounds' own limits. With multiple shooting the nodes start from the model's run under
+        ``guess``, or at the initial state where that run blows up.
         """
-        problem = self.problem
-        try:
-            states = problem.simulate(parameters)
-        except SimulationError:
-            parameters = np.zeros(problem.control.size)
-            states = problem.simulate(parameters)
-        nodes = states[self.per_interval :: self.per_interval].T
-        if self.settings.shooting == "single":
-            nodes = nodes[:, :0]
-        bias = np.zeros(problem.grid.size) if bias is None else bias
+        problem, size = self.problem, self.problem.control.size
+        packed = values.pack()
+        guess = np.array(guess, dtype=float)
+        nodes = np.zeros(0)
+        if self.node_count:
+            run = np.array(self._rollout(packed, guess))
+            if not np.all(np.isfinite(run)):
+                run = np.tile(values.initial_state[:, None], (1, run.shape[1]))
+            nodes = run.ravel(order="F")
+        lbx = np.full(self.node_count + size, -np.inf)
+        ubx = np.full(self.node_count + size, np.inf)
+        for index, value in (fixed or {}).items():
+            lbx[self.node_count + index] = ubx[self.node_count + index] = value
+            guess[index] = value
+        bounds = problem.bounds
+        lbg = np.concatenate([self.continuity, bounds.lower if lower is None else lower])
+        ubg = np.concatenate([self.continuity, bounds.upper if upper is None else upper])
+        self._callback.lbg, self._callback.ubg = lbg, ubg
         self.history.clear()
         self.log.restart()
         started = time.perf_counter()
         solution = interrupted_solve(
             self.solver,
-            x0=np.concatenate([nodes.ravel(order="F"), parameters]),
-            lbg=self.lbg,
-            ubg=self.ubg,
-            p=bias,
+            x0=np.concatenate([nodes, guess]),
+            p=packed,
+            lbx=lbx,
+            ubx=ubx,
+            lbg=lbg,
+            ubg=ubg,
         )
         solve_time = time.perf_counter() - started
         stats = self.solver.stats()
         iterations = int(stats["iter_count"])
         return SolverOutcome(
-            parameters=np.array(solution["x"][-problem.control.size :]).ravel(),
+            parameters=np.array(solution["x"][-size:]).ravel(),
             status=stats["return_status"],
             success=bool(stats["success"]),
             iterations=iterations,
@@ -386,6 +422,19 @@ class ShootingProblem:
             function_time=sum(stats.get(f"t_wall_{name}", 0.0) for name in NLP_FUNCTIONS),
             history=list(self.history),
         )
+
+
+def stage_matrix(problem: WinchProblem, named: dict, winch: ca.MX) -> ca.MX:
+    """The stage inputs (15, 3 K) of the NLP: the named parameters plus the winch profile.
+
+    The winch adds ``r_D (phi, phi', phi'')`` of its control to the top-element rows at the RK4
+    stages (:func:`cable_ocp.drive.drive.stage_times`, end stages from the left).
+    """
+    times, left = stage_times(problem.grid[:-1], problem.step)
+    radius = problem.scene.winch.drum_radius
+    basis = problem.control.basis(times, left)
+    profile = ca.vertcat(*[(radius * ca.sparsify(ca.DM(b)) @ winch).T for b in basis])
+    return ca.vertcat(named["top_motion"], named["winch_base"] + profile, named["end_force"])
 
 
 class _History(ca.Callback):

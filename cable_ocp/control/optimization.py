@@ -12,19 +12,20 @@ from __future__ import annotations
 import time
 import zipfile
 from collections.abc import Callable
-from dataclasses import dataclass, field, fields
+from dataclasses import dataclass, field, fields, replace
 from pathlib import Path
 
 import numpy as np
 import xarray as xr
 
 from cable_ocp.control import labelled
+from cable_ocp.control.gauss_newton import GaussNewton, GaussNewtonSettings
 from cable_ocp.control.nelder_mead import NelderMeadSettings, nelder_mead_problem, solve_nelder_mead
 from cable_ocp.control.ocp import IpoptSettings, ShootingProblem, ipopt_problem
 from cable_ocp.control.problem import SolverOutcome, WinchProblem
 from cable_ocp.control.verification import Verification
 from cable_ocp.scene import labelled as results
-from cable_ocp.simulation.progress import check_verbosity
+from cable_ocp.simulation.progress import IterationLog, check_verbosity
 from cable_ocp.simulation.trajectory import Trajectory
 
 # Model correction stops once a solve improves the verified Omega by less than this factor.
@@ -208,6 +209,25 @@ def _timed_verify(problem: WinchProblem, quiet: bool, compiled: bool):
     return verify, lambda: elapsed[0]
 
 
+def shooting_solver(
+    problem: WinchProblem,
+    settings: IpoptSettings,
+    quiet: bool = False,
+    verbose: bool = False,
+    rate_weight: float = 0.0,
+) -> GaussNewton | ShootingProblem:
+    """The transcription of a problem with the solver the settings ask for, built once.
+
+    Both take the problem's named parameters and solve with
+    ``solve(values, guess, fixed=, lower=, upper=)``.
+    """
+    if settings.solver == "gauss-newton":
+        log = IterationLog("gauss-newton", quiet=quiet)
+        gauss_newton = GaussNewtonSettings(max_iter=settings.max_iter, rate_weight=rate_weight)
+        return GaussNewton(problem, gauss_newton, log)
+    return ShootingProblem(problem, settings, quiet=quiet, verbose=verbose, rate_weight=rate_weight)
+
+
 def solve_ipopt(
     problem: WinchProblem,
     settings: IpoptSettings,
@@ -215,7 +235,7 @@ def solve_ipopt(
     quiet: bool = False,
     verbose: bool = False,
 ) -> OcpResult:
-    """Direct shooting + IPOPT on a problem, verified (and refined) on the scene's model.
+    """Direct shooting (Gauss-Newton or IPOPT) on a problem, verified and refined on its scene.
 
     Parameters
     ----------
@@ -232,26 +252,31 @@ def solve_ipopt(
     Returns
     -------
     OcpResult
-        ``success`` is False, with the reason in ``status``, when a solve fails (IPOPT's status)
-        or its profile fails verification (``"verification failed: ..."``); the result then holds
-        the best verified profile, if any.
+        ``success`` is False, with the reason in ``status``, when a solve fails (the solver's
+        status) or its profile fails verification (``"verification failed: ..."``); the result
+        then holds the best verified profile, if any.
     """
     started = time.perf_counter()
-    nlp = ShootingProblem(problem, settings, quiet=quiet, verbose=verbose)
+    nlp = shooting_solver(problem, settings, quiet=quiet, verbose=verbose)
     verify, verification_time = _timed_verify(problem, quiet, settings.compiled)
     outcomes: list[SolverOutcome] = []
     verified: list[float] = []
     best_outcome, best, checked, failure = None, None, None, None
-    parameters, bias = problem.first_guess(), None
+    values = problem.parameter_values()
+    parameters = problem.first_guess(compiled=settings.compiled)
+    solver_name = "Gauss-Newton" if settings.solver == "gauss-newton" else "IPOPT"
     for _ in range(1 + (refinements if problem.reduced else 0)):
         if best is not None:
             full_error = np.interp(problem.grid, best.time, best.clearance_error)
-            model_error = problem.clearance(problem.simulate(best_outcome.parameters))
-            parameters, bias = best_outcome.parameters, full_error - model_error
-        outcome = nlp.solve(parameters, bias)
+            states = best_outcome.states
+            if states is None:
+                states = problem.simulate(best_outcome.parameters, compiled=settings.compiled)
+            parameters = best_outcome.parameters
+            values = replace(values, bias=full_error - problem.clearance(states))
+        outcome = nlp.solve(values, parameters)
         outcomes.append(outcome)
         if not outcome.success:
-            failure = f"IPOPT did not converge: {outcome.status}"
+            failure = f"{solver_name} did not converge: {outcome.status}"
             if best is None:  # show where the failed solve got to, still marked as failed
                 checked = verify(outcome.parameters)
                 best = checked.trajectory
@@ -261,7 +286,9 @@ def solve_ipopt(
         trial = verify(outcome.parameters)
         if trial.trajectory is None:
             verified.append(float("nan"))
-            failure = f"IPOPT converged ({outcome.status}); verification failed: {trial.reason}"
+            failure = (
+                f"{solver_name} converged ({outcome.status}); verification failed: {trial.reason}"
+            )
             break
         verified.append(trial.trajectory.omega)
         if best is not None and trial.trajectory.omega >= best.omega:

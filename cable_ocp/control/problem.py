@@ -15,14 +15,15 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from cable_ocp.control.parameters import ProblemParameters
 from cable_ocp.control.verification import Verification, verify_profile
 from cable_ocp.drive import winch
 from cable_ocp.drive.bounds import LinearBounds, angle_bounds
 from cable_ocp.drive.controls import HermiteIntervals, KnotSpline
 from cable_ocp.drive.drive import Drive
 from cable_ocp.model.cable import CableModel
-from cable_ocp.simulation.integrate import integrate, step_count
-from cable_ocp.simulation.seabed import clearance_error, rms_objective
+from cable_ocp.simulation.integrate import integrate, stage_inputs, step_count
+from cable_ocp.simulation.seabed import clearance_error, clearance_reference, rms_objective
 from cable_ocp.simulation.statics import starting_state
 
 # Bond residual allowed in the runs of the optimisation model, as a share of its element length
@@ -116,10 +117,53 @@ class WinchProblem:
             heave_feedforward=feedforward,
         )
 
+    @classmethod
+    def receding(
+        cls, scene, horizon: float, sample: float, elements: int, step: float
+    ) -> WinchProblem:
+        """The problem over one horizon of a receding-horizon controller (a closed loop).
+
+        The control is a free-start Hermite angle on intervals of one ``sample`` (its node 0 is
+        where the winch is when the solve starts); the bounds hold between the samples as in the
+        open loop. The defaults of :meth:`parameter_values` are the scene's first horizon; a
+        controller sets them from its estimate and forecasts at every sample.
+
+        Parameters
+        ----------
+        scene : Scene
+        horizon, sample, step : float, s
+            ``sample`` divides ``horizon`` and ``step`` divides ``sample``.
+        elements : int
+            Elements of the controller's model.
+        """
+        control = HermiteIntervals(horizon, round(horizon / sample), free_start=True)
+        grid = np.arange(step_count(horizon, step) + 1) * step
+        model = CableModel.from_scene(scene, elements)
+        drive = Drive.from_scene(scene, winch.locked, elements=elements)
+        low, high = angle_bounds(scene)
+        return cls(
+            scene=scene,
+            model=model,
+            step=step,
+            grid=grid,
+            drive=drive,
+            x0=starting_state(model, drive),
+            control=control,
+            low=low,
+            high=high,
+            bounds=LinearBounds.build(scene, control, grid),
+        )
+
     @property
     def duration(self) -> float:
-        """``T`` (s), the scene's ``numerics.duration``."""
-        return self.scene.numerics.duration
+        """The horizon (s): the scene's ``numerics.duration`` in the open loop."""
+        return float(self.grid[-1])
+
+    def parameter_values(self) -> ProblemParameters:
+        """The named parameters from the scene: its start, top motion and end force."""
+        inputs = stage_inputs(self.drive, self.grid[:-1], self.step)
+        reference = clearance_reference(self.scene.seabed.hills, self.x0)
+        return ProblemParameters.from_stage_inputs(self.x0, inputs, reference)
 
     @property
     def reduced(self) -> bool:
@@ -203,8 +247,11 @@ class SolverOutcome:
         Building the transcription (compiling included), compiling C alone (0 on a cache hit),
         inside the solver, and of that evaluating the objective and its derivatives.
     history : list of float
-        IPOPT: Omega^2 (m^2) at each iteration; Nelder-Mead: the best Omega (m) after each
-        evaluation.
+        IPOPT and Gauss-Newton: Omega^2 (m^2) at each iteration; Nelder-Mead: the best Omega (m)
+        after each evaluation.
+    states : array (k, nx) or None
+        The optimisation model's run under ``parameters``, when the solver has it (Gauss-Newton):
+        it spares a simulation for the model correction.
     """
 
     parameters: np.ndarray
@@ -218,3 +265,4 @@ class SolverOutcome:
     solve_time: float
     function_time: float
     history: list[float]
+    states: np.ndarray | None = None

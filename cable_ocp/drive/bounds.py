@@ -110,11 +110,17 @@ class LinearBounds:
     matrix : array (rows, size)
     lower, upper : array (rows,)
         In rad, rad/s or rad/s^2 per row, tightened by the margin.
+    derivatives : array of int (rows,)
+        What each row bounds: 0 the angle, 1 its rate, 2 its acceleration.
+    starts : array (rows,), s
+        Start of the sub-interval each row holds on.
     """
 
     matrix: np.ndarray
     lower: np.ndarray
     upper: np.ndarray
+    derivatives: np.ndarray
+    starts: np.ndarray
 
     @classmethod
     def build(cls, scene, control, grid: np.ndarray, margin: float = BOUND_TOLERANCE / 2):
@@ -122,7 +128,7 @@ class LinearBounds:
         starts, ends = subintervals(control, grid)
         samples = starts[:, None] + np.linspace(0.0, 1.0, HEAVE_SAMPLES) * (ends - starts)[:, None]
         heave = _heave(scene, samples.ravel()).reshape(samples.shape)
-        matrices, lower, upper = [], [], []
+        matrices, lower, upper, derivatives, times = [], [], [], [], []
         for derivative, low, high, _ in winch_limits(scene):
             rows = bernstein_rows(control, starts, ends, derivative)
             count = rows.shape[1]
@@ -131,7 +137,24 @@ class LinearBounds:
             matrices.append(rows.reshape(-1, control.size))
             lower.append(np.repeat(low + margin - shift_low, count))
             upper.append(np.repeat(high - margin - shift_high, count))
-        return cls(np.vstack(matrices), np.concatenate(lower), np.concatenate(upper))
+            derivatives.append(np.full(starts.size * count, derivative))
+            times.append(np.repeat(starts, count))
+        return cls(
+            np.vstack(matrices),
+            np.concatenate(lower),
+            np.concatenate(upper),
+            np.concatenate(derivatives),
+            np.concatenate(times),
+        )
+
+    def narrowed(self, margin: float, ramp: float) -> tuple[np.ndarray, np.ndarray]:
+        """Lower and upper limits with the angle range narrowed by ``margin`` (rad) on each side.
+
+        The narrowing is phased in linearly over the first ``ramp`` seconds (a receding plan
+        starts where the winch is, which may be inside the margin).
+        """
+        share = np.clip(self.starts / ramp, 0.0, 1.0) * (self.derivatives == 0)
+        return self.lower + margin * share, self.upper - margin * share
 
     def excess(self, parameters: np.ndarray) -> float:
         """Largest violation of the constraints by ``parameters`` (0 when they hold)."""

@@ -78,30 +78,43 @@ class KnotSpline:
 class HermiteIntervals:
     """Piecewise cubic Hermite angle on ``intervals`` equal intervals of ``[0, duration]``.
 
-    Parameters are ``[phi_1..phi_N, phi'_1..phi'_N]`` at the nodes ``t_k = k T / N``.
+    Parameters are ``[phi_1..phi_N, phi'_1..phi'_N]`` at the nodes ``t_k = k T / N``, node 0
+    being held at ``phi = phi' = 0`` (the winch at rest at the start). With ``free_start`` (a
+    receding horizon, which starts where the winch is) node 0 is a parameter too:
+    ``[phi_0..phi_N, phi'_0..phi'_N]``. Beyond ``duration`` the angle holds its end value.
     """
 
     duration: float
     intervals: int
+    free_start: bool = False
 
     @property
     def size(self) -> int:
         """Number of parameters."""
-        return 2 * self.intervals
+        return 2 * (self.intervals + self.free_start)
 
     @property
     def breakpoints(self) -> np.ndarray:
         """Times (s) between which the angle is one cubic polynomial: the nodes."""
         return np.linspace(0.0, self.duration, self.intervals + 1)
 
+    def node_indices(self, node: int) -> tuple[int, int]:
+        """Indices of the angle and the rate of ``node`` (0 .. intervals) in the parameters."""
+        first = 0 if self.free_start else 1
+        if node < first:
+            raise ValueError(f"node {node} is held at rest: it has no parameters")
+        return node - first, self.intervals + self.free_start + node - first
+
     def basis(self, t: np.ndarray, left=None) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """``B0, B1, B2`` at the times ``t``: arrays (len(t), size).
 
         A time on a node belongs to the interval that starts there (the last node to the last
         interval), or, where ``left`` (bool, or array like ``t``) is true, to the interval that
-        ends there (node 0 to the first).
+        ends there (node 0 to the first). Beyond ``duration`` the rate and acceleration are 0.
         """
-        t = np.clip(np.atleast_1d(np.asarray(t, dtype=float)), 0.0, self.duration)
+        t = np.atleast_1d(np.asarray(t, dtype=float))
+        beyond = t > self.duration * (1 + 1e-9)
+        t = np.clip(t, 0.0, self.duration)
         width = self.duration / self.intervals
         k = (t / width + 1e-9).astype(int)
         if left is not None:
@@ -112,13 +125,24 @@ class HermiteIntervals:
         scale = np.array([1.0, 1.0 / width, 1.0 / width**2])[:, None]
         out = np.zeros((3, t.size, self.size))
         rows = np.arange(t.size)
-        n = self.intervals
-        for left, (value_basis, rate_basis) in ((k - 1, (h00, h10)), (k, (h01, h11))):
-            valid = left >= 0  # node 0 is fixed at phi = phi' = 0
+        first = 0 if self.free_start else 1  # node 0 is fixed at phi = phi' = 0 unless free
+        rates = self.intervals + self.free_start
+        for node, (value_basis, rate_basis) in ((k, (h00, h10)), (k + 1, (h01, h11))):
+            valid = node >= first
+            column = node[valid] - first
             for d in range(3):
-                out[d, rows[valid], left[valid]] += scale[d] * value_basis[d][valid]
-                out[d, rows[valid], n + left[valid]] += scale[d] * width * rate_basis[d][valid]
+                out[d, rows[valid], column] += scale[d] * value_basis[d][valid]
+                out[d, rows[valid], rates + column] += scale[d] * width * rate_basis[d][valid]
+        out[1:, beyond] = 0.0
         return out[0], out[1], out[2]
+
+    def shifted(self, parameters: np.ndarray) -> np.ndarray:
+        """A free-start plan moved on by one interval: nodes shift left, the last held at rest."""
+        if not self.free_start:
+            raise ValueError("only a free-start control (a receding horizon) can be shifted")
+        n = self.intervals + 1
+        values, rates = parameters[:n], parameters[n:]
+        return np.concatenate([values[1:], values[-1:], rates[1:], [0.0]])
 
     def angle_function(self, parameters: np.ndarray):
         """The winch angle history of a parameter vector (it takes ``left`` as :meth:`basis`)."""

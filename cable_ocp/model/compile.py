@@ -79,13 +79,13 @@ def find_compiler() -> str | None:
     return None
 
 
-def cache_key(function: ca.Function, description: str) -> str:
+def cache_key(function: ca.Function, description: str, flags: tuple[str, ...] | None = None) -> str:
     """Key of a compiled Function: its expression graph, what built it, CasADi and the flags.
 
     Serialising the graph takes about 0.7 s at n = 100, against minutes of compiling.
     """
     digest = hashlib.sha256(function.serialize().encode())
-    flags = [*optimisation_flags(function), *COMPILER_FLAGS]
+    flags = [*(flags or optimisation_flags(function)), *COMPILER_FLAGS]
     digest.update("|".join([description, ca.__version__, _processor(), *flags]).encode())
     return digest.hexdigest()[:20]
 
@@ -160,7 +160,12 @@ def _remove(library: Path) -> None:
 
 
 def _build(
-    function: ca.Function, compiler: str, library: Path, derivatives: bool, quiet: bool
+    function: ca.Function,
+    compiler: str,
+    library: Path,
+    derivatives: bool,
+    quiet: bool,
+    flags: tuple[str, ...] | None,
 ) -> None:
     """Generate C, compile it, and install the library and its record atomically.
 
@@ -180,8 +185,8 @@ def _build(
             generator.add(function.reverse(1))
         generator.generate(str(Path(scratch)) + os.sep)
         target = Path(scratch) / library.name
-        flags = [*optimisation_flags(function), *COMPILER_FLAGS]
-        command = [compiler, *flags, str(source), "-o", str(target), "-lm"]
+        options = [*(flags or optimisation_flags(function)), *COMPILER_FLAGS]
+        command = [compiler, *options, str(source), "-o", str(target), "-lm"]
         try:
             result = subprocess.run(command, capture_output=True, text=True)
         except OSError as error:
@@ -198,7 +203,11 @@ def _build(
 
 
 def compiled(
-    function: ca.Function, description: str, derivatives: bool = True, quiet: bool = True
+    function: ca.Function,
+    description: str,
+    derivatives: bool = True,
+    quiet: bool = True,
+    flags: tuple[str, ...] | None = None,
 ) -> tuple[ca.Function, CompileReport]:
     """The Function compiled to C (with first derivatives), from the cache when possible.
 
@@ -219,6 +228,8 @@ def compiled(
         simulation; they roughly triple the code).
     quiet : bool
         No message about compiling.
+    flags : tuple of str, optional
+        The compiler's optimisation flags (None: :func:`optimisation_flags`).
 
     Returns
     -------
@@ -236,7 +247,7 @@ def compiled(
         )
         return interpreted
     name = function.name()
-    key = cache_key(function, f"{description}|derivatives={derivatives}")
+    key = cache_key(function, f"{description}|derivatives={derivatives}", flags)
     library = cache_dir() / f"{name}_{key}.so"
     if library.is_file():
         problem = damage(library)
@@ -253,7 +264,7 @@ def compiled(
         _remove(library)
     started = time.perf_counter()
     try:
-        _build(function, compiler, library, derivatives, quiet)
+        _build(function, compiler, library, derivatives, quiet, flags)
     except _CompilerFailed as error:
         warnings.warn(
             f"compiling {name} into {library} failed: {error}\nusing the interpreted model "

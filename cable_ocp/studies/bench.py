@@ -268,7 +268,9 @@ def hessian_report(models_dir: Path) -> None:
     print(f"{'hessian':<16}{'compiled':>9}{'iterations':>12}{'Omega [m]':>12}{'solve [s]':>11}"
           f"{'s/iteration':>13}{'build [s]':>11}")  # fmt: skip
     for hessian, compiled in cases:
-        settings = IpoptSettings(step=0.25, intervals=8, hessian=hessian, compiled=compiled)
+        settings = IpoptSettings(
+            step=0.25, intervals=8, solver="ipopt", hessian=hessian, compiled=compiled
+        )
         r = optimize(scene, "ipopt", settings, quiet=True)
         print(
             f"{hessian:<16}{str(compiled):>9}{r.iterations:>12}{r.omega:>12.3e}"

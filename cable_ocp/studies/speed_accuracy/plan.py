@@ -55,6 +55,7 @@ class OcpSetting:
                 intervals=intervals,
                 max_iter=self.limit,
                 compiled=self.compiled,
+                solver="ipopt",
             )
         return NelderMeadSettings(
             elements=self.elements,

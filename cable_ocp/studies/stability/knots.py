@@ -228,7 +228,12 @@ def knots_comparison(
     for p in knots:
         local = scene.updated({"winch.knots": p})
         ipopt = IpoptSettings(
-            elements=elements, step=step, control="spline", max_iter=max_iter, compiled=compiled
+            elements=elements,
+            step=step,
+            control="spline",
+            max_iter=max_iter,
+            compiled=compiled,
+            solver="ipopt",
         )
         plain = optimize(local, "ipopt", ipopt, refinements=0, quiet=quiet)
         runs.append(_knot_run(p, "ipopt", plain))

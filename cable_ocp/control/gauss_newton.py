@@ -1,0 +1,252 @@
+"""Gauss-Newton SQP on a winch problem: Omega^2 is a least-squares, so its Hessian is ``2 J^T J``.
+
+Each iteration linearises the clearance error on the problem's grid (one simulation of the
+optimisation model with its sensitivities, :mod:`cable_ocp.control.linearisation`) and solves
+the quadratic programme
+
+    min  |W (e + J d)|^2 + w |W_r (r_D phi'(p + d))|^2     s.t.  bounds on p + d
+
+with DAQP (a dual active-set solver for dense QPs; silent, and twice as fast as qpOASES on
+a 42-parameter, 360-row QP), the winch bounds being the problem's Bernstein constraints (held
+between the RK4 samples, :mod:`cable_ocp.drive.bounds`). The open loop iterates to convergence
+with a backtracking line search; the closed loop takes one such step per sample from the shifted
+previous plan (a real-time iteration, as acados does), so that a solve costs one simulation with
+sensitivities and one small QP.
+"""
+
+from __future__ import annotations
+
+import time
+from dataclasses import dataclass
+
+import casadi as ca
+import numpy as np
+
+from cable_ocp.control.linearisation import ErrorLinearisation, Linearised
+from cable_ocp.control.parameters import ProblemParameters
+from cable_ocp.control.problem import SolverOutcome, WinchProblem
+from cable_ocp.drive.drive import stage_times
+from cable_ocp.simulation.progress import IterationLog
+from cable_ocp.simulation.seabed import trapezoid_weights
+
+# Levenberg-Marquardt damping of the QP's Hessian, relative to its largest diagonal entry: it
+# keeps the QP strictly convex where a parameter barely moves the error (the horizon's last rate).
+DAMPING = 1e-9
+# A step is accepted once it achieves this fraction of the decrease the QP predicted (Armijo).
+ARMIJO = 1e-4
+BACKTRACKS = 12
+# A predicted decrease below this share of Omega^2 that the line search cannot realise is
+# round-off: the iterations have converged.
+NEGLIGIBLE = 1e-3
+DAQP_INFEASIBLE = "Infeasible: no winch profile meets the winch bounds (DAQP exit flag -1)"
+
+
+@dataclass(frozen=True)
+class GaussNewtonSettings:
+    """How the Gauss-Newton iterations run.
+
+    Attributes
+    ----------
+    max_iter : int
+        Iterations (one linearisation and one QP each); 1 is the real-time iteration.
+    tolerance : float
+        Stop when the QP predicts a decrease of Omega^2 below ``tolerance`` times Omega^2 (and
+        below ``tolerance`` times (1 mm)^2, so that an Omega near zero stops too).
+    rate_weight : float, s^2
+        Weight of the pay-out speed ``(r_D phi')^2`` against ``e^2`` (0 in the open loop).
+    """
+
+    max_iter: int = 30
+    tolerance: float = 1e-6
+    rate_weight: float = 0.0
+
+    def __post_init__(self):
+        if not (isinstance(self.max_iter, int) and self.max_iter >= 1):
+            raise ValueError(f"max_iter = {self.max_iter}: must be an integer >= 1")
+        if not self.tolerance > 0:
+            raise ValueError(f"tolerance = {self.tolerance}: must be > 0")
+        if not self.rate_weight >= 0:
+            raise ValueError(f"rate_weight = {self.rate_weight} s^2: must be >= 0")
+
+
+class GaussNewton:
+    """The Gauss-Newton SQP of a :class:`WinchProblem`, built once and solved as often as needed.
+
+    Parameters
+    ----------
+    problem : WinchProblem
+    settings : GaussNewtonSettings
+    log : IterationLog, optional
+        One line per iteration (None: nothing).
+    """
+
+    def __init__(
+        self, problem: WinchProblem, settings: GaussNewtonSettings, log: IterationLog | None = None
+    ):
+        started = time.perf_counter()
+        self.problem, self.settings, self.log = problem, settings, log
+        steps = problem.grid.size - 1
+        radius = problem.scene.winch.drum_radius
+        times, left = stage_times(problem.grid[:-1], problem.step)
+        self.linearisation = ErrorLinearisation(
+            problem.model, problem.step, steps, problem.control, radius,
+            problem.scene.seabed.hills, times, left,
+        )  # fmt: skip
+        report = self.linearisation.compile_report
+        self.compile_time = report.compile_time
+        span = problem.grid[-1] - problem.grid[0]
+        self.weights = np.sqrt(trapezoid_weights(problem.step, problem.grid.size) / span)
+        rates = radius * problem.control.basis(problem.grid)[1]
+        self.rate_rows = np.sqrt(settings.rate_weight) * self.weights[:, None] * rates
+        bounds = problem.bounds
+        size = problem.control.size
+        self.qp = ca.conic(
+            "gauss_newton_qp",
+            "daqp",
+            {"h": ca.Sparsity.dense(size, size), "a": ca.Sparsity.dense(*bounds.matrix.shape)},
+            {"error_on_fail": False},
+        )
+        self.build_time = time.perf_counter() - started
+
+    def objective(self, linearised: Linearised, parameters: np.ndarray) -> float:
+        """Omega^2 (m^2), with the rate term."""
+        residual = self.weights * linearised.error
+        rates = self.rate_rows @ parameters
+        return float(residual @ residual + rates @ rates)
+
+    def step(
+        self,
+        linearised: Linearised,
+        parameters: np.ndarray,
+        lower: np.ndarray,
+        upper: np.ndarray,
+        fixed: dict[int, float],
+    ) -> tuple[np.ndarray | None, float, str]:
+        """The QP's step ``d`` from ``parameters``, its predicted decrease and DAQP's status.
+
+        ``lower``, ``upper`` bound ``bounds.matrix @ (p + d)``; ``fixed`` pins parameters.
+        """
+        jacobian = self.weights[:, None] * linearised.jacobian
+        residual = self.weights * linearised.error
+        hessian = jacobian.T @ jacobian + self.rate_rows.T @ self.rate_rows
+        gradient = jacobian.T @ residual + self.rate_rows.T @ (self.rate_rows @ parameters)
+        hessian[np.diag_indices_from(hessian)] += DAMPING * max(np.max(np.diag(hessian)), 1e-30)
+        matrix = self.problem.bounds.matrix
+        values = matrix @ parameters
+        lbx = np.full(parameters.size, -np.inf)
+        ubx = np.full(parameters.size, np.inf)
+        for index, value in fixed.items():
+            lbx[index] = ubx[index] = value - parameters[index]
+        solution = self.qp(
+            h=hessian, g=gradient, a=matrix, lba=lower - values, uba=upper - values,
+            lbx=lbx, ubx=ubx,
+        )  # fmt: skip
+        stats = self.qp.stats()
+        if not stats["success"]:
+            flag = stats["return_status"]
+            return None, 0.0, DAQP_INFEASIBLE if flag == -1 else f"DAQP exit flag {flag}"
+        step = np.array(solution["x"]).ravel()
+        predicted = -float(gradient @ step + 0.5 * step @ hessian @ step)
+        return step, 2 * predicted, "solved"
+
+    def solve(
+        self,
+        values: ProblemParameters,
+        guess: np.ndarray,
+        fixed: dict[int, float] | None = None,
+        lower: np.ndarray | None = None,
+        upper: np.ndarray | None = None,
+    ) -> SolverOutcome:
+        """Iterate from ``guess`` (rad, rad/s) under the parameter values.
+
+        ``fixed`` pins parameters (index to value); ``lower``/``upper`` replace the bounds'
+        own (a closed loop narrows the angle range). The outcome's ``states`` are the model's run
+        under its parameters (None after a real-time iteration, which does not simulate its
+        result).
+        """
+        settings, bounds = self.settings, self.problem.bounds
+        lower = bounds.lower if lower is None else lower
+        upper = bounds.upper if upper is None else upper
+        fixed = fixed or {}
+        started = time.perf_counter()
+        function_time = 0.0
+        parameters = np.array(guess, dtype=float)
+        begun = time.perf_counter()
+        current = self.linearisation(values, parameters)
+        function_time += time.perf_counter() - begun
+        history, status, success, iterations = [], "", False, 0
+        if self.log is not None:
+            self.log.restart()
+        if not current.finite:
+            status = "the optimisation model blew up under the initial guess"
+        else:
+            cost = self.objective(current, parameters)
+            history.append(cost)
+            self._report(history, parameters, lower, upper)
+        while current.finite and iterations < settings.max_iter:
+            iterations += 1
+            step, predicted, qp_status = self.step(current, parameters, lower, upper, fixed)
+            if step is None:
+                status = f"the QP failed: {qp_status}"
+                break
+            if predicted <= settings.tolerance * max(cost, 1e-6):
+                status, success = "converged: the predicted decrease is below tolerance", True
+                break
+            if settings.max_iter == 1:  # a real-time iteration: take the full step, unchecked
+                parameters = parameters + step
+                status, success = "one Gauss-Newton step (real-time iteration)", True
+                break
+            accepted = False
+            fraction = 1.0
+            for _ in range(BACKTRACKS):
+                trial = parameters + fraction * step
+                begun = time.perf_counter()
+                candidate = self.linearisation(values, trial)
+                function_time += time.perf_counter() - begun
+                if candidate.finite:
+                    trial_cost = self.objective(candidate, trial)
+                    if trial_cost <= cost - ARMIJO * fraction * predicted:
+                        accepted = True
+                        break
+                fraction /= 2
+            if not accepted:
+                # Round-off: near the optimum the predicted decrease is below what the
+                # simulation resolves.
+                success = predicted <= NEGLIGIBLE * cost
+                status = (
+                    "converged: no decrease left along the Gauss-Newton step"
+                    if success
+                    else "the line search found no decrease"
+                )
+                break
+            parameters, current, cost = trial, candidate, trial_cost
+            history.append(cost)
+            self._report(history, parameters, lower, upper)
+        else:
+            if current.finite and not status:
+                status = f"stopped at max_iter = {settings.max_iter}"
+        solve_time = time.perf_counter() - started
+        omega = float(np.sqrt(max(history[-1], 0.0))) if history else float("nan")
+        outcome = SolverOutcome(
+            parameters=parameters,
+            status=status,
+            success=success,
+            iterations=iterations,
+            evaluations=len(history),
+            omega=omega,
+            build_time=self.build_time,
+            compile_time=self.compile_time,
+            solve_time=solve_time,
+            function_time=function_time,
+            history=history,
+            states=current.states if current.finite and settings.max_iter > 1 else None,
+        )
+        return outcome
+
+    def _report(self, history: list[float], parameters, lower, upper) -> None:
+        """One log line: the iteration, Omega and the excess over the bounds."""
+        if self.log is None:
+            return
+        values = self.problem.bounds.matrix @ parameters
+        excess = max(float(np.max(lower - values)), float(np.max(values - upper)), 0.0)
+        self.log.line(len(history) - 1, float(np.sqrt(max(history[-1], 0.0))), excess)
