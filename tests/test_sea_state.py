@@ -7,6 +7,9 @@ against the lever arm applied by hand to the surface elevation.
 
 from __future__ import annotations
 
+import re
+from pathlib import Path
+
 import numpy as np
 import pytest
 from scipy.signal import welch
@@ -170,3 +173,16 @@ def test_bad_sea_states_are_one_line_errors(models_dir, sea, message):
 def test_a_heave_needs_an_amplitude_or_a_sea_state(models_dir):
     with pytest.raises(SceneError, match=r"^top\.heave\.amplitude: missing required key \(or"):
         load_scene(models_dir / "hanging.toml", {"top.heave": {"period": 8.0}})
+
+
+def test_the_readmes_survey_tables_load(tmp_path):
+    """The TOML example of the README's scene section is a valid scene."""
+    readme = (Path(__file__).resolve().parent.parent / "README.md").read_text(encoding="utf-8")
+    example = next(b for b in re.findall(r"```toml\n(.*?)```", readme, re.S) if "sea_state" in b)
+    path = tmp_path / "survey_tables.toml"
+    path.write_text("[model]\n[top]\n[numerics]\n" + example, encoding="utf-8")
+    scene = load_scene(path)
+    assert len(scene.environment.current_profile) == 3
+    sea = scene.top.heave.sea_state
+    assert (sea.significant_height, sea.peak_period, len(sea.rao)) == (2.0, 8.0, 2)
+    assert scene.top.has_heave and top_motion(scene.top)(np.array([0.0, 5.0]))[0].shape == (3, 2)

@@ -136,8 +136,8 @@ def check_supported(scene: Scene) -> None:
         problems.append("model.torsion must be false and cable.bending_damping 0")
     if not scene.environment.submerged:
         problems.append("environment.submerged must be true")
-    if any(scene.environment.current):
-        problems.append("environment.current must be zero")
+    if any(scene.environment.current) or scene.environment.current_profile:
+        problems.append("environment.current must be zero (and no environment.current_profile)")
     if any(end.force) or any(end.force_amplitude) or end.payload is not None:
         problems.append("no end force or payload ([end] section)")
     if problems:
