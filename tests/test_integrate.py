@@ -12,6 +12,7 @@ from cable_ocp.simulation.integrate import (
     RK4_STAGES,
     WHOLE_STEP_LIMIT,
     SimulationError,
+    extrapolated_rhs_size,
     integrate,
     reference_solution,
     step_count,
@@ -191,6 +192,21 @@ def test_torsional_instability_is_caught(models_dir):
     with pytest.raises(SimulationError, match="twisted apart") as info:
         integrate(model, x0, drive, 20.0, 0.1, tolerance=1.0)
     assert "smaller numerics.step" in str(info.value)
+
+
+@pytest.mark.parametrize(
+    "scene_name, overrides",
+    [
+        ("hanging.toml", {"model.elements": 9}),
+        ("paper_hill.toml", {"model.elements": 12}),
+        ("catenary.toml", {"model.elements": 8}),
+        ("end_force.toml", {"model.elements": 7, "model.torsion": True}),
+    ],
+)
+def test_rhs_size_extrapolated_from_small_models_is_exact(models_dir, scene_name, overrides):
+    """The flat right-hand side grows by the same instructions per element (affine in n)."""
+    parametric = CableModel.from_scene(load_scene(models_dir / scene_name, overrides)).parametric
+    assert extrapolated_rhs_size(parametric) == parametric.rhs_size()
 
 
 @pytest.mark.parametrize(

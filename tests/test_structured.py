@@ -8,7 +8,13 @@ import pytest
 
 from cable_ocp.model.cable import CableModel
 from cable_ocp.model.layout import INPUTS
-from cable_ocp.model.structured import structured_outputs, structured_rhs, supports
+from cable_ocp.model.structured import (
+    structured_bond_residual,
+    structured_joints_and_forces,
+    structured_outputs,
+    structured_rhs,
+    supports,
+)
 from cable_ocp.scene.schema import load_scene
 
 # Every force on: drag with a current, anisotropic added mass, bending damping and a payload.
@@ -68,6 +74,20 @@ def test_structured_joints_and_tensions_equal_the_model_outputs(model):
     reference = model.output_values(x, u)
     np.testing.assert_allclose(joints, reference["joints"], rtol=0, atol=1e-12)
     np.testing.assert_allclose(tensions, reference["tensions"], rtol=1e-12)
+
+
+def test_structured_bond_forces_and_residuals_equal_the_model_outputs(model):
+    """What a compiled run's equilibrium and bond checks take instead of the flat outputs."""
+    parametric = model.parametric
+    x, u = random_point(model, np.random.default_rng(7))
+    reference = model.output_values(x, u)
+    values = structured_joints_and_forces(parametric)(x=x, u=u, p=model.parameters)
+    np.testing.assert_allclose(np.array(values["joints"]), reference["joints"], rtol=0, atol=1e-12)
+    forces = np.array(values["bond_forces"])
+    scale = np.abs(reference["bond_forces"]).max()
+    np.testing.assert_allclose(forces, reference["bond_forces"], rtol=0, atol=1e-12 * scale)
+    residual = np.array(structured_bond_residual(parametric)(x, u, model.parameters))
+    np.testing.assert_allclose(residual, reference["bond_residual"], rtol=0, atol=1e-12)
 
 
 def test_torsion_is_not_supported(models_dir):

@@ -157,7 +157,7 @@ def structured_rhs(model: ParametricModel) -> ca.Function:
     """
 
     def build() -> ca.Function:
-        x, u, p, xdot, _, _ = _shared_graph(model)
+        x, u, p, xdot, *_ = _shared_graph(model)
         return ca.Function("rhs", [x, u, p], [xdot], ["x", "u", "p"], ["xdot"])
 
     return model.memo(("structured", "rhs"), build)
@@ -171,7 +171,7 @@ def structured_outputs(model: ParametricModel) -> ca.Function:
     """
 
     def build() -> ca.Function:
-        x, u, p, _, forces, joints = _shared_graph(model)
+        x, u, p, _, forces, joints, _ = _shared_graph(model)
         tensions = ca.sqrt(ca.sum1(forces**2)).T
         return ca.Function(
             "joints_tensions",
@@ -182,6 +182,42 @@ def structured_outputs(model: ParametricModel) -> ca.Function:
         )
 
     return model.memo(("structured", "outputs"), build)
+
+
+def structured_joints_and_forces(model: ParametricModel) -> ca.Function:
+    """``(x, u, p) ->`` joints (3 x n+2, m) and bond forces (3 x n+1, N), as ``model.outputs``.
+
+    By the loops of :func:`structured_rhs`, not compiled: one evaluation (a static equilibrium's
+    tensions) without building the flat graph of ``model.outputs`` (1 s at n = 100).
+    """
+
+    def build() -> ca.Function:
+        x, u, p, _, forces, joints, _ = _shared_graph(model)
+        return ca.Function(
+            "joints_bond_forces",
+            [x, u, p],
+            [joints, forces],
+            ["x", "u", "p"],
+            ["joints", "bond_forces"],
+        )
+
+    return model.memo(("structured", "joints_bond_forces"), build)
+
+
+def structured_bond_residual(model: ParametricModel) -> ca.Function:
+    """``(x, u, p) ->`` the bond residuals ``Phi`` (3 (n+1), m), as ``model.bond_residual()``.
+
+    By the loops of :func:`structured_rhs`, so that a run integrated with them checks its bonds
+    without the flat graph (1 s to build at n = 100).
+    """
+
+    def build() -> ca.Function:
+        x, u, p, *_, residual = _shared_graph(model)
+        return ca.Function(
+            "bond_residual", [x, u, p], [ca.vec(residual)], ["x", "u", "p"], ["bond_residual"]
+        )
+
+    return model.memo(("structured", "bond_residual"), build)
 
 
 def compiled_structured(model: CableModel, which: str, count: int | None = None) -> ca.Function:
@@ -213,7 +249,7 @@ def _shared_graph(model: ParametricModel) -> tuple[ca.MX, ...]:
 
 
 def _structured_graph(model: ParametricModel) -> tuple[ca.MX, ...]:
-    """Inputs ``x, u, p`` and the MX expressions of ``x'``, the bond forces and the joints."""
+    """Inputs ``x, u, p`` and the MX expressions of ``x'``, bond forces, joints, bond residuals."""
     if not supports(model):
         raise ValueError("the structured right-hand side needs 5-DOF elements and n >= 2")
     dofs, count = model.dofs, model.element_count
@@ -281,7 +317,8 @@ def _structured_graph(model: ParametricModel) -> tuple[ca.MX, ...]:
     below = ca.horzcat(ca.MX.zeros(3, 1), forces[:, :-1])
     qdd = _accelerations(dofs).map(count)(free, along_p, along_d, forces, below)
     joints = ca.horzcat(q[0:3, :], column(point, last))
-    return x, u, p, ca.vertcat(x[size:], ca.vec(qdd)), forces, joints
+    residual = ca.horzcat(q[0:3, 1:], top) - point  # each bond's lower point less its upper one
+    return x, u, p, ca.vertcat(x[size:], ca.vec(qdd)), forces, joints, residual
 
 
 def _inverse_mx(block: ca.MX) -> ca.MX:

@@ -10,7 +10,7 @@ from __future__ import annotations
 
 import math
 from collections.abc import Callable
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import casadi as ca
 import numpy as np
@@ -34,6 +34,7 @@ QUIET_SEGMENTS = 8
 # right-hand side.
 WHOLE_STEP_LIMIT = 100_000
 RK4_STAGES = 4
+SIZE_PROBES = (3, 4)  # elements of the small models that give a structure's rhs size (affine in n)
 # Largest twist (rad) between neighbouring elements before a torsion run counts as blown up.
 MAX_RELATIVE_TWIST = np.pi
 
@@ -133,12 +134,33 @@ def whole_step_fits(parametric: ParametricModel) -> bool:
     Decided on the instructions of the right-hand side with its common subexpressions eliminated.
     Elimination removes 17-20 % of them (n = 2 to 100, in air and in water, with and without
     torsion), never half, so a right-hand side of more than twice the limit before it is too large
-    either way, and the elimination (1.6 s at n = 100) is spared.
+    either way, and the elimination (1.6 s at n = 100) is spared. A model whose size extrapolated
+    from small ones (:func:`extrapolated_rhs_size`) is over twice that again is too large without
+    building its own flat right-hand side at all (1 s at n = 100).
     """
     limit = WHOLE_STEP_LIMIT / RK4_STAGES
-    if parametric.rhs_size() > 2 * limit:
-        return False
-    return parametric.rhs.n_instructions() <= limit
+
+    def decide() -> bool:
+        if extrapolated_rhs_size(parametric) > 4 * limit or parametric.rhs_size() > 2 * limit:
+            return False
+        return parametric.rhs.n_instructions() <= limit
+
+    return parametric.memo(("whole_step_fits",), decide)
+
+
+def extrapolated_rhs_size(parametric: ParametricModel) -> int:
+    """:meth:`ParametricModel.rhs_size` of the structure, from the same structure at n = 3 and 4.
+
+    Every element adds the same instructions: the size is affine in n, exactly, in air and in
+    water, with and without torsion (measured at n = 2 to 100).
+    """
+    elements = parametric.spec.elements
+    if elements <= SIZE_PROBES[-1]:
+        return parametric.rhs_size()
+    small, large = (
+        ParametricModel(replace(parametric.structure, elements=k)).rhs_size() for k in SIZE_PROBES
+    )
+    return large + (large - small) * (elements - SIZE_PROBES[-1])
 
 
 def _step_and_report(
@@ -302,8 +324,14 @@ def _residual_norms(model: CableModel, count: int, compiled: bool) -> ca.Functio
 
     def parametric_norm() -> ca.Function:
         parametric = model.parametric
-        x, u, p = parametric.x, parametric.u, parametric.p
-        residual = parametric.bond_residual()
+        if structured.supports(parametric) and not whole_step_fits(parametric):
+            # Stepped by the structured loops: its bonds too, without the flat graph.
+            residual_function = structured.structured_bond_residual(parametric)
+            x, u, p = (residual_function.mx_in(k) for k in range(3))
+            residual = residual_function(x, u, p)
+        else:
+            x, u, p = parametric.x, parametric.u, parametric.p
+            residual = parametric.bond_residual()
         norm = ca.Function(
             "bond_norm",
             [x, u, p],
