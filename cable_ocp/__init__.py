@@ -3,22 +3,57 @@
 The front door: load a scene, build its model, simulate it, optimise its winch
 (open loop or closed loop) and sweep scenes on Dask (:mod:`cable_ocp.sweep`). Conventions and
 errata: ``cable_ocp/CONVENTIONS.md``.
+
+The names below are imported on first use (PEP 562): ``import cable_ocp``, which every
+``cable-ocp`` command does, costs no SciPy, optimiser or matplotlib import until one is needed
+(``cable-ocp simulate`` never loads the optimisers).
 """
 
-from cable_ocp import plots
-from cable_ocp.control.closed_loop import MpcResult, mpc
-from cable_ocp.control.nelder_mead import NelderMeadSettings
-from cable_ocp.control.ocp import IpoptSettings
-from cable_ocp.control.optimization import OcpResult, optimize
-from cable_ocp.drive.drive import Drive
-from cable_ocp.model.cable import INPUT_NAMES, CableModel
-from cable_ocp.scene.schema import Scene, load_scene
-from cable_ocp.simulation.integrate import SimulationError, integrate, reference_solution
-from cable_ocp.simulation.run import simulate
-from cable_ocp.simulation.statics import EquilibriumError, equilibrium
-from cable_ocp.simulation.trajectory import Trajectory
-from cable_ocp.studies.catenary import catenary_shape
-from cable_ocp.studies.validation import catenary_check
+from __future__ import annotations
+
+from importlib import import_module
+from typing import TYPE_CHECKING
+
+if TYPE_CHECKING:  # what __getattr__ imports, for type checkers and the import graph
+    from cable_ocp import plots
+    from cable_ocp.control.closed_loop import MpcResult, mpc
+    from cable_ocp.control.nelder_mead import NelderMeadSettings
+    from cable_ocp.control.ocp import IpoptSettings
+    from cable_ocp.control.optimization import OcpResult, optimize
+    from cable_ocp.drive.drive import Drive
+    from cable_ocp.model.cable import INPUT_NAMES, CableModel
+    from cable_ocp.scene.schema import Scene, load_scene
+    from cable_ocp.simulation.integrate import SimulationError, integrate, reference_solution
+    from cable_ocp.simulation.run import simulate
+    from cable_ocp.simulation.statics import EquilibriumError, equilibrium
+    from cable_ocp.simulation.trajectory import Trajectory
+    from cable_ocp.studies.catenary import catenary_shape
+    from cable_ocp.studies.validation import catenary_check
+
+# Each public name and the module that defines it ("plots" is a subpackage).
+_SOURCES = {
+    "INPUT_NAMES": "cable_ocp.model.cable",
+    "CableModel": "cable_ocp.model.cable",
+    "IpoptSettings": "cable_ocp.control.ocp",
+    "MpcResult": "cable_ocp.control.closed_loop",
+    "NelderMeadSettings": "cable_ocp.control.nelder_mead",
+    "OcpResult": "cable_ocp.control.optimization",
+    "Drive": "cable_ocp.drive.drive",
+    "EquilibriumError": "cable_ocp.simulation.statics",
+    "Scene": "cable_ocp.scene.schema",
+    "SimulationError": "cable_ocp.simulation.integrate",
+    "Trajectory": "cable_ocp.simulation.trajectory",
+    "catenary_check": "cable_ocp.studies.validation",
+    "catenary_shape": "cable_ocp.studies.catenary",
+    "equilibrium": "cable_ocp.simulation.statics",
+    "integrate": "cable_ocp.simulation.integrate",
+    "load_scene": "cable_ocp.scene.schema",
+    "mpc": "cable_ocp.control.closed_loop",
+    "optimize": "cable_ocp.control.optimization",
+    "plots": "cable_ocp.plots",
+    "reference_solution": "cable_ocp.simulation.integrate",
+    "simulate": "cable_ocp.simulation.run",
+}
 
 __all__ = [
     "INPUT_NAMES",
@@ -43,3 +78,19 @@ __all__ = [
     "reference_solution",
     "simulate",
 ]
+
+
+def __getattr__(name: str):
+    """A public name, imported from its module on first use and kept."""
+    try:
+        source = _SOURCES[name]
+    except KeyError:
+        raise AttributeError(f"module 'cable_ocp' has no attribute {name!r}") from None
+    module = import_module(source)
+    value = module if source == f"{__name__}.{name}" else getattr(module, name)
+    globals()[name] = value
+    return value
+
+
+def __dir__() -> list[str]:
+    return sorted({*globals(), *__all__})
