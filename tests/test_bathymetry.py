@@ -70,12 +70,15 @@ def gridded(hill_file):
     return Seabed(grid=_grid(hill_file))
 
 
-def test_a_sampled_hill_reproduces_the_analytic_height_within_the_spline_bound(gridded):
+def test_a_sampled_hill_reproduces_the_analytic_height_within_the_spline_bound(gridded, validation):
     """Max error over 20 000 random points 9.4e-5 m at h = 2 m; the bound is 4.7e-4 m."""
     rng = np.random.default_rng(3)
     x, y = rng.uniform(-30, 250, 20_000), rng.uniform(-30, 90, 20_000)
     error = seabed_height(gridded, x, y) - (LEVEL + seabed_height([HILL], x, y))
     bound = interpolation_bound(SPACING)
+    validation("paper_hill's hill on a 2 m bathymetry grid", "analytic", "Gaussian hill eq. 40",
+               "max |z_grid - z_hill| (20 000 points)", f"{np.abs(error).max():.2g} m",
+               f"< (5/384) h^4 max|d4z| = {bound:.2g} m and < 1e-4 m")  # fmt: skip
     assert bound == pytest.approx(4.69e-4, rel=1e-2)
     assert np.abs(error).max() < bound
     assert np.abs(error).max() < 1e-4
@@ -156,7 +159,9 @@ def paper_hill(models_dir):
     return load_scene(models_dir / "paper_hill.toml")
 
 
-def test_paper_hill_on_a_grid_has_the_locked_omega_of_the_analytic_hill(paper_hill, tmp_path):
+def test_paper_hill_on_a_grid_has_the_locked_omega_of_the_analytic_hill(
+    paper_hill, tmp_path, validation
+):
     """The hill replaced by its grid (h = 2 m) on the flat level delta under the end's start.
 
     Measured: Omega 4.2761963 m both, differing by 2.9e-6 m; e(t) by at most 4.9e-5 m.
@@ -167,6 +172,11 @@ def test_paper_hill_on_a_grid_has_the_locked_omega_of_the_analytic_hill(paper_hi
     grid = hill_grid(tmp_path / "hill.nc", level=level)
     scene = paper_hill.updated({"seabed.hills": [], "seabed.grid": {"file": str(grid)}})
     on_grid = simulate(scene, compiled=True)
+    difference = abs(on_grid.omega - analytic.omega)
+    validation("paper_hill locked, its hill as a 2 m grid (absolute seabed)", "analytic",
+               "the analytic hill (relative seabed)", "|Omega difference|",
+               f"{difference:.2g} m (Omega {analytic.omega:.4f} m)",
+               "< 1e-5 m (asked: 1 mm)")  # fmt: skip
     assert abs(on_grid.omega - analytic.omega) < 1e-5  # far inside the 1 mm asked for
     assert np.abs(on_grid.clearance_error - analytic.clearance_error).max() < 1e-4
 
@@ -290,7 +300,8 @@ def test_verification_reports_the_smallest_clearance_and_fails_a_profile_under_c
     assert checked.minimum_clearance_time == reference.time[reference.clearance_error.argmin()]
     assert lowest < 2.0 - CLEARANCE_TOLERANCE
     assert checked.trajectory is None
-    assert checked.reason.startswith(f"the end comes {lowest:.3g} m above the seabed at t = ")
+    assert lowest < 0  # into the hill
+    assert checked.reason.startswith(f"the end goes {-lowest:.3g} m into the seabed at t = ")
     assert f"{2.0 - lowest:.3g} m under seabed.minimum_clearance = 2 m" in checked.reason
     # Without c_min the same profile passes, its smallest clearance still reported
     free = verify_profile(paper_hill, control, locked, compiled=True)

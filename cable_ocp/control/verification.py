@@ -191,8 +191,13 @@ def lowest_clearance(seabed, trajectory: Trajectory) -> tuple[float, float, str 
         return lowest, when, None
     below = heights < minimum - CLEARANCE_TOLERANCE
     span = trajectory.time[below]
+    where = (
+        f"comes within {lowest:.3g} m of the seabed"
+        if lowest >= 0
+        else f"goes {-lowest:.3g} m into the seabed"
+    )
     reason = (
-        f"the end comes {lowest:.3g} m above the seabed at t = {when:g} s, (x, y) = "
+        f"the end {where} at t = {when:g} s, (x, y) = "
         f"({end[k, 0]:.1f}, {end[k, 1]:.1f}) m: {minimum - lowest:.3g} m under "
         f"seabed.minimum_clearance = {minimum:g} m (under it for {span.size} samples in "
         f"t = {span[0]:g}..{span[-1]:g} s)"
