@@ -15,6 +15,8 @@ import pytest
 
 from cable_ocp.drive.drive import Drive
 from cable_ocp.model.cable import CableModel, spec_from_scene
+from cable_ocp.model.current import current_at, current_values
+from cable_ocp.model.hydro import HydroCoefficients
 from cable_ocp.model.rfe import element_functions
 from cable_ocp.scene.schema import SceneError, load_scene
 from cable_ocp.simulation.run import simulate
@@ -190,9 +192,6 @@ def test_bad_profiles_are_one_line_errors(models_dir, profile, extra, message):
 
 def test_current_at_matches_its_numpy_twin():
     """The model's CasADi interpolation and the statics' numpy one agree (1e-15 m/s)."""
-    from cable_ocp.model.current import current_at, current_values
-    from cable_ocp.model.hydro import HydroCoefficients
-
     hydro = HydroCoefficients(
         1025.0, 0.07, 0.004, 1.0, 0.1, 1.0, 0.0, (0.0, 0.0, 0.0), 3,
         tuple(r["z"] for r in TWO_LAYERS), tuple(r["u"] for r in TWO_LAYERS),

@@ -50,11 +50,6 @@ class WaveComponents:
     amplitudes: np.ndarray
     phases: np.ndarray
 
-    @property
-    def variance(self) -> float:
-        """``m0 = sum a_i^2 / 2`` (m^2), the surface elevation's variance."""
-        return float(np.sum(self.amplitudes**2) / 2)
-
 
 def jonswap_shape(frequency: np.ndarray, peak_period: float, gamma: float) -> np.ndarray:
     """The JONSWAP spectrum's shape at the angular frequencies ``frequency`` (rad/s), unscaled.
