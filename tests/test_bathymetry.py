@@ -325,3 +325,19 @@ def test_the_bundled_survey_grid_is_what_its_script_makes(models_dir):
     made = survey_grid()
     xr.testing.assert_allclose(shipped, made, rtol=0, atol=1e-9)
     assert (models_dir / "data" / "survey_grid.nc").stat().st_size < 300_000
+
+
+def test_the_survey_figures_draw_the_grid_the_cable_and_c_min(models_dir, tmp_path):
+    """plots.survey.seabed_view, cable_shapes and clearance on the bundled survey scene."""
+    from cable_ocp import plots
+    from cable_ocp.plots import survey
+
+    scene = load_scene(models_dir / "survey.toml", {"numerics.duration": 10.0})
+    run = simulate(scene, compiled=True)
+    figure = survey.seabed_view(run, scene.seabed, path=tmp_path / "view.png")
+    assert figure.axes[0].get_zlim()[1] == pytest.approx(-305.0 + 40.0, abs=2.0)  # the window
+    plots.cable_shapes(run, seabed=scene.seabed, path=tmp_path / "shapes.png")
+    drawn = plots.clearance(run, 5.0, minimum_clearance=2.0, path=tmp_path / "clearance.png")
+    assert any(line.get_label() == "minimum c_min = 2.0 m" for line in drawn.axes[0].lines)
+    for name in ("view.png", "shapes.png", "clearance.png"):
+        assert (tmp_path / name).stat().st_size > 10_000
