@@ -79,13 +79,13 @@ def find_compiler() -> str | None:
     return None
 
 
-def cache_key(function: ca.Function, description: str, flags: tuple[str, ...] | None = None) -> str:
+def cache_key(function: ca.Function, description: str) -> str:
     """Key of a compiled Function: its expression graph, what built it, CasADi and the flags.
 
     Serialising the graph takes about 0.7 s at n = 100, against minutes of compiling.
     """
     digest = hashlib.sha256(function.serialize().encode())
-    flags = [*(flags or optimisation_flags(function)), *COMPILER_FLAGS]
+    flags = [*optimisation_flags(function), *COMPILER_FLAGS]
     digest.update("|".join([description, ca.__version__, _processor(), *flags]).encode())
     return digest.hexdigest()[:20]
 
@@ -160,12 +160,7 @@ def _remove(library: Path) -> None:
 
 
 def _build(
-    function: ca.Function,
-    compiler: str,
-    library: Path,
-    derivatives: bool,
-    quiet: bool,
-    flags: tuple[str, ...] | None,
+    function: ca.Function, compiler: str, library: Path, derivatives: bool, quiet: bool
 ) -> None:
     """Generate C, compile it, and install the library and its record atomically.
 
@@ -185,8 +180,8 @@ def _build(
             generator.add(function.reverse(1))
         generator.generate(str(Path(scratch)) + os.sep)
         target = Path(scratch) / library.name
-        options = [*(flags or optimisation_flags(function)), *COMPILER_FLAGS]
-        command = [compiler, *options, str(source), "-o", str(target), "-lm"]
+        flags = [*optimisation_flags(function), *COMPILER_FLAGS]
+        command = [compiler, *flags, str(source), "-o", str(target), "-lm"]
         try:
             result = subprocess.run(command, capture_output=True, text=True)
         except OSError as error:
@@ -203,11 +198,7 @@ def _build(
 
 
 def compiled(
-    function: ca.Function,
-    description: str,
-    derivatives: bool = True,
-    quiet: bool = True,
-    flags: tuple[str, ...] | None = None,
+    function: ca.Function, description: str, derivatives: bool = True, quiet: bool = True
 ) -> tuple[ca.Function, CompileReport]:
     """The Function compiled to C (with first derivatives), from the cache when possible.
 
@@ -228,8 +219,6 @@ def compiled(
         simulation; they roughly triple the code).
     quiet : bool
         No message about compiling.
-    flags : tuple of str, optional
-        The compiler's optimisation flags (None: :func:`optimisation_flags`).
 
     Returns
     -------
@@ -247,7 +236,7 @@ def compiled(
         )
         return interpreted
     name = function.name()
-    key = cache_key(function, f"{description}|derivatives={derivatives}", flags)
+    key = cache_key(function, f"{description}|derivatives={derivatives}")
     library = cache_dir() / f"{name}_{key}.so"
     if library.is_file():
         problem = damage(library)
@@ -264,7 +253,7 @@ def compiled(
         _remove(library)
     started = time.perf_counter()
     try:
-        _build(function, compiler, library, derivatives, quiet, flags)
+        _build(function, compiler, library, derivatives, quiet)
     except _CompilerFailed as error:
         warnings.warn(
             f"compiling {name} into {library} failed: {error}\nusing the interpreted model "

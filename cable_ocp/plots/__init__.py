@@ -32,6 +32,9 @@ from cable_ocp.simulation.trajectory import Trajectory
 def finish_figure(fig: Figure, path: str | Path | None) -> Figure:
     """Lay out ``fig``; with a ``path``, save it there and close it (the module's rule)."""
     fig.tight_layout()
+    # tight_layout leaves a placeholder layout engine, for which savefig lays the figure out in
+    # a draw of its own before drawing it; without an engine the same pixels take one draw.
+    fig.set_layout_engine(None)
     if path is not None:
         fig.savefig(path, dpi=120)
         plt.close(fig)
