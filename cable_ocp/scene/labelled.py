@@ -316,12 +316,25 @@ def _equal(x, y) -> bool:
 
 
 def write(dataset: xr.Dataset, path: Path) -> Path:
-    """Write a result's Dataset to netCDF at ``path``, without any Dask scheduler's lock."""
-    import dask
+    """Write a result's Dataset to netCDF at ``path``, without any Dask scheduler's lock.
+
+    A result's arrays are in memory, so they go straight to xarray's netCDF4 store under
+    netCDF4's own locks: ``Dataset.to_netcdf`` first asks Dask for its scheduler, which imports
+    ``dask.distributed`` (0.3 s of a ``cable-ocp simulate``), and in a sweep's worker would take
+    the cluster's lock. The file is the one ``to_netcdf`` writes (same store, same encoding).
+    """
+    from xarray.backends import NetCDF4DataStore
+    from xarray.backends.locks import HDF5_LOCK, NETCDFC_LOCK, combine_locks
 
     path = Path(path)
-    with dask.config.set(scheduler="synchronous"):
-        dataset.to_netcdf(path)
+    if any(variable.chunks is not None for variable in dataset.variables.values()):
+        raise ValueError(f"{path}: a result's arrays must be in memory, not Dask arrays")
+    lock = combine_locks([NETCDFC_LOCK, HDF5_LOCK])  # what to_netcdf takes, less Dask's
+    store = NetCDF4DataStore.open(path, mode="w", format="NETCDF4", lock=lock)
+    try:
+        dataset.dump_to_store(store)
+    finally:
+        store.close()
     return path
 
 
