@@ -16,7 +16,9 @@ from typing import TYPE_CHECKING
 
 if TYPE_CHECKING:  # what __getattr__ imports, for type checkers and the import graph
     from cable_ocp import plots
-    from cable_ocp.control.closed_loop import MpcResult, mpc
+    from cable_ocp.control.closed_loop.loop import mpc
+    from cable_ocp.control.closed_loop.result import MpcResult
+    from cable_ocp.control.closed_loop.settings import MpcSettings
     from cable_ocp.control.nelder_mead import NelderMeadSettings
     from cable_ocp.control.ocp import IpoptSettings
     from cable_ocp.control.optimization import OcpResult, optimize
@@ -35,7 +37,8 @@ _SOURCES = {
     "INPUT_NAMES": "cable_ocp.model.cable",
     "CableModel": "cable_ocp.model.cable",
     "IpoptSettings": "cable_ocp.control.ocp",
-    "MpcResult": "cable_ocp.control.closed_loop",
+    "MpcResult": "cable_ocp.control.closed_loop.result",
+    "MpcSettings": "cable_ocp.control.closed_loop.settings",
     "NelderMeadSettings": "cable_ocp.control.nelder_mead",
     "OcpResult": "cable_ocp.control.optimization",
     "Drive": "cable_ocp.drive.drive",
@@ -48,7 +51,7 @@ _SOURCES = {
     "equilibrium": "cable_ocp.simulation.statics",
     "integrate": "cable_ocp.simulation.integrate",
     "load_scene": "cable_ocp.scene.schema",
-    "mpc": "cable_ocp.control.closed_loop",
+    "mpc": "cable_ocp.control.closed_loop.loop",
     "optimize": "cable_ocp.control.optimization",
     "plots": "cable_ocp.plots",
     "reference_solution": "cable_ocp.simulation.integrate",
@@ -60,6 +63,7 @@ __all__ = [
     "CableModel",
     "IpoptSettings",
     "MpcResult",
+    "MpcSettings",
     "NelderMeadSettings",
     "OcpResult",
     "Drive",

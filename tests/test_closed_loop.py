@@ -7,11 +7,13 @@ import pytest
 import xarray as xr
 from legacy_results import write_mpc_result
 
-from cable_ocp.control.closed_loop import mpc
-from cable_ocp.control.closed_loop.controller import hermite_basis
+from cable_ocp.control.closed_loop import MpcSettings, mpc
 from cable_ocp.control.closed_loop.forecast import BlendedHeight, HeightFilter, TopForecast
+from cable_ocp.control.closed_loop.plant import LIMITER_BAND
 from cable_ocp.control.closed_loop.projection import project_state
 from cable_ocp.control.closed_loop.result import MpcResult
+from cable_ocp.drive.bounds import BOUND_TOLERANCE
+from cable_ocp.drive.controls import HermiteIntervals
 from cable_ocp.drive.drive import Drive
 from cable_ocp.model.cable import CableModel
 from cable_ocp.model.layout import INPUTS
@@ -42,7 +44,10 @@ def closed_loop(short_hill):
         ({"horizon": 22.0}, "horizon = 22.0 s must be a whole multiple of sample"),
         ({"sample": 3.0, "horizon": 30.0}, "sample = 3.0 s must divide numerics.duration"),
         ({"sample": 0.0}, "sample = 0.0 s: must be > 0"),
-        ({"sample": 5.02, "horizon": 10.04}, "sample = 5.02 s must divide"),
+        ({"sample": 5.02, "horizon": 10.04, "interval": 5.02, "step": 0.02}, "sample = 5.02 s"),
+        ({"interval": 3.0}, "interval = 3.0 s: must be > 0 and divide horizon = 20.0 s"),
+        ({"solver": "sqp"}, "solver = 'sqp': must be one of gauss-newton, ipopt"),
+        ({"rate_weight": float("nan")}, "rate_weight = nan s.2: must be finite and >= 0"),
         ({"elements": 16}, "elements = 16: the reduced model needs 1 .. model.elements = 15"),
         ({"step": 0.3}, "step = 0.3 s: must be > 0 and divide sample"),
         ({"heave_margin": 2.0}, "heave_margin = 2.0: must be in [0, 1]"),
@@ -140,16 +145,41 @@ def test_projection_keeps_the_reduced_bonds(models_dir):
     assert 1e-6 < np.linalg.norm(projected.end_offset) < 0.5
 
 
-def test_hermite_basis_rates_are_the_derivatives():
+def test_free_start_hermite_rates_are_the_derivatives():
+    control = HermiteIntervals(20.0, 4, free_start=True)
     t = np.linspace(0.0, 20.0, 2001)
-    parameters = np.random.default_rng(1).normal(size=2 * 5)
-    phi, rate, acc = (b @ parameters for b in hermite_basis(t, 5.0, 4))
+    parameters = np.random.default_rng(1).normal(size=control.size)
+    phi, rate, acc = (b @ parameters for b in control.basis(t))
     inner = np.abs((t / 5.0) - np.round(t / 5.0)) > 0.01  # acceleration jumps at the nodes
     np.testing.assert_allclose(np.gradient(phi, t)[inner], rate[inner], atol=1e-4)
     np.testing.assert_allclose(np.gradient(rate, t)[inner], acc[inner], atol=5e-3)
-    nodes = hermite_basis(np.arange(5) * 5.0, 5.0, 4)
+    nodes = control.basis(np.arange(5) * 5.0)
     np.testing.assert_allclose(nodes[0] @ parameters, parameters[:5], atol=1e-12)
     np.testing.assert_allclose(nodes[1] @ parameters, parameters[5:], atol=1e-12)
+    # Moved on by one interval, the plan is the same angle; beyond its end it holds at rest.
+    moved = control.resampled(parameters, 5.0)
+    np.testing.assert_allclose(
+        control.basis(t[t <= 15.0])[0] @ moved, control.basis(t[t <= 15.0] + 5.0)[0] @ parameters,
+        atol=1e-12,
+    )  # fmt: skip
+    assert moved[4] == parameters[4] and moved[-1] == 0.0
+
+
+def test_settings_are_one_dataclass_for_the_api_and_the_command_line(short_hill):
+    """The command line builds the same MpcSettings with the same defaults; mpc() checks once."""
+    import argparse
+
+    from cable_ocp.cli.mpc import add_mpc_command
+
+    parser = argparse.ArgumentParser(prog="cable-ocp")
+    add_mpc_command(parser.add_subparsers(dest="command", required=True))
+    args = parser.parse_args(["mpc", "scene.toml", "--out", "x"])
+    defaults = MpcSettings()
+    for name in ("horizon", "sample", "interval", "elements", "step", "solver", "max_iter",
+                 "heave_filter", "heave_margin", "rate_weight"):  # fmt: skip
+        assert getattr(args, name) == getattr(defaults, name), name
+    with pytest.raises(ValueError, match="pass settings or its fields"):
+        mpc(short_hill, MpcSettings(), horizon=10.0)
 
 
 def test_height_filter_passes_a_trend_and_damps_the_heave():
@@ -218,9 +248,13 @@ def test_quiet_prints_nothing(models_dir, capfd):
 
 
 def test_failed_solves_keep_the_previous_plan_and_are_reported(models_dir):
-    """One IPOPT iteration cannot solve: each failure is counted, the run goes on, success False."""
+    """One IPOPT iteration cannot solve: each failure is counted, the run goes on, success False.
+
+    (IPOPT is the closed loop's baseline solver; the default real-time iteration takes one step
+    by design.)"""
     scene = load_scene(models_dir / "paper_hill.toml", {"numerics.duration": 10.0})
-    result = mpc(scene, **{**SHORT, "horizon": 10.0}, max_iter=1, references=(), quiet=True)
+    settings = {**SHORT, "horizon": 10.0, "solver": "ipopt", "max_iter": 1, "references": ()}
+    result = mpc(scene, quiet=True, **settings)
     assert not result.success
     assert len(result.failures) == 2 and result.failures[0].startswith("t = 0 s: Maximum_Iter")
     assert result.statuses == ["Maximum_Iterations_Exceeded"] * 2
@@ -247,3 +281,27 @@ def test_mpc_command_writes_results_and_figures(models_dir, tmp_path, capsys):
     assert written == ["clearance.png", "mpc.nc", "solve_times.png", "summary.json",
                        "winch_angle.png"]  # fmt: skip
     assert '"omega_m"' in capsys.readouterr().out
+
+
+def test_the_plan_holds_the_winch_bounds_between_samples(short_hill):
+    """The tow lifts the end by about 1 m in 40 s; a winch with 1 rad of pay-out rides its bound.
+
+    The plan is the open loop's Hermite control with its Bernstein bounds, so between the RK4
+    points too (planned_angle is sampled at the plant's 0.05 s, the RK4 points are 1 s apart) it
+    stays in the angle range, to BOUND_TOLERANCE. (The limiter's band narrows the range beyond
+    the first sample of each plan, which is the part applied.)"""
+    scene = short_hill.updated({"winch.angle_max": 1.0})
+    result = mpc(scene, quiet=True, references=(), heave_margin=0.0, **SHORT)
+    low, high = result.angle_range
+    assert result.success, result.status
+    assert result.planned_angle.max() > high - LIMITER_BAND - 0.05  # it rides the bound
+    assert result.planned_angle.max() <= high + BOUND_TOLERANCE
+    assert result.planned_angle.min() >= low - BOUND_TOLERANCE
+
+
+def test_real_time_iteration_and_ipopt_solve_one_transcription(short_hill, closed_loop):
+    """The same receding-horizon problem solved by IPOPT to convergence: the same loop Omega
+    (the real-time iteration: one Gauss-Newton step per sample), within 2 %."""
+    converged = mpc(short_hill, quiet=True, references=(), solver="ipopt", max_iter=100, **SHORT)
+    assert converged.success, converged.status
+    assert closed_loop.omega == pytest.approx(converged.omega, rel=0.02)

@@ -8,6 +8,8 @@ import math
 import sys
 from pathlib import Path
 
+from cable_ocp.control.closed_loop.settings import SOLVERS, MpcSettings
+
 
 def _weight(text: str) -> float:
     """An argparse type: a finite number >= 0 (a weight of the objective)."""
@@ -32,25 +34,54 @@ def add_mpc_command(subparsers) -> None:
     )
     parser.add_argument("scene", type=Path)
     parser.add_argument("--out", type=Path, required=True, help="results folder (atomic)")
-    parser.add_argument("--horizon", type=float, default=20.0, help="prediction horizon [s]")
-    parser.add_argument("--sample", type=float, default=5.0, help="time between solves [s]")
-    parser.add_argument("--elements", type=int, default=2, help="elements of the reduced model")
-    parser.add_argument("--step", type=float, default=1.0, help="RK4 step of the reduced model [s]")
+    defaults = MpcSettings()
+    parser.add_argument(
+        "--horizon", type=float, default=defaults.horizon, help="prediction horizon [s]"
+    )
+    parser.add_argument(
+        "--sample", type=float, default=defaults.sample, help="time between solves [s]"
+    )
+    parser.add_argument(
+        "--interval", type=float, default=defaults.interval, help="interval of the plan [s]"
+    )
+    parser.add_argument(
+        "--elements", type=int, default=defaults.elements, help="elements of the reduced model"
+    )
+    parser.add_argument(
+        "--step", type=float, default=defaults.step, help="RK4 step of the reduced model [s]"
+    )
+    parser.add_argument(
+        "--solver",
+        choices=SOLVERS,
+        default=defaults.solver,
+        help="gauss-newton: one Gauss-Newton step per sample (real-time iteration); ipopt: IPOPT",
+    )
     parser.add_argument(
         "--no-heave-feedback",
         action="store_true",
         help="apply the plan only (no pay-out of the measured heave)",
     )
     parser.add_argument(
-        "--heave-filter", type=float, default=15.0, help="time constant of the heave low-pass [s]"
+        "--heave-filter",
+        type=float,
+        default=defaults.heave_filter,
+        help="time constant of the heave low-pass [s]",
     )
     parser.add_argument(
-        "--heave-margin", type=float, default=1.0, help="room kept for the heave feedback, 0..1"
+        "--heave-margin",
+        type=float,
+        default=defaults.heave_margin,
+        help="room kept for the heave feedback, 0..1",
     )
     parser.add_argument(
-        "--rate-weight", type=_weight, default=1e-4, help="pay-out speed weight [s^2]"
+        "--rate-weight",
+        type=_weight,
+        default=defaults.rate_weight,
+        help="pay-out speed weight [s^2]",
     )
-    parser.add_argument("--max-iter", type=int, default=100, help="IPOPT iterations per solve")
+    parser.add_argument(
+        "--max-iter", type=int, default=defaults.max_iter, help="iterations per solve"
+    )
     parser.add_argument(
         "--open-loop",
         action="store_true",
@@ -76,20 +107,21 @@ def run_mpc_command(args) -> int:
     from cable_ocp.scene.schema import load_scene
 
     scene = load_scene(args.scene, parse_overrides(args.set))
-    result = mpc(
-        scene,
+    settings = MpcSettings(
         horizon=args.horizon,
         sample=args.sample,
+        interval=args.interval,
         elements=args.elements,
         step=args.step,
+        solver=args.solver,
         heave_feedback=not args.no_heave_feedback,
         heave_filter=args.heave_filter,
         heave_margin=args.heave_margin,
         rate_weight=args.rate_weight,
         max_iter=args.max_iter,
         references=("locked", "open-loop") if args.open_loop else ("locked",),
-        quiet=args.quiet,
     )
+    result = mpc(scene, settings, quiet=args.quiet)
     with atomic_directory(args.out) as folder:
         result.save(folder)
         plots.clearance(result, path=folder / "clearance.png")

@@ -90,7 +90,7 @@ class GaussNewton:
         times, left = stage_times(problem.grid[:-1], problem.step)
         self.linearisation = ErrorLinearisation(
             problem.model, problem.step, steps, problem.control, radius,
-            problem.scene.seabed.hills, times, left,
+            problem.scene.seabed, times, left,
         )  # fmt: skip
         report = self.linearisation.compile_report
         self.compile_time = report.compile_time
@@ -189,12 +189,12 @@ class GaussNewton:
             if step is None:
                 status = f"the QP failed: {qp_status}"
                 break
-            if predicted <= settings.tolerance * max(cost, 1e-6):
-                status, success = "converged: the predicted decrease is below tolerance", True
-                break
             if settings.max_iter == 1:  # a real-time iteration: take the full step, unchecked
                 parameters = parameters + step
                 status, success = "one Gauss-Newton step (real-time iteration)", True
+                break
+            if predicted <= settings.tolerance * max(cost, 1e-6):
+                status, success = "converged: the predicted decrease is below tolerance", True
                 break
             accepted = False
             fraction = 1.0

@@ -9,8 +9,10 @@ parameters to the step's nine winch inputs. The error's Jacobian is then the sea
 the end times the end's rows of ``S``. This is what a Gauss-Newton step needs
 (:mod:`cable_ocp.control.gauss_newton`): one simulation with sensitivities, no second derivatives.
 
-The compiled Jacobian costs about ten right-hand sides (state size 30 at n = 2), against one per
-direction and stage for CasADi's forward mode through the compiled step.
+The compiled Jacobian (gcc -O1, as every flat Function: -O0 compiles in half the time but runs
+3.6x slower, 363 against 99 us per call at n = 2) costs about twenty right-hand sides (9e4
+instructions at n = 2, 1.6e5 at n = 3), against two per direction and stage (33 directions at
+n = 2) for CasADi's forward mode through the compiled step.
 """
 
 from __future__ import annotations
@@ -29,10 +31,6 @@ from cable_ocp.simulation.seabed import seabed_height
 WINCH_ROWS = slice(INPUTS.top_length, INPUTS.top_length_acceleration + 1)
 WINCH_INPUTS = 3  # top-element length, its rate and acceleration
 RK4_STAGE_COLUMNS = (0, 1, 1, 2)  # stage-input column of each of the four RK4 stages
-# The Jacobian is one straight-line C function of 9e4 (n = 2) to 1.6e5 (n = 3) instructions,
-# bound by memory traffic: gcc -O0 compiles it 3.5x faster than -O1 (18 s against 65 s at
-# n = 3 on a loaded 2-core machine) for the same speed (400 against 455 us per call).
-JACOBIAN_FLAGS = ("-O0",)
 
 
 def rhs_jacobian(model: CableModel) -> tuple[ca.Function, CompileReport]:
@@ -50,8 +48,7 @@ def rhs_jacobian(model: CableModel) -> tuple[ca.Function, CompileReport]:
             "rhs_jacobian", [x, u, p], [xdot, jacobian], ["x", "u", "p"], ["xdot", "jacobian"],
             {"cse": True},
         )  # fmt: skip
-        description = f"{parametric.structure!r}|rhs_jacobian"
-        return compiled(function, description, derivatives=False, flags=JACOBIAN_FLAGS)
+        return compiled(function, f"{parametric.structure!r}|rhs_jacobian", derivatives=False)
 
     function, report = parametric.memo(("rhs_jacobian",), build)
     return model.memo(("rhs_jacobian",), lambda: model.bind(function)), report

@@ -306,7 +306,7 @@ class ShootingProblem:
         )
         step_function, report = ocp_step(model, step, settings.compiled)
         self.compile_time = report.compile_time if report is not None else 0.0
-        interval = _interval_function(step_function, step, per_interval, problem.scene.seabed.hills)
+        interval = _interval_function(step_function, step, per_interval, problem.scene.seabed)
         arguments = (inputs, bias_rows, named["end_offset"], named["reference"])
         if settings.shooting == "single":
             run = interval.mapaccum(settings.intervals)

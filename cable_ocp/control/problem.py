@@ -119,24 +119,24 @@ class WinchProblem:
 
     @classmethod
     def receding(
-        cls, scene, horizon: float, sample: float, elements: int, step: float
+        cls, scene, horizon: float, interval: float, elements: int, step: float
     ) -> WinchProblem:
         """The problem over one horizon of a receding-horizon controller (a closed loop).
 
-        The control is a free-start Hermite angle on intervals of one ``sample`` (its node 0 is
-        where the winch is when the solve starts); the bounds hold between the samples as in the
-        open loop. The defaults of :meth:`parameter_values` are the scene's first horizon; a
+        The control is a free-start Hermite angle on intervals of ``interval`` seconds (its node
+        0 is where the winch is when the solve starts); the bounds hold between the samples as in
+        the open loop. The defaults of :meth:`parameter_values` are the scene's first horizon; a
         controller sets them from its estimate and forecasts at every sample.
 
         Parameters
         ----------
         scene : Scene
-        horizon, sample, step : float, s
-            ``sample`` divides ``horizon`` and ``step`` divides ``sample``.
+        horizon, interval, step : float, s
+            ``interval`` divides ``horizon`` and ``step`` divides ``interval``.
         elements : int
             Elements of the controller's model.
         """
-        control = HermiteIntervals(horizon, round(horizon / sample), free_start=True)
+        control = HermiteIntervals(horizon, round(horizon / interval), free_start=True)
         grid = np.arange(step_count(horizon, step) + 1) * step
         model = CableModel.from_scene(scene, elements)
         drive = Drive.from_scene(scene, winch.locked, elements=elements)
@@ -162,7 +162,7 @@ class WinchProblem:
     def parameter_values(self) -> ProblemParameters:
         """The named parameters from the scene: its start, top motion and end force."""
         inputs = stage_inputs(self.drive, self.grid[:-1], self.step)
-        reference = clearance_reference(self.scene.seabed.hills, self.x0)
+        reference = clearance_reference(self.scene.seabed, self.x0)
         return ProblemParameters.from_stage_inputs(self.x0, inputs, reference)
 
     @property
@@ -198,7 +198,7 @@ class WinchProblem:
 
     def clearance(self, states: np.ndarray) -> np.ndarray:
         """Clearance error e(t) (m) of states of the optimisation model."""
-        return clearance_error(self.scene.seabed.hills, states[:, :3])
+        return clearance_error(self.scene.seabed, states[:, :3])
 
     def omega(self, states: np.ndarray) -> float:
         """Omega (eq. 39, m) of states of the optimisation model on the grid."""

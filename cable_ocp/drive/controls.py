@@ -136,13 +136,17 @@ class HermiteIntervals:
         out[1:, beyond] = 0.0
         return out[0], out[1], out[2]
 
-    def shifted(self, parameters: np.ndarray) -> np.ndarray:
-        """A free-start plan moved on by one interval: nodes shift left, the last held at rest."""
+    def resampled(self, parameters: np.ndarray, offset: float) -> np.ndarray:
+        """Free-start parameters of the same angle moved on by ``offset`` (s): a warm start.
+
+        The new nodes take the angle and rate at ``offset + t_k``: exact where the nodes fall on
+        old ones (an offset of whole intervals), a C1 interpolation between them otherwise;
+        beyond the old end the angle holds at rest.
+        """
         if not self.free_start:
-            raise ValueError("only a free-start control (a receding horizon) can be shifted")
-        n = self.intervals + 1
-        values, rates = parameters[:n], parameters[n:]
-        return np.concatenate([values[1:], values[-1:], rates[1:], [0.0]])
+            raise ValueError("only a free-start control (a receding horizon) can be resampled")
+        b0, b1, _ = self.basis(offset + self.breakpoints)
+        return np.concatenate([b0 @ parameters, b1 @ parameters])
 
     def angle_function(self, parameters: np.ndarray):
         """The winch angle history of a parameter vector (it takes ``left`` as :meth:`basis`)."""

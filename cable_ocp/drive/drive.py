@@ -81,9 +81,10 @@ class Drive:
         if self.heave_compensation:
             position, velocity, acceleration = self.top(t)
             start = self.top(np.zeros(1))[0][2]
-            phi = phi + (position[2] - start) / self.drum_radius
-            rate = rate + velocity[2] / self.drum_radius
-            acc = acc + acceleration[2] / self.drum_radius
+            payout = winch.heave_payout(
+                position[2] - start, velocity[2], acceleration[2], self.drum_radius
+            )
+            phi, rate, acc = phi + payout[0], rate + payout[1], acc + payout[2]
         return phi, rate, acc
 
     def inputs(self, t: np.ndarray, left=None) -> np.ndarray:

@@ -102,6 +102,25 @@ def tabulated_angle(time, angles) -> WinchAngleFunction:
     return angle
 
 
+def heave_payout(
+    departure: np.ndarray, speed: np.ndarray, acceleration: np.ndarray, drum_radius: float
+) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Winch angle that pays out a vertical motion of the top (eq. 38): ``z / r_D`` and rates.
+
+    Parameters
+    ----------
+    departure, speed, acceleration : arrays, m, m/s, m/s^2
+        The top's height from its reference (the start in the open loop, the forecast in the
+        closed loop) with its rates.
+    drum_radius : float, m
+
+    Returns
+    -------
+    phi, phi', phi'' : arrays, rad, rad/s, rad/s^2
+    """
+    return departure / drum_radius, speed / drum_radius, acceleration / drum_radius
+
+
 def top_length(
     angle: WinchAngleFunction,
     t: np.ndarray,

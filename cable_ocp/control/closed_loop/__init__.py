@@ -1,15 +1,38 @@
 """Closed-loop winch control by a receding-horizon OCP (model predictive control).
 
-``mpc(scene, horizon=..., sample=...)`` runs the scene's full model (the plant) under a controller
-that solves a multiple-shooting OCP on a reduced model every sample. Modules: ``controller`` (the
-NLP), ``projection`` (the state estimate), ``forecast`` (the top forecast), ``plant`` (the plant
-and the heave feedback), ``loop`` (the front door), ``result`` (:class:`MpcResult`) and
-``labelled`` (its Dataset); its figures are in ``cable_ocp.plots.closed_loop`` and its command in
-``cable_ocp.cli.mpc``. The package is not called ``mpc`` so that ``cable_ocp.mpc`` can be the
-function.
+``mpc(scene, MpcSettings(...))`` runs the scene's full model (the plant) under a controller that
+solves the open loop's winch problem over a receding horizon on a reduced model at every sample.
+Modules, in the order of one sample: ``estimator`` (the plant's measurements to the controller's
+view, with ``projection`` for the reduced state and ``forecast`` for the top), ``controller``
+(the receding-horizon problem and its solver), ``plant`` (the plant and the heave feedback);
+``loop`` is the front door, ``settings`` holds :class:`MpcSettings`, ``result``
+:class:`MpcResult` and ``labelled`` its Dataset. Its figures are in
+``cable_ocp.plots.closed_loop`` and its command in ``cable_ocp.cli.mpc``. The package is not
+called ``mpc`` so that ``cable_ocp.mpc`` can be the function.
+
+The names below are imported on first use (PEP 562), so that the command line reads the settings'
+defaults without loading the solvers.
 """
 
-from cable_ocp.control.closed_loop.loop import mpc
-from cable_ocp.control.closed_loop.result import MpcResult
+from __future__ import annotations
 
-__all__ = ["MpcResult", "mpc"]
+from importlib import import_module
+from typing import TYPE_CHECKING
+
+if TYPE_CHECKING:  # what __getattr__ imports, for type checkers and the import graph
+    from cable_ocp.control.closed_loop.loop import mpc
+    from cable_ocp.control.closed_loop.result import MpcResult
+    from cable_ocp.control.closed_loop.settings import MpcSettings
+
+_SOURCES = {
+    "mpc": "cable_ocp.control.closed_loop.loop",
+    "MpcResult": "cable_ocp.control.closed_loop.result",
+    "MpcSettings": "cable_ocp.control.closed_loop.settings",
+}
+__all__ = ["MpcResult", "MpcSettings", "mpc"]
+
+
+def __getattr__(name: str):
+    if name in _SOURCES:
+        return getattr(import_module(_SOURCES[name]), name)
+    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
