@@ -8,7 +8,7 @@ from cable_ocp.studies import bench
 
 def test_ocp_speed_case_reports_a_verified_solve(models_dir):
     """The quick case (small_tow) converges, holds its bounds and splits its wall time."""
-    figures = bench.ocp_speed_case(str(models_dir / "small_tow.toml"), "single", quick=True)
+    figures = bench.ocp_speed_case(str(models_dir / "small_tow.toml"), "gauss-newton", quick=True)
     assert figures["success"] and figures["bounds_held"]
     assert figures["omega"] < 1e-3  # measured 2.2e-4 m
     parts = ("build", "compile", "solve", "verification")
@@ -16,6 +16,6 @@ def test_ocp_speed_case_reports_a_verified_solve(models_dir):
     assert sum(figures[k] for k in parts) <= figures["wall"]
 
 
-def test_bench_accepts_the_ocp_speed_part():
-    args = build_parser().parse_args(["bench", "--only", "ocp-speed", "--quick"])
-    assert args.only == ["ocp-speed"] and args.quick
+def test_bench_accepts_the_ocp_speed_and_mpc_parts():
+    args = build_parser().parse_args(["bench", "--only", "mpc", "ocp-speed", "--quick"])
+    assert args.only == ["mpc", "ocp-speed"] and args.quick

@@ -323,6 +323,7 @@ def _bench(args) -> int:
         "moordyn": moordyn_report,
         "ocp": bench.ocp_report,
         "ocp-speed": bench.ocp_speed_report,
+        "mpc": _bench_mpc,
         "robustness": lambda _, quick: robustness.report(
             args.cases or (6 if quick else 50), args.seed
         ),
@@ -331,6 +332,17 @@ def _bench(args) -> int:
         parts[name](models_dir(), quick=args.quick)
         print()
     return 0
+
+
+def _bench_mpc(models: Path, quick: bool = False) -> None:
+    """The closed loop's benchmark, with its figure of solve times saved beside."""
+    from cable_ocp.plots.closed_loop import solve_time_comparison
+    from cable_ocp.studies import bench_mpc
+
+    results = bench_mpc.report(models, quick=quick)
+    path = Path("mpc_solve_times.png")
+    solve_time_comparison(results, path=path)
+    print(f"figure written to {path.resolve()}")
 
 
 def _study(args) -> int:
@@ -445,7 +457,7 @@ def build_parser() -> argparse.ArgumentParser:
     bench.add_argument(
         "--only",
         nargs="+",
-        choices=["rk4", "simulate", "moordyn", "ocp", "ocp-speed", "robustness"],
+        choices=["rk4", "simulate", "moordyn", "ocp", "ocp-speed", "mpc", "robustness"],
         help="run only these parts (robustness runs only when named)",
     )
     bench.add_argument(

@@ -38,7 +38,15 @@ BACKTRACKS = 12
 # A predicted decrease below this share of Omega^2 that the line search cannot realise is
 # round-off: the iterations have converged.
 NEGLIGIBLE = 1e-3
-DAQP_INFEASIBLE = "Infeasible: no winch profile meets the winch bounds (DAQP exit flag -1)"
+DAQP_INFEASIBLE = (
+    "Infeasible: no winch profile meets the winch bounds (and seabed.minimum_clearance, where "
+    "set) (DAQP exit flag -1)"
+)
+# The minimum clearance is imposed this far (m) above seabed.minimum_clearance on the
+# optimisation model: the verification (on the full model) allows 1 mm under it.
+CLEARANCE_BACKOFF = 1e-3
+# A run this far (m) under the backed-off minimum clearance counts as within it.
+BREACH_TOLERANCE = 1e-4
 
 
 @dataclass(frozen=True)
@@ -98,12 +106,18 @@ class GaussNewton:
         self.weights = np.sqrt(trapezoid_weights(problem.step, problem.grid.size) / span)
         rates = radius * problem.control.basis(problem.grid)[1]
         self.rate_rows = np.sqrt(settings.rate_weight) * self.weights[:, None] * rates
-        bounds = problem.bounds
+        bounds, seabed = problem.bounds, problem.scene.seabed
         size = problem.control.size
+        # The hard minimum clearance: delta + e >= c_min (+ a back-off) at every RK4 point after
+        # the start, linearised as the error is.
+        self.floor = None
+        if seabed.minimum_clearance is not None:
+            self.floor = seabed.minimum_clearance + CLEARANCE_BACKOFF - seabed.clearance
+        rows = bounds.matrix.shape[0] + (steps if self.floor is not None else 0)
         self.qp = ca.conic(
             "gauss_newton_qp",
             "daqp",
-            {"h": ca.Sparsity.dense(size, size), "a": ca.Sparsity.dense(*bounds.matrix.shape)},
+            {"h": ca.Sparsity.dense(size, size), "a": ca.Sparsity.dense(rows, size)},
             {"error_on_fail": False},
         )
         self.build_time = time.perf_counter() - started
@@ -113,6 +127,12 @@ class GaussNewton:
         residual = self.weights * linearised.error
         rates = self.rate_rows @ parameters
         return float(residual @ residual + rates @ rates)
+
+    def breach(self, linearised: Linearised) -> float:
+        """How far (m) the run goes under the minimum clearance with its back-off (0: not)."""
+        if self.floor is None or not linearised.finite:
+            return 0.0 if self.floor is None else float("inf")
+        return float(max(np.max(self.floor - linearised.error[1:]), 0.0))
 
     def step(
         self,
@@ -133,14 +153,16 @@ class GaussNewton:
         hessian[np.diag_indices_from(hessian)] += DAMPING * max(np.max(np.diag(hessian)), 1e-30)
         matrix = self.problem.bounds.matrix
         values = matrix @ parameters
+        lba, uba = lower - values, upper - values
+        if self.floor is not None:
+            matrix = np.vstack([matrix, linearised.jacobian[1:]])
+            lba = np.concatenate([lba, self.floor - linearised.error[1:]])
+            uba = np.concatenate([uba, np.full(linearised.error.size - 1, np.inf)])
         lbx = np.full(parameters.size, -np.inf)
         ubx = np.full(parameters.size, np.inf)
         for index, value in fixed.items():
             lbx[index] = ubx[index] = value - parameters[index]
-        solution = self.qp(
-            h=hessian, g=gradient, a=matrix, lba=lower - values, uba=upper - values,
-            lbx=lbx, ubx=ubx,
-        )  # fmt: skip
+        solution = self.qp(h=hessian, g=gradient, a=matrix, lba=lba, uba=uba, lbx=lbx, ubx=ubx)
         stats = self.qp.stats()
         if not stats["success"]:
             flag = stats["return_status"]
@@ -193,7 +215,8 @@ class GaussNewton:
                 parameters = parameters + step
                 status, success = "one Gauss-Newton step (real-time iteration)", True
                 break
-            if predicted <= settings.tolerance * max(cost, 1e-6):
+            breach = self.breach(current)
+            if predicted <= settings.tolerance * max(cost, 1e-6) and breach <= BREACH_TOLERANCE:
                 status, success = "converged: the predicted decrease is below tolerance", True
                 break
             accepted = False
@@ -205,18 +228,24 @@ class GaussNewton:
                 function_time += time.perf_counter() - begun
                 if candidate.finite:
                     trial_cost = self.objective(candidate, trial)
-                    if trial_cost <= cost - ARMIJO * fraction * predicted:
+                    trial_breach = self.breach(candidate)
+                    # A filter: less Omega^2 within the minimum clearance, or a run that goes
+                    # less far under it (restoration).
+                    better = trial_cost <= cost - ARMIJO * fraction * predicted
+                    feasible = trial_breach <= max(breach, BREACH_TOLERANCE)
+                    if (better and feasible) or trial_breach < (1 - ARMIJO) * breach:
                         accepted = True
                         break
                 fraction /= 2
             if not accepted:
                 # Round-off: near the optimum the predicted decrease is below what the
                 # simulation resolves.
-                success = predicted <= NEGLIGIBLE * cost
+                success = predicted <= NEGLIGIBLE * cost and breach <= BREACH_TOLERANCE
                 status = (
                     "converged: no decrease left along the Gauss-Newton step"
                     if success
                     else "the line search found no decrease"
+                    + (f" (the end {breach:.3g} m under the minimum clearance)" if breach else "")
                 )
                 break
             parameters, current, cost = trial, candidate, trial_cost

@@ -23,6 +23,7 @@ from dataclasses import dataclass, field
 import casadi as ca
 import numpy as np
 
+from cable_ocp.control.gauss_newton import CLEARANCE_BACKOFF
 from cable_ocp.control.parameters import ProblemParameters, symbols
 from cable_ocp.control.problem import SolverOutcome, WinchProblem
 from cable_ocp.drive.controls import HermiteIntervals, KnotSpline
@@ -239,10 +240,10 @@ def ocp_step(
 
 
 def _interval_function(step_function, step, steps, hills) -> ca.Function:
-    """``(x, stage inputs, bias, end offset, reference) -> (x_end, int e^2 dt)`` on one interval.
+    """``(x, stage inputs, bias, end offset, reference) -> (x_end, int e^2 dt, e)`` on an interval.
 
     ``e = z_E + b_z - z_ref - z_sb(x_E + b_x, y_E + b_y) + bias`` at the RK4 points (eq. 39
-    with the named parameters of :mod:`cable_ocp.control.parameters`).
+    with the named parameters of :mod:`cable_ocp.control.parameters`); ``e`` after the start.
     """
     size = step_function.size1_in(0)
     x = ca.MX.sym("x", size)
@@ -255,8 +256,11 @@ def _interval_function(step_function, step, steps, hills) -> ca.Function:
     xe, b, zr = ca.SX.sym("xe", size), ca.SX.sym("b", 3), ca.SX.sym("zr")
     error = xe[2] + b[2] - zr - seabed_height(hills, xe[0] + b[0], xe[1] + b[1])
     errors = ca.Function("e", [xe, b, zr], [error]).map(steps + 1)(points, offset, reference)
-    cost = ca.mtimes((errors + bias) ** 2, ca.DM(trapezoid_weights(step, steps + 1)))
-    return ca.Function("interval", [x, stages, bias, offset, reference], [states[:, -1], cost])
+    errors = errors + bias
+    cost = ca.mtimes(errors**2, ca.DM(trapezoid_weights(step, steps + 1)))
+    return ca.Function(
+        "interval", [x, stages, bias, offset, reference], [states[:, -1], cost, errors[1:]]
+    )
 
 
 class ShootingProblem:
@@ -310,13 +314,13 @@ class ShootingProblem:
         arguments = (inputs, bias_rows, named["end_offset"], named["reference"])
         if settings.shooting == "single":
             run = interval.mapaccum(settings.intervals)
-            costs = run(named["initial_state"], *arguments)[1]
+            _, costs, errors = run(named["initial_state"], *arguments)
             nodes, continuity = ca.MX(model.state_size, 0), ca.MX(0, 1)
         else:
             nodes = ca.MX.sym("nodes", model.state_size, settings.intervals)
             starts = ca.horzcat(named["initial_state"], nodes[:, :-1])
             mapped = interval.map(settings.intervals, "thread", settings.threads)
-            ends, costs = mapped(starts, *arguments)
+            ends, costs, errors = mapped(starts, *arguments)
             continuity = ca.vec(ends - nodes)
             states = step_function.mapaccum(total_steps)(named["initial_state"], inputs)
             self._rollout = ca.Function(
@@ -327,18 +331,27 @@ class ShootingProblem:
         effort = ca.dot(ca.DM(trapezoid_weights(step, problem.grid.size)), rates**2)
         objective = (ca.sum2(costs) + rate_weight * effort) / duration
 
-        bounds = problem.bounds
+        bounds, seabed = problem.bounds, problem.scene.seabed
         variables = ca.vertcat(ca.vec(nodes), winch) if nodes.numel() else winch
         self.node_count = nodes.numel()
-        constraints = ca.densify(ca.vertcat(continuity, ca.sparsify(ca.DM(bounds.matrix)) @ winch))
+        # The hard minimum clearance (delta + e >= c_min, backed off) at every RK4 point.
+        clearance = ca.MX(0, 1)
+        self.floor = np.zeros(0)
+        if seabed.minimum_clearance is not None:
+            clearance = ca.vec(errors)
+            floor = seabed.minimum_clearance + CLEARANCE_BACKOFF - seabed.clearance
+            self.floor = np.full(clearance.numel(), floor)
+        constraints = ca.densify(
+            ca.vertcat(continuity, ca.sparsify(ca.DM(bounds.matrix)) @ winch, clearance)
+        )
         self.continuity = np.zeros(continuity.numel())
         self.history: list[float] = []
         self.log = IterationLog("ipopt", quiet=quiet or verbose)
         self._callback = _History(
             self.history,
             self.log,
-            np.concatenate([self.continuity, bounds.lower]),
-            np.concatenate([self.continuity, bounds.upper]),
+            np.concatenate([self.continuity, bounds.lower, self.floor]),
+            np.concatenate([self.continuity, bounds.upper, np.full(self.floor.size, np.inf)]),
         )
         options = {
             "ipopt": ipopt_options(
@@ -391,8 +404,16 @@ class ShootingProblem:
             lbx[self.node_count + index] = ubx[self.node_count + index] = value
             guess[index] = value
         bounds = problem.bounds
-        lbg = np.concatenate([self.continuity, bounds.lower if lower is None else lower])
-        ubg = np.concatenate([self.continuity, bounds.upper if upper is None else upper])
+        lbg = np.concatenate(
+            [self.continuity, bounds.lower if lower is None else lower, self.floor]
+        )
+        ubg = np.concatenate(
+            [
+                self.continuity,
+                bounds.upper if upper is None else upper,
+                np.full(self.floor.size, np.inf),
+            ]
+        )
         self._callback.lbg, self._callback.ubg = lbg, ubg
         self.history.clear()
         self.log.restart()

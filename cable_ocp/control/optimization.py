@@ -91,6 +91,11 @@ class OcpResult:
         ``parameters`` are the slow profile on top, ``trajectory.winch_angle`` the sum.
     notes : str
         What the user should know beyond the status (bound riding, a refined verification step).
+    minimum_clearance : float, m
+        Smallest clearance ``z_E - z_sb`` (= delta + e) of the verified run; a profile under
+        ``seabed.minimum_clearance`` (by more than 1 mm) is not a success.
+    minimum_clearance_time : float, s
+        When the verified run reached it.
     """
 
     method: str
@@ -116,6 +121,8 @@ class OcpResult:
     verified_step: float = float("nan")
     heave_feedforward: bool = False
     notes: str = ""
+    minimum_clearance: float = float("nan")
+    minimum_clearance_time: float = float("nan")
 
     def to_xarray(self) -> xr.Dataset:
         """The result as an ``xarray.Dataset``, its verified trajectory over ``time`` included.
@@ -192,7 +199,7 @@ class OcpResult:
 # Fields of OcpResult that results written before them lack (their defaults are used).
 _OPTIONAL_FIELDS = {
     "compile_time", "verification_time", "bound_time", "bond_residual", "verified_step",
-    "heave_feedforward", "notes",
+    "heave_feedforward", "notes", "minimum_clearance", "minimum_clearance_time",
 }  # fmt: skip
 
 
@@ -265,13 +272,16 @@ def solve_ipopt(
     values = problem.parameter_values()
     parameters = problem.first_guess(compiled=settings.compiled)
     solver_name = "Gauss-Newton" if settings.solver == "gauss-newton" else "IPOPT"
-    for _ in range(1 + (refinements if problem.reduced else 0)):
-        if best is not None:
-            full_error = np.interp(problem.grid, best.time, best.clearance_error)
-            states = best_outcome.states
+    solves = 1 + (refinements if problem.reduced else 0)
+    learned = None  # (full-model run, outcome) the next model correction starts from
+    for solve in range(solves):
+        if learned is not None:
+            run, source = learned
+            full_error = np.interp(problem.grid, run.time, run.clearance_error)
+            states = source.states
             if states is None:
-                states = problem.simulate(best_outcome.parameters, compiled=settings.compiled)
-            parameters = best_outcome.parameters
+                states = problem.simulate(source.parameters, compiled=settings.compiled)
+            parameters = source.parameters
             values = replace(values, bias=full_error - problem.clearance(states))
         outcome = nlp.solve(values, parameters)
         outcomes.append(outcome)
@@ -289,12 +299,19 @@ def solve_ipopt(
             failure = (
                 f"{solver_name} converged ({outcome.status}); verification failed: {trial.reason}"
             )
+            if trial.run is not None and solve + 1 < solves:
+                # The full model broke the minimum clearance that the reduced one held: correct
+                # the model by that run and solve again.
+                learned = (trial.run, outcome)
+                continue
             break
+        failure = None
         verified.append(trial.trajectory.omega)
         if best is not None and trial.trajectory.omega >= best.omega:
             break
         gain = trial.trajectory.omega / best.omega if best is not None else 0.0
         best_outcome, best, checked = outcome, trial.trajectory, trial
+        learned = (best, best_outcome)
         if gain > SMALL_GAIN:
             break
     shown = best_outcome or outcomes[-1]
@@ -339,6 +356,8 @@ def _verification_fields(problem: WinchProblem, checked: Verification | None) ->
         "bond_residual": checked.bond_residual,
         "verified_step": checked.step,
         "notes": "; ".join(notes),
+        "minimum_clearance": checked.minimum_clearance,
+        "minimum_clearance_time": checked.minimum_clearance_time,
     }
 
 

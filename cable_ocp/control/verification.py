@@ -63,6 +63,9 @@ class Verification:
         run); also reported when it broke ``seabed.minimum_clearance``.
     minimum_clearance_time : float, s
         When it was reached (NaN without a run).
+    run : Trajectory or None
+        The full model's run whenever there was a trustworthy one, also when it broke
+        ``seabed.minimum_clearance`` (model correction learns from it).
     """
 
     trajectory: Trajectory | None
@@ -73,6 +76,7 @@ class Verification:
     note: str = ""
     minimum_clearance: float = float("nan")
     minimum_clearance_time: float = float("nan")
+    run: Trajectory | None = None
 
 
 def verify_profile(
@@ -140,6 +144,7 @@ def verify_profile(
             note,
             lowest,
             when,
+            trajectory,
         )
     reason = (
         f"no trustworthy full-model simulation at the scene's step or {STEP_HALVINGS} halvings "

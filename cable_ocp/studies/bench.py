@@ -1,6 +1,6 @@
 """Benchmarks that print their figures next to a baseline measured or quoted in the same run.
 
-``cable-ocp bench`` has four parts, each printing a table:
+``cable-ocp bench`` has these parts, each printing a table:
 
 - ``rk4``: the simulation loop (:func:`cable_ocp.simulation.integrate.integrate`, bond checks
   included) at n = 15 on ``paper_flat`` (winch locked) and n = 100 on ``end_force``,
@@ -13,7 +13,9 @@
   seconds per iteration or evaluation, total, and the verified Omega.
 - ``ocp-speed``: the default ``optimize`` of ``paper_hill`` end to end, each run in a fresh
   process: cold (an empty compile cache) and warm, split into build / compile / solve /
-  verification, against multiple shooting (the previous default) warm in the same run.
+  verification, for the Gauss-Newton solver (the default) against IPOPT with its limited-memory
+  Hessian (the default before) in the same run.
+- ``mpc`` (:mod:`cable_ocp.studies.bench_mpc`): the closed loop's solve times and Omega.
 
 ``cable-ocp bench --hessian`` compares IPOPT's exact and limited-memory Hessians.
 """
@@ -283,17 +285,18 @@ def hessian_report(models_dir: Path) -> None:
 QUICK_OCP_SETTINGS = {"step": 0.25, "intervals": 8}
 
 
-def ocp_speed_case(scene_path: str, shooting: str, quick: bool) -> dict:
+def ocp_speed_case(scene_path: str, solver: str, quick: bool) -> dict:
     """One ``optimize`` of a scene timed in this process, as a dict of figures.
 
-    The scene's default IPOPT settings with ``shooting`` (``"single"``: the default; else
-    ``"multiple"``); ``quick``: :data:`QUICK_OCP_SETTINGS`. Times in s, Omega in m.
+    The scene's default settings with ``solver`` (``"gauss-newton"``: the default; ``"ipopt"``:
+    IPOPT with its limited-memory Hessian, the default before); ``quick``:
+    :data:`QUICK_OCP_SETTINGS`. Times in s, Omega in m.
     """
     from cable_ocp.drive.bounds import violation
 
     scene = load_scene(scene_path)
     base = QUICK_OCP_SETTINGS if quick else {"elements": 3, "step": 0.5}
-    settings = IpoptSettings(**base, shooting=shooting)
+    settings = IpoptSettings(**base, solver=solver)
     started = time.perf_counter()
     result = optimize(scene, "ipopt", settings, quiet=True)
     wall = time.perf_counter() - started
@@ -312,7 +315,7 @@ def ocp_speed_case(scene_path: str, shooting: str, quick: bool) -> dict:
     }
 
 
-def _ocp_speed_process(scene_path: Path, shooting: str, quick: bool, cache: Path) -> dict:
+def _ocp_speed_process(scene_path: Path, solver: str, quick: bool, cache: Path) -> dict:
     """:func:`ocp_speed_case` in a fresh Python process with ``$CABLE_OCP_CACHE = cache``.
 
     ``process`` is the process's whole wall time (s): interpreter, imports and the run.
@@ -321,7 +324,7 @@ def _ocp_speed_process(scene_path: Path, shooting: str, quick: bool, cache: Path
         "import json, sys; from cable_ocp.studies.bench import ocp_speed_case; "
         "print(json.dumps(ocp_speed_case(sys.argv[1], sys.argv[2], sys.argv[3] == 'quick')))"
     )
-    command = [sys.executable, "-c", code, str(scene_path), shooting, "quick" if quick else "full"]
+    command = [sys.executable, "-c", code, str(scene_path), solver, "quick" if quick else "full"]
     env = {**os.environ, "CABLE_OCP_CACHE": str(cache)}
     started = time.perf_counter()
     run = subprocess.run(command, env=env, capture_output=True, text=True)
@@ -332,31 +335,36 @@ def _ocp_speed_process(scene_path: Path, shooting: str, quick: bool, cache: Path
 
 
 def ocp_speed_report(models_dir: Path, quick: bool = False) -> list[tuple[str, dict]]:
-    """Print the default ``optimize`` of ``paper_hill`` cold and warm against multiple shooting.
+    """Print the default ``optimize`` of ``paper_hill`` cold and warm against IPOPT's.
 
-    Every run is a fresh process; the cold one starts from an empty compile cache (a temporary
-    folder), the others reuse what it compiled. ``quick``: ``small_tow`` with
-    :data:`QUICK_OCP_SETTINGS`. Returns the rows as ``(label, figures)``.
+    Every run is a fresh process; each cold one starts from an empty compile cache (a temporary
+    folder per solver), the warm one after it reuses what it compiled. ``quick``: ``small_tow``
+    with :data:`QUICK_OCP_SETTINGS`. Returns the rows as ``(label, figures)``.
     """
     name = "small_tow" if quick else "paper_hill"
     scene_path = models_dir / f"{name}.toml"
     cases = [
-        ("single shooting, cold", "single"),
-        ("single shooting, warm", "single"),
-        ("multiple shooting, warm", "multiple"),
+        ("Gauss-Newton, cold", "gauss-newton"),
+        ("Gauss-Newton, warm", "gauss-newton"),
+        ("IPOPT L-BFGS, cold", "ipopt"),
+        ("IPOPT L-BFGS, warm", "ipopt"),
     ]
-    with tempfile.TemporaryDirectory(prefix="cable_ocp_bench_") as cache:
-        rows = [
-            (label, _ocp_speed_process(scene_path, shooting, quick, Path(cache)))
-            for label, shooting in cases
-        ]
+    rows = []
+    for solver in ("gauss-newton", "ipopt"):
+        with tempfile.TemporaryDirectory(prefix="cable_ocp_bench_") as cache:
+            rows += [
+                (label, _ocp_speed_process(scene_path, solver, quick, Path(cache)))
+                for label, case in cases
+                if case == solver
+            ]
     print(f"optimize({name}) end to end, default IPOPT settings, each run a fresh process; "
           "cold: empty compile cache; same run")  # fmt: skip
     print(f"{'case':<26}{'process':>8}{'wall':>7}{'build':>7}{'compile':>8}{'solve':>7}"
           f"{'verify':>7}{'other':>7}{'iter.':>6}{'solves':>7}{'Omega [m]':>11}{'success':>8}"
           f"{'bounds':>7}{'vs base':>8}")  # fmt: skip
-    baseline = rows[-1][1]["wall"]
+    baselines = {"cold": rows[2][1]["wall"], "warm": rows[3][1]["wall"]}
     for label, r in rows:
+        baseline = baselines[label.rsplit(" ", 1)[1]]
         other = r["wall"] - r["build"] - r["compile"] - r["solve"] - r["verification"]
         print(
             f"{label:<26}{r['process']:>8.1f}{r['wall']:>7.1f}{r['build']:>7.1f}"
@@ -368,6 +376,6 @@ def ocp_speed_report(models_dir: Path, quick: bool = False) -> list[tuple[str, d
         "times in s; 'process' includes starting Python and the imports, 'wall' is optimize() "
         "alone; 'compile' is the optimisation model's C compile (the full model's compile for "
         "verification is in 'verify'); 'other': first guess and model-correction runs; "
-        "'vs base': multiple shooting's wall over the row's."
+        "'vs base': IPOPT's wall (the default before, as cold or as warm) over the row's."
     )
     return rows

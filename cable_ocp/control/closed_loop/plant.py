@@ -66,7 +66,6 @@ class Plant:
         self.radius = scene.winch.drum_radius
         self.top_length = scene.top_element_length
         self.low, self.high = angle_range
-        self._runs: dict[tuple[int, int], object] = {}
 
     def apply(self, angle: AngleFunction, t: np.ndarray, left=None) -> Applied:
         """Limit a commanded angle history to the winch range at the times ``t``.
@@ -172,10 +171,13 @@ class Plant:
         # acceleration jumps at its nodes, which fall on step ends.
         times, left = stage_times(fine[:-1], h)
         stages = self.inputs(self.apply(angle, times, left), times)
-        key = (steps, substeps)
-        if key not in self._runs:
-            self._runs[key] = step_function(self.model, h, compiled=True).mapaccum(steps)
-        states = np.vstack([x, np.array(self._runs[key](x, stages)).T[substeps - 1 :: substeps]])
+        # One map per sample length and step, kept on the model for every loop of the process
+        # (building it costs 0.1 s at n = 15).
+        run = self.model.memo(
+            ("plant_run", steps, h),
+            lambda: step_function(self.model, h, compiled=True).mapaccum(steps),
+        )
+        states = np.vstack([x, np.array(run(x, stages)).T[substeps - 1 :: substeps]])
         times = start + np.arange(count + 1) * self.step
         applied = self.apply(angle, times)
         return states, self.inputs(applied, times).T, applied

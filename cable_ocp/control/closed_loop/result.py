@@ -33,11 +33,11 @@ class MpcResult:
     sample_times : array (s,), s
         When the controller solved.
     solve_times : array (s,), s
-        Wall time of each solve (IPOPT), without the state estimate.
+        Wall time of each solve (Gauss-Newton or IPOPT), without the state estimate.
     iterations : array (s,)
-        IPOPT iterations of each solve.
+        Iterations of each solve (1 for the real-time iteration).
     statuses : list of str
-        IPOPT's status of each solve.
+        The solver's status of each solve.
     failures : list of str
         One line per failed solve (its time and status); the plant then kept the previous plan.
     success : bool
@@ -50,15 +50,15 @@ class MpcResult:
         The winch range the applied angle is held in.
     real_time_factor : float
         Simulated time over the wall time of the loop (controller and plant; > 1 is faster than
-        real time). The one-off NLP build is not in it (``build_time``).
+        real time). The one-off build of the controller is not in it (``build_time``).
     worst_solve_time : float, s
     wall_time : float, s
         The loop's wall time.
     build_time : float, s
-        Building the NLP (and loading the compiled steps).
+        Building the controller's transcription (compiling or loading its libraries).
     settings : dict
-        horizon, sample, elements, step, heave_feedback, heave_filter, heave_margin,
-        rate_weight, max_iter, plant_elements, plant_step (with their units in the keys).
+        The fields of :class:`.settings.MpcSettings`, plant_elements and plant_step (with their
+        units in the keys, :meth:`.settings.MpcSettings.record`).
     references : dict of str to array (k,)
         Clearance errors of reference runs on the same plant and time grid (``"locked"``,
         ``"open-loop"``, ``"open-loop + heave feedback"``), m.
