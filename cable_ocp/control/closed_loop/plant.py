@@ -47,6 +47,11 @@ class Applied:
     acceleration: np.ndarray
     limited: np.ndarray
 
+    def tail(self, count: int) -> Applied:
+        """The last ``count`` times."""
+        return Applied(*(values[-count:] for values in (
+            self.angle, self.rate, self.acceleration, self.limited)))  # fmt: skip
+
 
 class Plant:
     """The scene's model integrated by RK4 at the scene's step, compiled to C.
@@ -170,17 +175,20 @@ class Plant:
         # The end stage of a step takes the input's left limit (drive.stage_times): the plan's
         # acceleration jumps at its nodes, which fall on step ends.
         times, left = stage_times(fine[:-1], h)
-        stages = self.inputs(self.apply(angle, times, left), times)
+        # The stage times and the output times in one evaluation of the command.
+        outputs = start + np.arange(count + 1) * self.step
+        every = np.concatenate([times, outputs])
+        applied = self.apply(angle, every, np.concatenate([left, np.zeros(count + 1, bool)]))
+        inputs = self.inputs(applied, every)
         # One map per sample length and step, kept on the model for every loop of the process
         # (building it costs 0.1 s at n = 15).
         run = self.model.memo(
             ("plant_run", steps, h),
             lambda: step_function(self.model, h, compiled=True).mapaccum(steps),
         )
+        stages = inputs[:, : times.size]
         states = np.vstack([x, np.array(run(x, stages)).T[substeps - 1 :: substeps]])
-        times = start + np.arange(count + 1) * self.step
-        applied = self.apply(angle, times)
-        return states, self.inputs(applied, times).T, applied
+        return states, inputs[:, times.size :].T, applied.tail(count + 1)
 
     def _health(self, x: np.ndarray, u: np.ndarray, t: float, substeps: int) -> str | None:
         """Why the plant's state at ``t`` cannot be trusted (None when it can)."""
