@@ -105,8 +105,20 @@ def _ipopt_settings(args):
             "(compiled = False): the compiled step carries no second derivatives",
             file=sys.stderr,
         )
-    names = ("elements", "step", "intervals", "shooting", "control", "hessian", "max_iter")
+    names = (
+        "elements",
+        "step",
+        "intervals",
+        "shooting",
+        "control",
+        "hessian",
+        "max_iter",
+        "solver",
+    )
     given = _given(args, names) | ({"compiled": False} if exact else {})
+    # An IPOPT option (its Hessian, multiple shooting) asks for IPOPT unless a solver is named.
+    if "solver" not in given and (args.hessian is not None or args.shooting == "multiple"):
+        given["solver"] = "ipopt"
     return replace(METHODS["ipopt"].default, **given)
 
 
@@ -260,7 +272,13 @@ def _add_optimiser_options(parser) -> None:
     parser.add_argument(
         "--step", type=_positive, help="RK4 step of the optimisation [s] (default: optimize()'s)"
     )
-    parser.add_argument("--intervals", type=_integer(1, 100_000), help="shooting intervals (IPOPT)")
+    parser.add_argument("--intervals", type=_integer(1, 100_000), help="shooting intervals")
+    parser.add_argument(
+        "--solver",
+        choices=["gauss-newton", "ipopt"],
+        help="the shooting NLP's solver (default: gauss-newton; ipopt when --hessian or "
+        "--shooting multiple is given)",
+    )
     parser.add_argument(
         "--shooting",
         choices=["single", "multiple"],
