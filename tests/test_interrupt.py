@@ -47,8 +47,13 @@ def _snapshot(folder: Path) -> dict[str, bytes]:
 
 
 @pytest.mark.skipif(os.name != "posix", reason="SIGINT to a child process")
-@pytest.mark.parametrize("delay", [0.0, 0.05, 0.3])  # in IPOPT's callback, its C code, later
-def test_ctrl_c_during_ipopt_keeps_the_previous_results(tmp_path, delay):
+@pytest.mark.parametrize(
+    ("solver", "delay"),
+    # IPOPT: in its callback, in its C code, later; Gauss-Newton: in its iterations.
+    [("ipopt", 0.0), ("ipopt", 0.05), ("ipopt", 0.3), ("gauss-newton", 0.0),
+     ("gauss-newton", 0.02)],
+)  # fmt: skip
+def test_ctrl_c_during_a_solve_keeps_the_previous_results(tmp_path, solver, delay):
     out = tmp_path / "results"
     scene = str(MODELS / "small_tow.toml")
     first = subprocess.run(
@@ -69,8 +74,8 @@ def test_ctrl_c_during_ipopt_keeps_the_previous_results(tmp_path, delay):
     )
     assert first.returncode == 0, first.stderr
     before = _snapshot(out)
-    command = ["optimize", scene, *SMALL, "--out", str(out)]
-    code, stderr = _interrupt_when(command, "ipopt", delay)
+    command = ["optimize", scene, *SMALL, "--solver", solver, "--out", str(out)]
+    code, stderr = _interrupt_when(command, f"{solver} iter", delay)
     assert code == 130, stderr
     assert "interrupted" in stderr and "failed" not in stderr
     assert _snapshot(out) == before

@@ -56,7 +56,11 @@ class GaussNewtonSettings:
     Attributes
     ----------
     max_iter : int
-        Iterations (one linearisation and one QP each); 1 is the real-time iteration.
+        Iterations (one linearisation and one QP each).
+    real_time : bool
+        Take ``max_iter`` full steps without a line search or a convergence test (a closed
+        loop's real-time iteration, warm-started from its previous plan); its result is the last
+        step's, not simulated again.
     tolerance : float
         Stop when the QP predicts a decrease of Omega^2 below ``tolerance`` times Omega^2 (and
         below ``tolerance`` times (1 mm)^2, so that an Omega near zero stops too).
@@ -67,6 +71,7 @@ class GaussNewtonSettings:
     max_iter: int = 30
     tolerance: float = 1e-6
     rate_weight: float = 0.0
+    real_time: bool = False
 
     def __post_init__(self):
         if not (isinstance(self.max_iter, int) and self.max_iter >= 1):
@@ -127,6 +132,35 @@ class GaussNewton:
         residual = self.weights * linearised.error
         rates = self.rate_rows @ parameters
         return float(residual @ residual + rates @ rates)
+
+    def feasible(
+        self, parameters: np.ndarray, lower: np.ndarray, upper: np.ndarray, fixed: dict
+    ) -> np.ndarray:
+        """The point nearest ``parameters`` within the winch bounds (``parameters`` if inside).
+
+        A least-distance QP on the bounds' rows (the minimum clearance aside); a guess no point
+        can bring inside is returned as it is (the first QP then reports the infeasibility).
+        """
+        matrix = self.problem.bounds.matrix
+        values = matrix @ parameters
+        pinned = all(parameters[i] == value for i, value in fixed.items())
+        if pinned and np.all(values >= lower) and np.all(values <= upper):
+            return parameters
+        size = parameters.size
+        lbx, ubx = np.full(size, -np.inf), np.full(size, np.inf)
+        for index, value in fixed.items():
+            lbx[index] = ubx[index] = value - parameters[index]
+        zeros = np.zeros((self.qp.size1_in(3) - matrix.shape[0], size))
+        rows = np.vstack([matrix, zeros])
+        pad = np.zeros(zeros.shape[0])
+        solution = self.qp(
+            h=np.eye(size), g=np.zeros(size), a=rows,
+            lba=np.concatenate([lower - values, pad - 1.0]),
+            uba=np.concatenate([upper - values, pad + 1.0]), lbx=lbx, ubx=ubx,
+        )  # fmt: skip
+        if not self.qp.stats()["success"]:
+            return parameters
+        return parameters + np.array(solution["x"]).ravel()
 
     def breach(self, linearised: Linearised) -> float:
         """How far (m) the run goes under the minimum clearance with its back-off (0: not)."""
@@ -193,6 +227,10 @@ class GaussNewton:
         started = time.perf_counter()
         function_time = 0.0
         parameters = np.array(guess, dtype=float)
+        if not settings.real_time:
+            # The line search moves between feasible points only (the bounds are linear), so
+            # that the result holds them: start from the guess's nearest feasible point.
+            parameters = self.feasible(parameters, lower, upper, fixed)
         begun = time.perf_counter()
         current = self.linearisation(values, parameters)
         function_time += time.perf_counter() - begun
@@ -211,9 +249,14 @@ class GaussNewton:
             if step is None:
                 status = f"the QP failed: {qp_status}"
                 break
-            if settings.max_iter == 1:  # a real-time iteration: take the full step, unchecked
+            if settings.real_time:  # take the full step, unchecked
                 parameters = parameters + step
-                status, success = "one Gauss-Newton step (real-time iteration)", True
+                if iterations < settings.max_iter:
+                    current = self.linearisation(values, parameters)
+                    if current.finite:
+                        continue
+                status = f"{iterations} Gauss-Newton step(s) (real-time iteration)"
+                success = True
                 break
             breach = self.breach(current)
             if predicted <= settings.tolerance * max(cost, 1e-6) and breach <= BREACH_TOLERANCE:
@@ -268,7 +311,7 @@ class GaussNewton:
             solve_time=solve_time,
             function_time=function_time,
             history=history,
-            states=current.states if current.finite and settings.max_iter > 1 else None,
+            states=current.states if current.finite and not settings.real_time else None,
         )
         return outcome
 

@@ -24,7 +24,7 @@ import numpy as np
 
 from cable_ocp.control.parameters import ProblemParameters
 from cable_ocp.model.cable import CableModel
-from cable_ocp.model.compile import CompileReport, compiled
+from cable_ocp.model.compile import CompileReport, compiled_from
 from cable_ocp.model.layout import INPUTS
 from cable_ocp.simulation.seabed import seabed_height
 
@@ -40,7 +40,7 @@ def rhs_jacobian(model: CableModel) -> tuple[ca.Function, CompileReport]:
     """
     parametric = model.parametric
 
-    def build() -> tuple[ca.Function, CompileReport]:
+    def derive() -> ca.Function:
         x, u, p = parametric.x, parametric.u, parametric.p
         xdot = parametric.rhs(x, u, p)
         wrt = ca.vertcat(x, u[WINCH_ROWS])
@@ -48,11 +48,15 @@ def rhs_jacobian(model: CableModel) -> tuple[ca.Function, CompileReport]:
         # n = 3, against 9.0e4 and 1.6e5 for CasADi's Jacobian of all columns at once, and 2.5
         # to 6x faster per call.
         jacobian = ca.horzcat(*[ca.jacobian(xdot, wrt[i]) for i in range(wrt.numel())])
-        function = ca.Function(
+        return ca.Function(
             "rhs_jacobian", [x, u, p], [xdot, jacobian], ["x", "u", "p"], ["xdot", "jacobian"],
             {"cse": True},
         )  # fmt: skip
-        return compiled(function, f"{parametric.structure!r}|rhs_jacobian", derivatives=False)
+
+    def build() -> tuple[ca.Function, CompileReport]:
+        # Keyed by the right-hand side: a cache hit does not derive the Jacobian again.
+        description = f"{parametric.structure!r}|columns of d xdot / d [x; winch inputs]"
+        return compiled_from(derive, "rhs_jacobian", parametric.rhs, description)
 
     function, report = parametric.memo(("rhs_jacobian",), build)
     return model.memo(("rhs_jacobian",), lambda: model.bind(function)), report

@@ -24,6 +24,7 @@ import subprocess
 import tempfile
 import time
 import warnings
+from collections.abc import Callable
 from pathlib import Path
 
 import casadi as ca
@@ -198,7 +199,11 @@ def _build(
 
 
 def compiled(
-    function: ca.Function, description: str, derivatives: bool = True, quiet: bool = True
+    function: ca.Function,
+    description: str,
+    derivatives: bool = True,
+    quiet: bool = True,
+    key: str | None = None,
 ) -> tuple[ca.Function, CompileReport]:
     """The Function compiled to C (with first derivatives), from the cache when possible.
 
@@ -219,6 +224,9 @@ def compiled(
         simulation; they roughly triple the code).
     quiet : bool
         No message about compiling.
+    key : str, optional
+        The cache key, when the caller has it (:func:`compiled_from`); by default
+        :func:`cache_key` of the Function and the description.
 
     Returns
     -------
@@ -236,7 +244,7 @@ def compiled(
         )
         return interpreted
     name = function.name()
-    key = cache_key(function, f"{description}|derivatives={derivatives}")
+    key = key or cache_key(function, f"{description}|derivatives={derivatives}")
     library = cache_dir() / f"{name}_{key}.so"
     if library.is_file():
         problem = damage(library)
@@ -282,6 +290,39 @@ def compiled(
             stacklevel=2,
         )
         return interpreted
+
+
+def compiled_from(
+    build: Callable[[], ca.Function],
+    name: str,
+    source: ca.Function,
+    description: str,
+    quiet: bool = True,
+) -> tuple[ca.Function, CompileReport]:
+    """:func:`compiled` of ``build()``, keyed by the Function it derives from (no derivatives).
+
+    For a Function derived deterministically from ``source`` (its Jacobian): the key hashes
+    ``source``, ``name`` and the description, so that a cache hit loads the library without
+    building the derived expression (1-2 s for the right-hand side's Jacobian at n = 3).
+
+    Parameters
+    ----------
+    build : callable
+        Builds the SX Function named ``name``; called only on a cache miss.
+    name : str
+    source : casadi.Function
+    description : str
+        Everything else that built it (the derivation included).
+    quiet : bool
+    """
+    key = cache_key(source, f"{description}|{name}|derivatives=False")
+    library = cache_dir() / f"{name}_{key}.so"
+    if library.is_file() and damage(library) is None:
+        try:
+            return ca.external(name, str(library)), CompileReport(True, 0.0, library)
+        except RuntimeError:
+            pass  # compiled() reports and rebuilds it
+    return compiled(build(), description, derivatives=False, quiet=quiet, key=key)
 
 
 def _first_line(error: Exception) -> str:

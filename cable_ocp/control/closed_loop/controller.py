@@ -96,9 +96,10 @@ class RecedingHorizon:
         )
         self.model, self.control = problem.model, problem.control
         if settings.solver == "gauss-newton":
-            self.solver = GaussNewton(
-                problem, GaussNewtonSettings(settings.max_iter, rate_weight=settings.rate_weight)
+            rti = GaussNewtonSettings(
+                settings.max_iter, rate_weight=settings.rate_weight, real_time=True
             )
+            self.solver = GaussNewton(problem, rti)
         else:
             ipopt = IpoptSettings(
                 elements=settings.elements,
