@@ -121,14 +121,24 @@ def winch_map(control, times: np.ndarray, left: np.ndarray, radius: float) -> np
     return radius * stacked.reshape(times.size // 3, 3 * WINCH_INPUTS, -1)
 
 
-def surface_function(seabed, count: int) -> ca.Function:
-    """``(end points (3, count), offset (3)) -> (heights (1, count), gradients (2, count))``."""
-    point = ca.SX.sym("point", 3)
-    offset = ca.SX.sym("offset", 3)
-    x, y = point[0] + offset[0], point[1] + offset[1]
-    height = seabed_height(seabed, x, y)
-    gradient = ca.jacobian(height, point[:2]).T
-    one = ca.Function("surface", [point, offset], [height, gradient])
+def clearance_error_function(seabed) -> ca.Function:
+    """``(end (3), offset (3), reference) -> e``, the transcription's clearance error (m).
+
+    ``e = z_E + b_z - r - z_sb(x_E + b_x, y_E + b_y)`` (eq. 39 with the end offset ``b`` and the
+    reference ``r`` of :mod:`cable_ocp.control.parameters`): one expression for both solvers.
+    """
+    end, offset, reference = ca.SX.sym("end", 3), ca.SX.sym("offset", 3), ca.SX.sym("reference")
+    height = seabed_height(seabed, end[0] + offset[0], end[1] + offset[1])
+    error = end[2] + offset[2] - reference - height
+    return ca.Function("clearance_error", [end, offset, reference], [error])
+
+
+def error_slope_function(seabed, count: int) -> ca.Function:
+    """``(ends (3, count), offset, reference) -> (e (1, count), de/d end (3, count))``."""
+    error = clearance_error_function(seabed)
+    end, offset, reference = ca.SX.sym("end", 3), ca.SX.sym("offset", 3), ca.SX.sym("reference")
+    value = error(end, offset, reference)
+    one = ca.Function("error_slope", [end, offset, reference], [value, ca.gradient(value, end)])
     return one.map(count)
 
 
@@ -176,7 +186,7 @@ class ErrorLinearisation:
         self.model, self.step, self.steps = model, step, steps
         self.sweep = sweep_function(model, step, steps)
         self.winch = winch_map(control, times, left, radius)
-        self.surface = surface_function(seabed, steps + 1)
+        self.slope = error_slope_function(seabed, steps + 1)
         self.compile_report = rhs_jacobian(model)[1]
         # The sweep writes into numpy arrays in place (CasADi's column-major layout: a C-order
         # array of the transposed shape), which spares converting 1.7e6 numbers through DM.
@@ -216,9 +226,7 @@ class ErrorLinearisation:
         for k in range(count):
             sensitivity = a[k] @ sensitivity + forced[k]
             end_rows[k + 1] = sensitivity[:3]
-        heights, gradients = self.surface(states[:, :3].T, values.end_offset)
-        heights, gradients = np.asarray(heights).ravel(), np.asarray(gradients)
-        error = states[:, 2] + values.end_offset[2] - values.reference - heights + values.bias
-        slope = np.vstack([-gradients, np.ones(count + 1)]).T  # de/d(x_E, y_E, z_E)
-        jacobian = np.einsum("ki,kis->ks", slope, end_rows)
+        error, slope = self.slope(states[:, :3].T, values.end_offset, values.reference)
+        error = np.asarray(error).ravel() + values.bias
+        jacobian = np.einsum("ik,kis->ks", np.asarray(slope), end_rows)
         return Linearised(states, error, jacobian, True)

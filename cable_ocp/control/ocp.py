@@ -24,6 +24,7 @@ import casadi as ca
 import numpy as np
 
 from cable_ocp.control.gauss_newton import CLEARANCE_BACKOFF
+from cable_ocp.control.linearisation import clearance_error_function
 from cable_ocp.control.parameters import ProblemParameters, symbols
 from cable_ocp.control.problem import SolverOutcome, WinchProblem
 from cable_ocp.drive.controls import HermiteIntervals, KnotSpline
@@ -33,7 +34,7 @@ from cable_ocp.model.compile import CompileReport
 from cable_ocp.model.layout import INPUT_SIZE
 from cable_ocp.simulation.integrate import step_compile_report, step_count, step_function
 from cable_ocp.simulation.progress import IterationLog, check_verbosity
-from cable_ocp.simulation.seabed import seabed_height, trapezoid_weights
+from cable_ocp.simulation.seabed import trapezoid_weights
 
 NLP_FUNCTIONS = ("nlp_f", "nlp_g", "nlp_grad_f", "nlp_jac_g", "nlp_hess_l", "nlp_grad")
 # IPOPT's status when CasADi's interrupt check stopped it.
@@ -239,7 +240,7 @@ def ocp_step(
     return function, step_compile_report(model, step, derivatives=True)
 
 
-def _interval_function(step_function, step, steps, hills) -> ca.Function:
+def _interval_function(step_function, step, steps, seabed) -> ca.Function:
     """``(x, stage inputs, bias, end offset, reference) -> (x_end, int e^2 dt, e)`` on an interval.
 
     ``e = z_E + b_z - z_ref - z_sb(x_E + b_x, y_E + b_y) + bias`` at the RK4 points (eq. 39
@@ -253,9 +254,7 @@ def _interval_function(step_function, step, steps, hills) -> ca.Function:
     reference = ca.MX.sym("reference")
     states = step_function.mapaccum(steps)(x, stages)
     points = ca.horzcat(x, states)
-    xe, b, zr = ca.SX.sym("xe", size), ca.SX.sym("b", 3), ca.SX.sym("zr")
-    error = xe[2] + b[2] - zr - seabed_height(hills, xe[0] + b[0], xe[1] + b[1])
-    errors = ca.Function("e", [xe, b, zr], [error]).map(steps + 1)(points, offset, reference)
+    errors = clearance_error_function(seabed).map(steps + 1)(points[:3, :], offset, reference)
     errors = errors + bias
     cost = ca.mtimes(errors**2, ca.DM(trapezoid_weights(step, steps + 1)))
     return ca.Function(
