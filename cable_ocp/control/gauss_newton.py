@@ -22,6 +22,7 @@ from dataclasses import dataclass
 import casadi as ca
 import numpy as np
 
+from cable_ocp.control.interrupts import check, keeping_interrupts
 from cable_ocp.control.linearisation import ErrorLinearisation, Linearised
 from cable_ocp.control.parameters import ProblemParameters
 from cable_ocp.control.problem import SolverOutcome, WinchProblem
@@ -220,6 +221,19 @@ class GaussNewton:
         under its parameters (None after a real-time iteration, which does not simulate its
         result).
         """
+        with keeping_interrupts() as seen:
+            return self._solve(values, guess, fixed, lower, upper, seen)
+
+    def _solve(
+        self,
+        values: ProblemParameters,
+        guess: np.ndarray,
+        fixed: dict[int, float] | None,
+        lower: np.ndarray | None,
+        upper: np.ndarray | None,
+        seen: list[int],
+    ) -> SolverOutcome:
+        """:meth:`solve`, stopping at once when ``seen`` records a SIGINT."""
         settings, bounds = self.settings, self.problem.bounds
         lower = bounds.lower if lower is None else lower
         upper = bounds.upper if upper is None else upper
@@ -244,6 +258,7 @@ class GaussNewton:
             history.append(cost)
             self._report(history, parameters, lower, upper)
         while current.finite and iterations < settings.max_iter:
+            check(seen)
             iterations += 1
             step, predicted, qp_status = self.step(current, parameters, lower, upper, fixed)
             if step is None:

@@ -15,8 +15,6 @@ objective is ``Omega^2`` of eq. 39 by the trapezoidal rule over the RK4 steps.
 
 from __future__ import annotations
 
-import signal
-import threading
 import time
 from dataclasses import dataclass, field
 
@@ -24,6 +22,7 @@ import casadi as ca
 import numpy as np
 
 from cable_ocp.control.gauss_newton import CLEARANCE_BACKOFF
+from cable_ocp.control.interrupts import keeping_interrupts
 from cable_ocp.control.linearisation import clearance_error_function
 from cable_ocp.control.parameters import ProblemParameters, symbols
 from cable_ocp.control.problem import SolverOutcome, WinchProblem
@@ -44,32 +43,12 @@ INTERRUPTED = "User_Requested_Stop"
 def interrupted_solve(solver: ca.Function, **arguments) -> dict:
     """``solver(**arguments)``, re-raising a user's Ctrl-C as KeyboardInterrupt.
 
-    IPOPT turns an interrupt into a return status (``User_Requested_Stop``, or
-    ``NonIpopt_Exception_Thrown`` when CasADi's check or a Python callback met the
-    KeyboardInterrupt); a user's interrupt is never a solver's failure, so a SIGINT seen during
-    the solve leaves here as the interrupt it was. The handler is only watched from the main
-    thread (a Dask worker's solve cannot be interrupted this way anyway).
+    A user's interrupt is never a solver's failure (:mod:`cable_ocp.control.interrupts`); IPOPT's
+    ``User_Requested_Stop`` is one too.
     """
-    seen = []
-    previous = signal.getsignal(signal.SIGINT)
-    watched = threading.current_thread() is threading.main_thread() and callable(previous)
-
-    def watch(number, frame):
-        seen.append(number)
-        previous(number, frame)
-
-    if watched:
-        signal.signal(signal.SIGINT, watch)
-    try:
+    with keeping_interrupts():
         solution = solver(**arguments)
-    except RuntimeError:
-        if seen:
-            raise KeyboardInterrupt from None
-        raise
-    finally:
-        if watched:
-            signal.signal(signal.SIGINT, previous)
-    if seen or solver.stats()["return_status"] == INTERRUPTED:
+    if solver.stats()["return_status"] == INTERRUPTED:
         raise KeyboardInterrupt
     return solution
 
