@@ -343,6 +343,7 @@ def test_the_survey_figures_draw_the_grid_the_cable_and_c_min(models_dir, tmp_pa
         assert (tmp_path / name).stat().st_size > 10_000
 
 
+@pytest.mark.slow
 def test_paper_hill_on_a_grid_has_the_optimum_of_the_analytic_hill(
     paper_hill, tmp_path, validation
 ):

@@ -299,6 +299,7 @@ def test_the_plan_holds_the_winch_bounds_between_samples(short_hill):
     assert result.planned_angle.min() >= low - BOUND_TOLERANCE
 
 
+@pytest.mark.slow
 def test_real_time_iteration_and_ipopt_solve_one_transcription(short_hill, closed_loop):
     """The same receding-horizon problem solved by IPOPT to convergence: the same loop Omega
     (the real-time iteration: one Gauss-Newton step per sample), within 2 %."""
