@@ -104,6 +104,18 @@ def test_nelder_mead_at_its_evaluation_limit_is_not_a_success(small):
     assert "evaluations" in result.status.lower()
 
 
+def test_gauss_newton_and_ipopt_find_the_same_winch(solved, small):
+    """Two solvers of one transcription: the verified Omega agrees within 0.1 % (measured
+    2.2322025e-4 m and 2.2322025e-4 m; 2 against 17 iterations)."""
+    gauss_newton, _ = solved
+    assert SETTINGS.solver == "gauss-newton"
+    ipopt = optimize(small, "ipopt", replace(SETTINGS, solver="ipopt"), quiet=True)
+    assert gauss_newton.success and ipopt.success, (gauss_newton.status, ipopt.status)
+    assert gauss_newton.omega == pytest.approx(ipopt.omega, rel=1e-3)
+    assert gauss_newton.iterations < ipopt.iterations
+
+
+@pytest.mark.slow
 def test_single_and_multiple_shooting_find_the_same_winch(solved, small):
     """Two formulations of one NLP: the optimum's verified Omega agrees within 1e-5 m (measured
     2.218e-4 m both), and both hold the bounds."""
