@@ -34,15 +34,48 @@ from cable_ocp.simulation.seabed import clearance_error, clearance_reference, rm
 
 
 class Plan:
-    """The plan in force: the controller's parameters from the solve at ``start`` (s)."""
+    """The plan in force: the controller's parameters from the solve at ``start`` (s).
 
-    def __init__(self, start: float, parameters: np.ndarray, control: HermiteIntervals):
+    A new plan starts at the winch's angle and rate (its first node is held there) but not at
+    its acceleration: over its first ``blend`` seconds it takes over from the ``previous`` one
+    by the quintic smoothstep, as the heave reference does (:class:`.forecast.BlendedHeight`), so
+    that the top element's acceleration never jumps at a sample. A jump every second drove the
+    plant's bonds 1.2e-4 to 3.6e-4 m open on 5 of 35 heaving robustness scenes (seeds 0 and 3).
+    """
+
+    def __init__(
+        self,
+        start: float,
+        parameters: np.ndarray,
+        control: HermiteIntervals,
+        previous: Plan | None = None,
+        blend: float = 0.0,
+    ):
         self.start, self.parameters, self.control = start, parameters, control
+        self.previous, self.blend = previous, blend
 
     def __call__(self, t: np.ndarray, left=None) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """Angle, rate and acceleration (rad, rad/s, rad/s^2) at the times ``t``."""
-        bases = self.control.basis(np.asarray(t) - self.start, left)
-        return tuple(b @ self.parameters for b in bases)
+        t = np.atleast_1d(np.asarray(t, dtype=float))
+        bases = self.control.basis(t - self.start, left)
+        new = [b @ self.parameters for b in bases]
+        if self.previous is None or self.blend <= 0:
+            return tuple(new)
+        old = self.previous(t, left)
+        tau = np.clip((t - self.start) / self.blend, 0.0, 1.0)
+        keep = 1 - tau**3 * (10 - 15 * tau + 6 * tau**2)
+        keep_rate = -30 * tau**2 * (1 - tau) ** 2 / self.blend
+        keep_acc = -(60 * tau - 180 * tau**2 + 120 * tau**3) / self.blend**2
+        gap = [o - n for o, n in zip(old, new, strict=True)]
+        return (
+            new[0] + keep * gap[0],
+            new[1] + keep * gap[1] + keep_rate * gap[0],
+            new[2] + keep * gap[2] + 2 * keep_rate * gap[1] + keep_acc * gap[0],
+        )
+
+    def settled(self) -> Plan:
+        """The same plan without its predecessor (once the blend is over)."""
+        return Plan(self.start, self.parameters, self.control)
 
 
 def _command(plan: Plan, reference: BlendedHeight | None, top, radius: float):
@@ -132,7 +165,7 @@ def mpc(scene, settings: MpcSettings | None = None, quiet: bool = False, **field
         iterations.append(solve.iterations)
         statuses.append(solve.status)
         if solve.success:
-            plan = Plan(now, solve.parameters, controller.control)
+            plan = Plan(now, solve.parameters, controller.control, plan.settled(), settings.sample)
         else:
             failures.append(f"t = {now:g} s: {solve.status}")
         if settings.heave_feedback:
