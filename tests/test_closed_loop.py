@@ -9,7 +9,6 @@ from legacy_results import write_mpc_result
 
 from cable_ocp.control.closed_loop import MpcSettings, mpc
 from cable_ocp.control.closed_loop.forecast import BlendedHeight, HeightFilter, TopForecast
-from cable_ocp.control.closed_loop.plant import LIMITER_BAND
 from cable_ocp.control.closed_loop.projection import project_state
 from cable_ocp.control.closed_loop.result import MpcResult
 from cable_ocp.drive.bounds import BOUND_TOLERANCE
@@ -294,7 +293,8 @@ def test_the_plan_holds_the_winch_bounds_between_samples(short_hill):
     result = mpc(scene, quiet=True, references=(), heave_margin=0.0, **SHORT)
     low, high = result.angle_range
     assert result.success, result.status
-    assert result.planned_angle.max() > high - LIMITER_BAND - 0.05  # it rides the bound
+    band = MpcSettings().limiter_band
+    assert result.planned_angle.max() > high - band - 0.05  # it rides the bound
     assert result.planned_angle.max() <= high + BOUND_TOLERANCE
     assert result.planned_angle.min() >= low - BOUND_TOLERANCE
 

@@ -74,6 +74,12 @@ def add_mpc_command(subparsers) -> None:
         help="room kept for the heave feedback, 0..1",
     )
     parser.add_argument(
+        "--limiter-band",
+        type=float,
+        default=defaults.limiter_band,
+        help="width of the plant's soft limiter at each end of the winch range [rad]",
+    )
+    parser.add_argument(
         "--rate-weight",
         type=_weight,
         default=defaults.rate_weight,
@@ -117,6 +123,7 @@ def run_mpc_command(args) -> int:
         heave_feedback=not args.no_heave_feedback,
         heave_filter=args.heave_filter,
         heave_margin=args.heave_margin,
+        limiter_band=args.limiter_band,
         rate_weight=args.rate_weight,
         max_iter=args.max_iter,
         references=("locked", "open-loop") if args.open_loop else ("locked",),

@@ -24,11 +24,17 @@ from cable_ocp.scene.schema import load_scene
 HEAVE = {"top.heave.amplitude": 1.0, "top.heave.period": 8.0}
 # The closed loop as it was before the real-time iteration (its defaults then).
 BASELINE = MpcSettings(
-    sample=5.0, interval=5.0, step=1.0, solver="ipopt", heave_margin=1.0, max_iter=100
+    sample=5.0,
+    interval=5.0,
+    step=1.0,
+    solver="ipopt",
+    heave_margin=1.0,
+    max_iter=100,
+    limiter_band=0.2,
 )
 CASES = (
     ("IPOPT L-BFGS, 5 s sample (baseline)", BASELINE),
-    ("Gauss-Newton RTI, 5 s sample", MpcSettings(sample=5.0, heave_margin=1.0)),
+    ("Gauss-Newton RTI, 5 s sample", replace(BASELINE, solver="gauss-newton", max_iter=1)),
     ("Gauss-Newton RTI, 1 s sample (default)", MpcSettings()),
 )
 QUICK_DURATION = 40.0  # s of the scene with --quick

@@ -13,7 +13,6 @@ import numpy as np
 
 from cable_ocp.control.closed_loop.controller import Estimate
 from cable_ocp.control.closed_loop.forecast import HeightFilter, TopForecast, forecast_top
-from cable_ocp.control.closed_loop.plant import LIMITER_BAND
 from cable_ocp.control.closed_loop.projection import project_state
 from cable_ocp.control.closed_loop.settings import MpcSettings
 from cable_ocp.model.cable import CableModel
@@ -87,7 +86,7 @@ class Estimator:
             self.reduced.spec.top_length + self.radius * angle,
             self.radius * rate,
         )
-        margin = LIMITER_BAND
+        margin = self.settings.limiter_band
         if self.settings.heave_feedback:
             times = np.concatenate(self.times)
             recent = times >= now - 2 * self.settings.heave_filter

@@ -37,10 +37,11 @@ class Plan:
     """The plan in force: the controller's parameters from the solve at ``start`` (s).
 
     A new plan starts at the winch's angle and rate (its first node is held there) but not at
-    its acceleration: over its first ``blend`` seconds it takes over from the ``previous`` one
-    by the quintic smoothstep, as the heave reference does (:class:`.forecast.BlendedHeight`), so
-    that the top element's acceleration never jumps at a sample. A jump every second drove the
-    plant's bonds 1.2e-4 to 3.6e-4 m open on 5 of 35 heaving robustness scenes (seeds 0 and 3).
+    its acceleration: over its first ``blend`` seconds (one RK4 step of the controller's model)
+    it takes over from the ``previous`` one by the quintic smoothstep, as the heave reference
+    does (:class:`.forecast.BlendedHeight`), so that the top element's acceleration never jumps
+    at a sample (with it, one of the 5 heaving robustness scenes whose plant's bonds opened ran
+    through; a wider limiter band did the rest, ``MpcSettings.limiter_band``).
     """
 
     def __init__(
@@ -128,7 +129,7 @@ def mpc(scene, settings: MpcSettings | None = None, quiet: bool = False, **field
     started = time.perf_counter()
     low, high = angle_bounds(scene)
     controller = RecedingHorizon(scene, settings)
-    plant = Plant(scene, (low, high))
+    plant = Plant(scene, (low, high), settings.limiter_band)
     radius = scene.winch.drum_radius
     duration, h = scene.numerics.duration, plant.step
     per_sample = round(settings.sample / h)
@@ -165,7 +166,7 @@ def mpc(scene, settings: MpcSettings | None = None, quiet: bool = False, **field
         iterations.append(solve.iterations)
         statuses.append(solve.status)
         if solve.success:
-            plan = Plan(now, solve.parameters, controller.control, plan.settled(), settings.sample)
+            plan = Plan(now, solve.parameters, controller.control, plan.settled(), settings.step)
         else:
             failures.append(f"t = {now:g} s: {solve.status}")
         if settings.heave_feedback:

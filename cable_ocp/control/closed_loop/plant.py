@@ -26,11 +26,6 @@ from cable_ocp.simulation.statics import equilibrium
 
 # Substeps per plant step tried in turn when a sample's run is in doubt (see Plant.advance).
 SUBSTEPS = (1, 4)
-# Width of the soft limiter at each end of the winch range (rad). Its bend accelerates the winch by
-# about rate^2 / band: at 0.2 rad the heave feedback (1.5 rad/s) bent into a bound opened the
-# plant's bonds by 1.4e-4 to 3.6e-4 m on 5 of 35 heaving robustness scenes (seeds 0 and 3, at a
-# 1 s sample); at 0.5 rad every one of them ran through.
-LIMITER_BAND = 0.5
 AngleFunction = Callable[..., tuple[np.ndarray, np.ndarray, np.ndarray]]
 
 
@@ -64,9 +59,11 @@ class Plant:
     scene : Scene
     angle_range : (float, float), rad
         The range the applied angle is held in.
+    band : float, rad
+        Width of the soft limiter at each end of the range (``MpcSettings.limiter_band``).
     """
 
-    def __init__(self, scene, angle_range: tuple[float, float]):
+    def __init__(self, scene, angle_range: tuple[float, float], band: float):
         self.scene = scene
         self.model = CableModel.from_scene(scene)
         self.step = scene.numerics.step
@@ -74,11 +71,12 @@ class Plant:
         self.radius = scene.winch.drum_radius
         self.top_length = scene.top_element_length
         self.low, self.high = angle_range
+        self.band = band
 
     def apply(self, angle: AngleFunction, t: np.ndarray, left=None) -> Applied:
         """Limit a commanded angle history to the winch range at the times ``t``.
 
-        Within :data:`LIMITER_BAND` of a bound the angle bends smoothly towards it (``b tanh(x /
+        Within ``band`` of a bound the angle bends smoothly towards it (``b tanh(x /
         b)`` beyond the band's start ``x = 0``), so the applied angle never leaves the range and
         its rate and acceleration stay continuous: a hard clip would jump the pay-out speed, and
         a bend that is only C1 (the earlier ``b (1 - exp(-x / b))``) jumps the acceleration by
@@ -88,7 +86,7 @@ class Plant:
         """
         phi, rate, acceleration = (np.array(v, dtype=float) for v in with_left(angle)(t, left))
         limited = np.zeros(phi.shape, dtype=bool)
-        band = LIMITER_BAND
+        band = self.band
         for sign, edge in ((1.0, self.high - band), (-1.0, self.low + band)):
             over = sign * (phi - edge)
             active = over > 0
@@ -152,7 +150,7 @@ class Plant:
             at the scene's step and at each of :data:`SUBSTEPS`.
 
         A sample in doubt at the scene's step is integrated again from the same state with
-        substeps: the soft limiter bends the angle on a time scale of ``LIMITER_BAND / rate``
+        substeps: the soft limiter bends the angle on a time scale of ``band / rate``
         (0.15 s when the heave feedback drives the winch into a bound at 1.3 rad/s, measured
         on a paper_hill variant), which RK4 at h = 0.05 s resolves badly enough to open the
         bonds by 1e-3 m; at h / 4 it stays at the health of the other samples.

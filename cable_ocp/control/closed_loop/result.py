@@ -44,7 +44,7 @@ class MpcResult:
         Every solve succeeded and the plant ran to the end.
     limited_steps : int
         Plant steps at which the soft limiter changed the commanded angle (within
-        :data:`cable_ocp.control.closed_loop.plant.LIMITER_BAND` of a
+        ``MpcSettings.limiter_band`` of a
         bound, :mod:`.plant`).
     angle_range : (float, float), rad
         The winch range the applied angle is held in.
