@@ -153,9 +153,7 @@ class GaussNewton:
         if pinned and np.all(values >= lower) and np.all(values <= upper):
             return parameters
         size = parameters.size
-        lbx, ubx = np.full(size, -np.inf), np.full(size, np.inf)
-        for index, value in fixed.items():
-            lbx[index] = ubx[index] = value - parameters[index]
+        lbx, ubx = _pinned_steps(parameters, fixed)
         zeros = np.zeros((self.qp.size1_in(3) - matrix.shape[0], size))
         rows = np.vstack([matrix, zeros])
         pad = np.zeros(zeros.shape[0])
@@ -198,10 +196,7 @@ class GaussNewton:
             matrix = np.vstack([matrix, linearised.jacobian[1:]])
             lba = np.concatenate([lba, self.floor - linearised.error[1:]])
             uba = np.concatenate([uba, np.full(linearised.error.size - 1, np.inf)])
-        lbx = np.full(parameters.size, -np.inf)
-        ubx = np.full(parameters.size, np.inf)
-        for index, value in fixed.items():
-            lbx[index] = ubx[index] = value - parameters[index]
+        lbx, ubx = _pinned_steps(parameters, fixed)
         solution = self.qp(h=hessian, g=gradient, a=matrix, lba=lba, uba=uba, lbx=lbx, ubx=ubx)
         stats = self.qp.stats()
         if not stats["success"]:
@@ -339,6 +334,13 @@ class GaussNewton:
         """One log line: the iteration, Omega and the excess over the bounds."""
         if self.log is None:
             return
-        values = self.problem.bounds.matrix @ parameters
-        excess = max(float(np.max(lower - values)), float(np.max(values - upper)), 0.0)
+        excess = self.problem.bounds.excess(parameters, lower, upper)
         self.log.line(len(history) - 1, float(np.sqrt(max(history[-1], 0.0))), excess)
+
+
+def _pinned_steps(parameters: np.ndarray, fixed: dict[int, float]) -> tuple[np.ndarray, ...]:
+    """Bounds of a step from ``parameters`` that lands the ``fixed`` ones on their values."""
+    lbx, ubx = np.full(parameters.size, -np.inf), np.full(parameters.size, np.inf)
+    for index, value in fixed.items():
+        lbx[index] = ubx[index] = value - parameters[index]
+    return lbx, ubx

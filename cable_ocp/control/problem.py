@@ -99,23 +99,7 @@ class WinchProblem:
         if feedforward:
             scene = scene.updated({"top.heave.compensation": True})
         step = step or scene.numerics.step
-        grid = np.arange(step_count(scene.numerics.duration, step) + 1) * step
-        model = CableModel.from_scene(scene, elements)
-        drive = Drive.from_scene(scene, winch.locked, elements=model.spec.elements)
-        low, high = angle_bounds(scene)
-        return cls(
-            scene=scene,
-            model=model,
-            step=step,
-            grid=grid,
-            drive=drive,
-            x0=starting_state(model, drive),
-            control=control,
-            low=low,
-            high=high,
-            bounds=LinearBounds.build(scene, control, grid),
-            heave_feedforward=feedforward,
-        )
+        return cls._over(scene, control, elements, step, scene.numerics.duration, feedforward)
 
     @classmethod
     def receding(
@@ -137,9 +121,22 @@ class WinchProblem:
             Elements of the controller's model.
         """
         control = HermiteIntervals(horizon, round(horizon / interval), free_start=True)
+        return cls._over(scene, control, elements, step, horizon)
+
+    @classmethod
+    def _over(
+        cls,
+        scene,
+        control: Control,
+        elements: int | None,
+        step: float,
+        horizon: float,
+        feedforward: bool = False,
+    ) -> WinchProblem:
+        """The problem on ``[0, horizon]``: the model, its locked drive, start and bounds."""
         grid = np.arange(step_count(horizon, step) + 1) * step
         model = CableModel.from_scene(scene, elements)
-        drive = Drive.from_scene(scene, winch.locked, elements=elements)
+        drive = Drive.from_scene(scene, winch.locked, elements=model.spec.elements)
         low, high = angle_bounds(scene)
         return cls(
             scene=scene,
@@ -152,6 +149,7 @@ class WinchProblem:
             low=low,
             high=high,
             bounds=LinearBounds.build(scene, control, grid),
+            heave_feedforward=feedforward,
         )
 
     @property

@@ -156,10 +156,20 @@ class LinearBounds:
         share = np.clip(self.starts / ramp, 0.0, 1.0) * (self.derivatives == 0)
         return self.lower + margin * share, self.upper - margin * share
 
-    def excess(self, parameters: np.ndarray) -> float:
-        """Largest violation of the constraints by ``parameters`` (0 when they hold)."""
+    def excess(
+        self,
+        parameters: np.ndarray,
+        lower: np.ndarray | None = None,
+        upper: np.ndarray | None = None,
+    ) -> float:
+        """Largest violation of the constraints by ``parameters`` (0 when they hold).
+
+        ``lower``, ``upper`` replace the limits (a closed loop's narrowed range).
+        """
+        lower = self.lower if lower is None else lower
+        upper = self.upper if upper is None else upper
         values = self.matrix @ parameters
-        return float(max(np.max(self.lower - values), np.max(values - self.upper), 0.0))
+        return float(max(np.max(lower - values), np.max(values - upper), 0.0))
 
     def scale_into(self, parameters: np.ndarray) -> np.ndarray:
         """``s * parameters`` with the largest ``s`` in [0, 1] that satisfies the constraints.
