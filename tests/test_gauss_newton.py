@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 from scipy.linalg import expm
 
-from cable_ocp.control.linearisation import ErrorLinearisation, chain_stages
+from cable_ocp.control.linearisation import ErrorLinearisation, propagate_sensitivities
 from cable_ocp.control.problem import WinchProblem
 from cable_ocp.drive.controls import HermiteIntervals
 from cable_ocp.drive.drive import stage_times
@@ -29,22 +29,24 @@ def linearisation(problem):
     )  # fmt: skip
 
 
-def test_chained_stages_of_a_linear_system_are_its_rk4_step():
-    """x' = A x + B w: RK4's step matrix is the 4th-order Taylor polynomial of exp(hA), and a
-    constant input enters by h (I + hA/2 + (hA)^2/6 + (hA)^3/24) B (the three stage columns
-    summed)."""
+def test_sensitivities_of_a_linear_system_follow_its_rk4_step():
+    """x' = A x + B w with w = M p at every stage: RK4's step matrix is the 4th-order Taylor
+    polynomial T of exp(hA), and a constant input enters by h (I + hA/2 + (hA)^2/6 + (hA)^3/24) B,
+    so S_1 = h (...) B M and S_2 = (T + I) S_1."""
     rng = np.random.default_rng(3)
-    nx, h, steps = 6, 0.1, 5
+    nx, h, steps, size = 6, 0.1, 2, 4
     a, b = rng.normal(size=(nx, nx)), rng.normal(size=(nx, 3))
-    jacobians = np.tile(np.hstack([a, b])[None, None], (steps, 4, 1, 1))
-    step_matrix, input_matrix = chain_stages(jacobians, h)
+    transposed = np.tile(np.hstack([a, b]).T[None, None], (steps, 4, 1, 1))
+    inputs = rng.normal(size=(3, size))  # the winch rows of every stage column
+    winch = np.tile(np.vstack([inputs] * 3)[None], (steps, 1, 1))
+    sensitivities = propagate_sensitivities(transposed, winch, h)
     ha = h * a
     taylor = sum(np.linalg.matrix_power(ha, k) / np.prod(np.arange(1, k + 1)) for k in range(5))
-    np.testing.assert_allclose(step_matrix[0], taylor, atol=1e-13)
-    assert np.max(np.abs(step_matrix[0] - expm(ha))) < 1e-4  # RK4 is 4th order
-    series = h * (np.eye(nx) + ha / 2 + ha @ ha / 6 + ha @ ha @ ha / 24) @ b
-    summed = input_matrix[0].reshape(nx, 3, 3).sum(axis=1)  # (stage column, winch row)
-    np.testing.assert_allclose(summed, series, atol=1e-13)
+    assert np.max(np.abs(taylor - expm(ha))) < 1e-4  # RK4 is 4th order
+    first = h * (np.eye(nx) + ha / 2 + ha @ ha / 6 + ha @ ha @ ha / 24) @ b @ inputs
+    assert np.all(sensitivities[0] == 0.0)
+    np.testing.assert_allclose(sensitivities[1].T, first, atol=1e-13)
+    np.testing.assert_allclose(sensitivities[2].T, (taylor + np.eye(nx)) @ first, atol=1e-13)
 
 
 def test_error_and_its_jacobian_match_the_simulation_and_central_differences(

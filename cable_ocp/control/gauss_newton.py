@@ -17,6 +17,7 @@ sensitivities and one small QP.
 from __future__ import annotations
 
 import time
+from copy import deepcopy
 from dataclasses import dataclass
 
 import casadi as ca
@@ -30,6 +31,11 @@ from cable_ocp.drive.drive import stage_times
 from cable_ocp.simulation.progress import IterationLog
 from cable_ocp.simulation.seabed import trapezoid_weights
 
+# The QP is first solved on the constraint rows within this distance of their limits (rad, rad/s,
+# rad/s^2), with room for this many rows; rows its solution breaks are added (constraint
+# screening, :meth:`GaussNewton._screened_solve`).
+SCREEN_DISTANCE = 1e-2
+SCREENED_ROWS = 120
 # Levenberg-Marquardt damping of the QP's Hessian, relative to its largest diagonal entry: it
 # keeps the QP strictly convex where a parameter barely moves the error (the horizon's last rate).
 DAMPING = 1e-9
@@ -52,6 +58,9 @@ DAQP_INFEASIBLE = (
 CLEARANCE_BACKOFF = 1e-3
 # A run this far (m) under the backed-off minimum clearance counts as within it.
 BREACH_TOLERANCE = 1e-4
+# The Jacobian is kept for the next step while it predicted the error at the accepted point to
+# within this share of that error (weighted 2-norms).
+STALE_JACOBIAN = 0.05
 
 
 @dataclass(frozen=True)
@@ -124,12 +133,9 @@ class GaussNewton:
         if seabed.minimum_clearance is not None:
             self.floor = seabed.minimum_clearance + CLEARANCE_BACKOFF - seabed.clearance
         rows = bounds.matrix.shape[0] + (steps if self.floor is not None else 0)
-        self.qp = ca.conic(
-            "gauss_newton_qp",
-            "daqp",
-            {"h": ca.Sparsity.dense(size, size), "a": ca.Sparsity.dense(rows, size)},
-            {"error_on_fail": False},
-        )
+        self.qp = _dense_qp("gauss_newton_qp", size, rows)
+        self.screened_qp = _dense_qp("gauss_newton_screened_qp", size, min(SCREENED_ROWS, rows))
+        self._last: tuple[ProblemParameters, np.ndarray, Linearised] | None = None
         self.build_time = time.perf_counter() - started
 
     def objective(self, linearised: Linearised, parameters: np.ndarray) -> float:
@@ -197,14 +203,45 @@ class GaussNewton:
             lba = np.concatenate([lba, self.floor - linearised.error[1:]])
             uba = np.concatenate([uba, np.full(linearised.error.size - 1, np.inf)])
         lbx, ubx = _pinned_steps(parameters, fixed)
-        solution = self.qp(h=hessian, g=gradient, a=matrix, lba=lba, uba=uba, lbx=lbx, ubx=ubx)
-        stats = self.qp.stats()
-        if not stats["success"]:
-            flag = stats["return_status"]
-            return None, 0.0, DAQP_INFEASIBLE if flag == -1 else f"DAQP exit flag {flag}"
-        step = np.array(solution["x"]).ravel()
+        step, status = self._screened_solve(hessian, gradient, matrix, lba, uba, lbx, ubx)
+        if step is None:
+            return None, 0.0, status
         predicted = -float(gradient @ step + 0.5 * step @ hessian @ step)
         return step, 2 * predicted, "solved"
+
+    def _screened_solve(self, hessian, gradient, matrix, lba, uba, lbx, ubx):
+        """The QP's solution ``(step, "solved")``, or ``(None, reason)``, by constraint screening.
+
+        Of the winch bounds' Bernstein rows (1680 on paper_hill) few are ever near active: the QP
+        is solved on the rows within :data:`SCREEN_DISTANCE` of their limits, and rows that its
+        solution breaks are added until none is (the relaxed QP's solution then solves the whole
+        QP). More rows than the screened QP holds fall back to the whole QP.
+        """
+        width = self.screened_qp.size1_in(3)
+        kept = np.flatnonzero((-lba < SCREEN_DISTANCE) | (uba < SCREEN_DISTANCE))
+        if matrix.shape[0] <= width:
+            kept = np.arange(matrix.shape[0])
+        while kept.size <= width:
+            padding = width - kept.size
+            step, status = _solved(
+                self.screened_qp,
+                h=hessian,
+                g=gradient,
+                a=np.vstack([matrix[kept], np.zeros((padding, matrix.shape[1]))]),
+                lba=np.concatenate([lba[kept], np.full(padding, -1.0)]),
+                uba=np.concatenate([uba[kept], np.full(padding, 1.0)]),
+                lbx=lbx,
+                ubx=ubx,
+            )
+            if step is None:
+                return None, status
+            values = matrix @ step
+            broken = np.flatnonzero((values < lba) | (values > uba))
+            broken = np.setdiff1d(broken, kept)
+            if broken.size == 0:
+                return step, status
+            kept = np.union1d(kept, broken)
+        return _solved(self.qp, h=hessian, g=gradient, a=matrix, lba=lba, uba=uba, lbx=lbx, ubx=ubx)
 
     def solve(
         self,
@@ -246,7 +283,7 @@ class GaussNewton:
             # that the result holds them: start from the guess's nearest feasible point.
             parameters = self.feasible(parameters, lower, upper, fixed)
         begun = time.perf_counter()
-        current = self.linearisation(values, parameters)
+        current = self._linearised_start(values, parameters)
         function_time += time.perf_counter() - begun
         history, status, success, iterations = [], "", False, 0
         if self.log is not None:
@@ -282,7 +319,7 @@ class GaussNewton:
             for _ in range(BACKTRACKS):
                 trial = parameters + fraction * step
                 begun = time.perf_counter()
-                candidate = self.linearisation(values, trial)
+                candidate = self.linearisation.error(values, trial)
                 function_time += time.perf_counter() - begun
                 if candidate.finite:
                     trial_cost = self.objective(candidate, trial)
@@ -306,13 +343,19 @@ class GaussNewton:
                     + (f" (the end {breach:.3g} m under the minimum clearance)" if breach else "")
                 )
                 break
-            parameters, current, cost = trial, candidate, trial_cost
+            begun = time.perf_counter()
+            current = self._linearised_after(values, current, candidate, trial, fraction * step)
+            function_time += time.perf_counter() - begun
+            parameters, cost = trial, trial_cost
             history.append(cost)
             self._report(history, parameters, lower, upper)
         else:
             if current.finite and not status:
                 status = f"stopped at max_iter = {settings.max_iter}"
         solve_time = time.perf_counter() - started
+        # Where the next solve may start (copied: a caller may refill its arrays in place); a
+        # real-time iteration ends away from its last linearisation.
+        self._last = None if settings.real_time else (deepcopy(values), parameters, current)
         omega = float(np.sqrt(max(history[-1], 0.0))) if history else float("nan")
         outcome = SolverOutcome(
             parameters=parameters,
@@ -330,12 +373,70 @@ class GaussNewton:
         )
         return outcome
 
+    def _linearised_after(
+        self,
+        values: ProblemParameters,
+        before: Linearised,
+        after: Linearised,
+        parameters: np.ndarray,
+        step: np.ndarray,
+    ) -> Linearised:
+        """The linearisation at an accepted point, whose error ``after`` is known.
+
+        The Jacobian is evaluated again (a simulation with sensitivities) unless the last one
+        predicted the new error to within :data:`STALE_JACOBIAN` of it (weighted 2-norms): then
+        it is kept, as in a simplified Newton method. A model-correction solve moves the winch by
+        a fraction of a millimetre, along which the Jacobian does not change.
+        """
+        predicted = before.error + before.jacobian @ step
+        mismatch = np.linalg.norm(self.weights * (after.error - predicted))
+        if mismatch <= STALE_JACOBIAN * np.linalg.norm(self.weights * after.error):
+            return Linearised(after.states, after.error, before.jacobian, True)
+        return self.linearisation(values, parameters)
+
+    def _linearised_start(self, values: ProblemParameters, parameters: np.ndarray) -> Linearised:
+        """The linearisation at the start of a solve, reusing the last solve's end if it is there.
+
+        A model-correction solve starts where the last one ended, with only the bias changed:
+        the run and the Jacobian are the same, the error moves by the change of the bias.
+        """
+        if self._last is not None:
+            last_values, last_parameters, last = self._last
+            if (
+                last.finite
+                and np.array_equal(parameters, last_parameters)
+                and values.same_run(last_values)
+            ):
+                error = last.error + (values.bias - last_values.bias)
+                return Linearised(last.states, error, last.jacobian, True)
+        return self.linearisation(values, parameters)
+
     def _report(self, history: list[float], parameters, lower, upper) -> None:
         """One log line: the iteration, Omega and the excess over the bounds."""
         if self.log is None:
             return
         excess = self.problem.bounds.excess(parameters, lower, upper)
         self.log.line(len(history) - 1, float(np.sqrt(max(history[-1], 0.0))), excess)
+
+
+def _dense_qp(name: str, size: int, rows: int) -> ca.Function:
+    """DAQP on a dense QP of ``size`` variables and ``rows`` constraint rows (silent)."""
+    return ca.conic(
+        name,
+        "daqp",
+        {"h": ca.Sparsity.dense(size, size), "a": ca.Sparsity.dense(rows, size)},
+        {"error_on_fail": False},
+    )
+
+
+def _solved(qp: ca.Function, **data) -> tuple[np.ndarray | None, str]:
+    """``(x, "solved")`` of a QP, or ``(None, why)`` when DAQP fails."""
+    solution = qp(**data)
+    stats = qp.stats()
+    if not stats["success"]:
+        flag = stats["return_status"]
+        return None, DAQP_INFEASIBLE if flag == -1 else f"DAQP exit flag {flag}"
+    return np.array(solution["x"]).ravel(), "solved"
 
 
 def _pinned_steps(parameters: np.ndarray, fixed: dict[int, float]) -> tuple[np.ndarray, ...]:

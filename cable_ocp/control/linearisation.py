@@ -2,17 +2,19 @@
 
 One sweep of the horizon evaluates the compiled right-hand side with its Jacobian in the state and
 the three winch inputs (top-element length, rate, acceleration) at the four stages of every RK4
-step (:func:`rhs_jacobian`); the stage Jacobians are chained into the step's ``A_k = dx_{k+1}/dx_k``
-and ``B_k = dx_{k+1}/dw_k`` (numpy, batched over the steps), and the forward sensitivity
-``S_{k+1} = A_k S_k + B_k D_k`` runs over the steps, ``D_k`` being the (constant) map from the winch
-parameters to the step's nine winch inputs. The error's Jacobian is then the seabed's gradient at
-the end times the end's rows of ``S``. This is what a Gauss-Newton step needs
+step (:func:`rhs_jacobian`); the forward sensitivity ``S_k = dx_k/dp`` then runs through the stages
+of every step as RK4 runs through its slopes (:func:`propagate_sensitivities`), ``D_k`` being the
+(constant) map from the winch parameters to the step's nine winch inputs. (Chaining the stages
+into each step's ``A_k`` and ``B_k`` first, batched over the steps, cost three times as much: the
+full 40 x 40 products against the sensitivities' 86 x 40.) The error's Jacobian is then the
+seabed's gradient at the end times the end's rows of ``S``. This is what a Gauss-Newton step needs
 (:mod:`cable_ocp.control.gauss_newton`): one simulation with sensitivities, no second derivatives.
 
-The compiled Jacobian (gcc -O1, as every flat Function: -O0 compiles in half the time but runs
-3.6x slower) costs about seven right-hand sides (2.9e4 instructions at n = 2, 4.4e4 at n = 3,
-the right-hand side 4.5e3 at n = 3), against two per direction and stage (33 directions at n =
-2) for CasADi's forward mode through the compiled step.
+The compiled Jacobian (gcc -Og, as every flat Function: 4.6 s to compile at n = 3 against 22.9 s
+at -O1, for 40 us a call against 36 us, :func:`cable_ocp.model.compile.optimisation_flags`)
+costs about seven right-hand sides (2.9e4 instructions at n = 2, 4.4e4 at n = 3, the right-hand
+side 4.5e3 at n = 3), against two per direction and stage (33 directions at n = 2) for CasADi's
+forward mode through the compiled step.
 """
 
 from __future__ import annotations
@@ -26,6 +28,7 @@ from cable_ocp.control.parameters import ProblemParameters
 from cable_ocp.model.cable import CableModel
 from cable_ocp.model.compile import CompileReport, compiled_from
 from cable_ocp.model.layout import INPUTS
+from cable_ocp.simulation.integrate import evaluate_into, step_function
 from cable_ocp.simulation.seabed import seabed_height
 
 WINCH_ROWS = slice(INPUTS.top_length, INPUTS.top_length_acceleration + 1)
@@ -54,18 +57,23 @@ def rhs_jacobian(model: CableModel) -> tuple[ca.Function, CompileReport]:
         )  # fmt: skip
 
     def build() -> tuple[ca.Function, CompileReport]:
-        # Keyed by the right-hand side: a cache hit does not derive the Jacobian again.
+        # Keyed by the code that derives it: a cache hit builds no right-hand side.
         description = f"{parametric.structure!r}|columns of d xdot / d [x; winch inputs]"
-        return compiled_from(derive, "rhs_jacobian", parametric.rhs, description)
+        functions, report = compiled_from(
+            lambda: [derive()], ["rhs_jacobian"], description, True, (__file__,)
+        )
+        return functions[0], report
 
     function, report = parametric.memo(("rhs_jacobian",), build)
     return model.memo(("rhs_jacobian",), lambda: model.bind(function)), report
 
 
-def sweep_function(model: CableModel, step: float, steps: int) -> ca.Function:
-    """``(x0, stage inputs (15, 3 steps)) -> (states (nx, steps), stage Jacobians)``.
+def sweep_step_function(model: CableModel, step: float) -> ca.Function:
+    """``(x, stage inputs (15, 3)) -> (x_next, stage Jacobians)``: one RK4 step, ``step`` in s.
 
-    The stage Jacobians are ``nx x 4 (nx + 3)`` per step, the four stages side by side.
+    The stage Jacobians are ``nx x 4 (nx + 3)``, the four stages side by side. A horizon is swept
+    by calling it step after step (:class:`ErrorLinearisation`): CasADi's ``mapaccum`` over the
+    420 steps of paper_hill took 1 s to build, for outputs of 3e6 numbers.
     """
 
     def build() -> ca.Function:
@@ -80,38 +88,48 @@ def sweep_function(model: CableModel, step: float, steps: int) -> ca.Function:
             rates.append(rate)
             jacobians.append(matrix)
         x_next = x + step / 6 * (rates[0] + 2 * rates[1] + 2 * rates[2] + rates[3])
-        one = ca.Function(
+        return ca.Function(
             "sweep_step", [x, stages], [ca.densify(x_next), ca.densify(ca.horzcat(*jacobians))]
         )
-        return one.mapaccum(steps)
 
-    return model.memo(("sweep", step, steps), build)
+    return model.memo(("sweep_step", step), build)
 
 
-def chain_stages(jacobians: np.ndarray, step: float) -> tuple[np.ndarray, np.ndarray]:
-    """``A_k`` (K, nx, nx) and ``B_k`` (K, nx, 9) of the RK4 steps from their stage Jacobians.
+def propagate_sensitivities(transposed: np.ndarray, winch: np.ndarray, step: float) -> np.ndarray:
+    """Forward sensitivities ``S_k = d x_k / d p`` of the RK4 steps, stage by stage.
 
-    ``jacobians``: (K, 4, nx, nx + 3), stage ``i`` of step ``k``. The nine winch inputs of a step
-    are the three winch rows at its three stage-input columns (index ``3 column + row``).
+    Parameters
+    ----------
+    transposed : array (K, 4, nx + 3, nx)
+        The stage Jacobians ``[d x'/d x, d x'/d w]`` of every step, each transposed (the layout
+        the compiled sweep writes).
+    winch : array (K, 9, size)
+        ``D_k`` of :func:`winch_map`.
+    step : float, s
+
+    Returns
+    -------
+    array (K + 1, size, nx)
+        ``S_k`` transposed, ``S_0 = 0``: the stage slopes' derivatives
+        ``dk_i = J_x,i (S + c_i h dk_(i-1)) + J_w,i D_k`` combined as RK4 combines the slopes.
     """
-    count, _, nx, _ = jacobians.shape
-    width = nx + 3 * WINCH_INPUTS
-    identity = np.zeros((nx, width))
-    identity[:, :nx] = np.eye(nx)
-    total = np.zeros((count, nx, width))
-    slope = None
-    for stage, (weight, column) in enumerate(zip((1, 2, 2, 1), RK4_STAGE_COLUMNS, strict=True)):
-        state_part, winch_part = jacobians[:, stage, :, :nx], jacobians[:, stage, :, nx:]
-        if stage == 0:
-            slope = np.zeros((count, nx, width))
-            slope[:, :, :nx] = state_part
-        else:
-            fraction = step if stage == 3 else step / 2
-            slope = state_part @ (identity + fraction * slope)
-        slope[:, :, nx + 3 * column : nx + 3 * column + 3] += winch_part
-        total += weight * slope
-    total = identity + step / 6 * total
-    return total[:, :, :nx], total[:, :, nx:]
+    count, _, _, nx = transposed.shape
+    size = winch.shape[2]
+    by_column = winch.reshape(count, 3, WINCH_INPUTS, size)[:, list(RK4_STAGE_COLUMNS)]
+    forced = np.swapaxes(by_column, 2, 3) @ transposed[:, :, nx:, :]  # (K, 4, size, nx)
+    state_parts = transposed[:, :, :nx, :]
+    sensitivities = np.zeros((count + 1, size, nx))
+    current = sensitivities[0]
+    half = step / 2
+    for k in range(count):
+        jx, pushed = state_parts[k], forced[k]
+        k1 = current @ jx[0] + pushed[0]
+        k2 = (current + half * k1) @ jx[1] + pushed[1]
+        k3 = (current + half * k2) @ jx[2] + pushed[2]
+        k4 = (current + step * k3) @ jx[3] + pushed[3]
+        current = current + step / 6 * (k1 + 2 * (k2 + k3) + k4)
+        sensitivities[k + 1] = current
+    return sensitivities
 
 
 def winch_map(control, times: np.ndarray, left: np.ndarray, radius: float) -> np.ndarray:
@@ -184,22 +202,38 @@ class ErrorLinearisation:
 
     def __init__(self, model, step, steps, control, radius, seabed, times, left):
         self.model, self.step, self.steps = model, step, steps
-        self.sweep = sweep_function(model, step, steps)
+        sweep = sweep_step_function(model, step)
+        self.run = step_function(model, step, compiled=True).mapaccum(steps)
         self.winch = winch_map(control, times, left, radius)
         self.slope = error_slope_function(seabed, steps + 1)
         self.compile_report = rhs_jacobian(model)[1]
         # The sweep writes into numpy arrays in place (CasADi's column-major layout: a C-order
-        # array of the transposed shape), which spares converting 1.7e6 numbers through DM.
+        # array of the transposed shape), which spares converting 1.7e6 numbers through DM; the
+        # views of every step are made once.
         nx, width = model.state_size, model.state_size + WINCH_INPUTS
-        self._start = np.zeros(nx)
-        self._inputs = np.zeros((3 * steps, INPUTS.end_force.stop))
-        self._states = np.zeros((steps, nx))
+        self._states = np.zeros((steps + 1, nx))  # the initial state first
+        self._inputs = np.zeros((steps, 3, INPUTS.end_force.stop))
         self._jacobians = np.zeros((steps, 4, width, nx))
-        self._buffer, self._run = self.sweep.buffer()
-        for index, array in enumerate((self._start, self._inputs)):
-            self._buffer.set_arg(index, memoryview(array))
-        for index, array in enumerate((self._states, self._jacobians)):
-            self._buffer.set_res(index, memoryview(array))
+        self._buffer, self._run = sweep.buffer()
+        self._views = [
+            tuple(
+                memoryview(array)
+                for array in (
+                    self._states[k], self._inputs[k], self._states[k + 1], self._jacobians[k]
+                )
+            )
+            for k in range(steps)
+        ]  # fmt: skip
+
+    def _sweep(self) -> None:
+        """Step the model over the horizon from ``_states[0]`` under ``_inputs``."""
+        buffer, run = self._buffer, self._run
+        for start, inputs, end, jacobians in self._views:
+            buffer.set_arg(0, start)
+            buffer.set_arg(1, inputs)
+            buffer.set_res(0, end)
+            buffer.set_res(1, jacobians)
+            run()
 
     def stage_inputs(self, values: ProblemParameters, parameters: np.ndarray) -> np.ndarray:
         """The stage inputs (15, 3 K) under the winch parameters."""
@@ -208,25 +242,35 @@ class ErrorLinearisation:
         inputs[WINCH_ROWS] += rows.reshape(-1, WINCH_INPUTS).T
         return inputs
 
+    def error(self, values: ProblemParameters, parameters: np.ndarray) -> Linearised:
+        """The error at ``parameters`` from a run without sensitivities (an empty Jacobian).
+
+        Its run takes the compiled RK4 step (the structured right-hand side), the same model as
+        the sweep's to round-off, at about a twentieth of the sweep's cost.
+        """
+        count = self.steps
+        states = np.empty((count + 1, self.model.state_size))
+        states[0] = values.initial_state
+        inputs = self.stage_inputs(values, parameters).T
+        evaluate_into(self.run, [values.initial_state, inputs], [states[1:]])
+        if not np.all(np.isfinite(states)):
+            return Linearised(states, np.full(count + 1, np.nan), np.zeros((0, 0)), False)
+        error, _ = self.slope(states[:, :3].T, values.end_offset, values.reference)
+        error = np.asarray(error).ravel() + values.bias
+        return Linearised(states, error, np.zeros((0, 0)), True)
+
     def __call__(self, values: ProblemParameters, parameters: np.ndarray) -> Linearised:
         """Error and Jacobian at ``parameters`` (rad, rad/s) for the parameter values."""
-        nx, count = self.model.state_size, self.steps
-        self._start[:] = values.initial_state
-        self._inputs[:] = self.stage_inputs(values, parameters).T
-        self._run()
-        states = np.vstack([values.initial_state, self._states])
-        jacobians = self._jacobians.transpose(0, 1, 3, 2)  # (K, 4, nx, nx + 3)
-        if not (np.all(np.isfinite(states)) and np.all(np.isfinite(jacobians))):
+        count = self.steps
+        self._states[0] = values.initial_state
+        self._inputs.reshape(-1, INPUTS.end_force.stop)[:] = self.stage_inputs(values, parameters).T
+        self._sweep()
+        states = self._states.copy()
+        if not (np.all(np.isfinite(states)) and np.all(np.isfinite(self._jacobians))):
             empty = np.zeros((count + 1, self.winch.shape[2]))
             return Linearised(states, np.full(count + 1, np.nan), empty, False)
-        a, b = chain_stages(jacobians, self.step)
-        forced = b @ self.winch  # (K, nx, size)
-        end_rows = np.zeros((count + 1, 3, self.winch.shape[2]))
-        sensitivity = np.zeros((nx, self.winch.shape[2]))
-        for k in range(count):
-            sensitivity = a[k] @ sensitivity + forced[k]
-            end_rows[k + 1] = sensitivity[:3]
+        sensitivities = propagate_sensitivities(self._jacobians, self.winch, self.step)
         error, slope = self.slope(states[:, :3].T, values.end_offset, values.reference)
         error = np.asarray(error).ravel() + values.bias
-        jacobian = np.einsum("ik,kis->ks", np.asarray(slope), end_rows)
+        jacobian = np.einsum("ik,ksi->ks", np.asarray(slope), sensitivities[:, :, :3])
         return Linearised(states, error, jacobian, True)

@@ -23,7 +23,7 @@ from cable_ocp.control.gauss_newton import GaussNewton, GaussNewtonSettings
 from cable_ocp.control.nelder_mead import NelderMeadSettings, nelder_mead_problem, solve_nelder_mead
 from cable_ocp.control.ocp import IpoptSettings, ShootingProblem, ipopt_problem
 from cable_ocp.control.problem import SolverOutcome, WinchProblem
-from cable_ocp.control.verification import Verification
+from cable_ocp.control.verification import Verification, correction_step
 from cable_ocp.scene import labelled as results
 from cable_ocp.simulation.progress import IterationLog, check_verbosity
 from cable_ocp.simulation.trajectory import Trajectory
@@ -72,7 +72,10 @@ class OcpResult:
         Objective per iteration (IPOPT: Omega^2 on the optimisation model, m^2) or best Omega per
         evaluation (Nelder-Mead, m).
     refinements : list of float
-        Verified Omega after each solve (m); more than one entry with model correction.
+        Omega of the full model after each solve (m); more than one entry with model
+        correction. The reported solve's is its verification at the scene's step, the others'
+        come from the correction runs at a coarser step (``notes`` gives it;
+        :func:`cable_ocp.control.verification.correction_step`).
     compile_time : float, s
         Of ``build_time``, compiling C (0 when the libraries came from the disk cache).
     verification_time : float, s
@@ -207,9 +210,9 @@ def _timed_verify(problem: WinchProblem, quiet: bool, compiled: bool):
     """``problem.verify`` that adds up its wall time: returns (verify, elapsed) callables."""
     elapsed = [0.0]
 
-    def verify(parameters: np.ndarray) -> Verification:
+    def verify(parameters: np.ndarray, step: float | None = None) -> Verification:
         begun = time.perf_counter()
-        checked = problem.verify(parameters, quiet=quiet, compiled=compiled)
+        checked = problem.verify(parameters, quiet=quiet, compiled=compiled, step=step)
         elapsed[0] += time.perf_counter() - begun
         return checked
 
@@ -273,7 +276,11 @@ def solve_ipopt(
     parameters = problem.first_guess(compiled=settings.compiled)
     solver_name = "Gauss-Newton" if settings.solver == "gauss-newton" else "IPOPT"
     solves = 1 + (refinements if problem.reduced else 0)
+    # Full-model runs that only steer the model correction take a coarser step; the profile
+    # reported is verified at the scene's.
+    correction = correction_step(problem.scene, settings.compiled) if solves > 1 else None
     learned = None  # (full-model run, outcome) the next model correction starts from
+    best_solve = None
     for solve in range(solves):
         if learned is not None:
             run, source = learned
@@ -293,7 +300,7 @@ def solve_ipopt(
                 best_outcome = outcome if best is not None else None
                 verified.append(best.omega if best is not None else float("nan"))
             break
-        trial = verify(outcome.parameters)
+        trial = verify(outcome.parameters, correction if solve + 1 < solves else None)
         if trial.trajectory is None:
             verified.append(float("nan"))
             failure = (
@@ -310,10 +317,19 @@ def solve_ipopt(
         if best is not None and trial.trajectory.omega >= best.omega:
             break
         gain = trial.trajectory.omega / best.omega if best is not None else 0.0
-        best_outcome, best, checked = outcome, trial.trajectory, trial
+        best_outcome, best, checked, best_solve = outcome, trial.trajectory, trial, solve
         learned = (best, best_outcome)
         if gain > SMALL_GAIN:
             break
+    if checked is not None and checked.step > problem.scene.numerics.step:
+        checked = verify(best_outcome.parameters)  # a correction run: now at the scene's step
+        best = checked.trajectory
+        verified[best_solve] = best.omega if best is not None else float("nan")
+        if best is None:
+            failure = (
+                f"{solver_name} converged ({best_outcome.status}); verification failed: "
+                f"{checked.reason}"
+            )
     shown = best_outcome or outcomes[-1]
     return OcpResult(
         method="ipopt",
@@ -334,12 +350,17 @@ def solve_ipopt(
         refinements=verified,
         compile_time=nlp.compile_time,
         verification_time=verification_time(),
-        **_verification_fields(problem, checked),
+        **_verification_fields(problem, checked, correction),
     )
 
 
-def _verification_fields(problem: WinchProblem, checked: Verification | None) -> dict:
-    """The OcpResult fields that report the verification of the profile shown."""
+def _verification_fields(
+    problem: WinchProblem, checked: Verification | None, correction: float | None = None
+) -> dict:
+    """The OcpResult fields that report the verification of the profile shown.
+
+    ``correction``: the step (s) of the model-correction runs, when there were any.
+    """
     fields = {"heave_feedforward": problem.heave_feedforward}
     if checked is None or checked.trajectory is None:
         return fields
@@ -350,6 +371,8 @@ def _verification_fields(problem: WinchProblem, checked: Verification | None) ->
         notes.append("the winch pays out the heave (eq. 38) under the optimised profile")
     if checked.note:
         notes.append(checked.note)
+    if correction is not None and correction > problem.scene.numerics.step:
+        notes.append(f"model correction learned from full-model runs at h = {correction:g} s")
     return {
         **fields,
         "bound_time": checked.bound_time,

@@ -71,6 +71,14 @@ class ProblemParameters:
         """The fixed stage inputs (15, 3 K): top motion, winch base and end force."""
         return np.vstack([self.top_motion, self.winch_base, self.end_force])
 
+    def same_run(self, other: ProblemParameters) -> bool:
+        """Whether the model's run is the same under both: every value equal but the bias."""
+        return all(
+            np.array_equal(getattr(self, f.name), getattr(other, f.name))
+            for f in fields(self)
+            if f.name != "bias"
+        )
+
     def pack(self) -> np.ndarray:
         """The NLP's parameter vector (column-major blocks in the order of the fields)."""
         return np.concatenate(

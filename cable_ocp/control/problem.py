@@ -215,13 +215,18 @@ class WinchProblem:
         return guess
 
     def verify(
-        self, parameters: np.ndarray, quiet: bool = True, compiled: bool = False
+        self,
+        parameters: np.ndarray,
+        quiet: bool = True,
+        compiled: bool = False,
+        step: float | None = None,
     ) -> Verification:
         """Check the winch bounds and simulate the scene's own model under the profile.
 
-        See :func:`cable_ocp.control.verification.verify_profile`: it never raises.
+        See :func:`cable_ocp.control.verification.verify_profile` (``step``: a model-correction
+        run's): it never raises.
         """
-        return verify_profile(self.scene, self.control, parameters, quiet, compiled)
+        return verify_profile(self.scene, self.control, parameters, quiet, compiled, step)
 
 
 @dataclass(frozen=True)

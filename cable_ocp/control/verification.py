@@ -15,6 +15,10 @@ a simulation that can be trusted, where does it keep the end? :func:`verify_prof
    hard minimum ``seabed.minimum_clearance`` fails a profile that takes the end closer than it
    (by more than :data:`CLEARANCE_TOLERANCE`), naming where and by how much. An end that leaves
    the bathymetry grid fails the profile at once (a smaller step would not bring it back).
+
+Model correction learns from full-model runs that need not be at the scene's step: they run at
+:func:`correction_step` (a multiple of it, well inside the RK4 stability limit), and only the
+profile reported is verified at the scene's step.
 """
 
 from __future__ import annotations
@@ -24,10 +28,14 @@ from dataclasses import dataclass
 import numpy as np
 
 from cable_ocp.drive.bounds import angle_bounds, violation
+from cable_ocp.drive.drive import Drive
+from cable_ocp.model import structured
 from cable_ocp.model.cable import CableModel
-from cable_ocp.simulation.integrate import SimulationError, bond_residuals
+from cable_ocp.simulation.integrate import SimulationError, bond_residuals, step_count
 from cable_ocp.simulation.run import simulate
 from cable_ocp.simulation.seabed import OffGridError, clearance, clearance_reference
+from cable_ocp.simulation.stability import linearised_step
+from cable_ocp.simulation.statics import starting_state
 from cable_ocp.simulation.trajectory import Trajectory
 
 # Halvings of the scene's step tried when a run at it leaves its bonds or blows up.
@@ -35,6 +43,12 @@ STEP_HALVINGS = 2
 # The winch counts as riding a bound while its angle's Bernstein coefficients are within this of
 # it (rad, 0.5 mm of line on a 0.5 m drum).
 BOUND_RIDE = 1e-3
+# Model-correction runs of the full model take at most this multiple of the scene's step, and
+# stay within this share of its linearised RK4 limit (:func:`correction_step`). The stability
+# study's runs at 0.53 and 0.68 of the limit (n = 15 at h = 0.2 s, n = 100 at 0.025 s) kept the
+# end within 2e-6 m and 1e-7 m of runs at a quarter of their step (notebooks/studies/bench.md).
+CORRECTION_COARSENING = 4
+CORRECTION_STABILITY_SHARE = 0.7
 # How far (m) the end may come under seabed.minimum_clearance before the profile fails: the
 # verified run is the full model, the constraint was imposed on the optimiser's (often reduced) one.
 CLEARANCE_TOLERANCE = 1e-3
@@ -79,8 +93,43 @@ class Verification:
     run: Trajectory | None = None
 
 
+def correction_step(scene, compiled: bool = False) -> float:
+    """RK4 step (s) of the full-model runs that model correction learns its bias from.
+
+    The bias ``e_full - e_reduced`` is a correction to the optimisation model, so its runs need
+    not be at the scene's step: the scene's step times the largest power of 2 up to
+    :data:`CORRECTION_COARSENING` that divides the run into whole steps and stays within
+    :data:`CORRECTION_STABILITY_SHARE` of the RK4 limit of the full model linearised at its start
+    (:func:`cable_ocp.simulation.stability.linearised_step`). On paper_hill (n = 15) that is
+    0.2 s against the scene's 0.05 s: a quarter of the cost, and e(t) within 2e-6 m of the
+    scene's step. The profile that is reported is always verified at the scene's step.
+    """
+    numerics = scene.numerics
+    count = step_count(numerics.duration, numerics.step)
+    model = CableModel.from_scene(scene)
+    drive = Drive.from_scene(scene)
+    start = starting_state(model, drive, compiled=compiled)
+    rhs = None
+    if compiled and structured.supports(model):
+        rhs = structured.compiled_structured(model, "rhs")
+    limit = linearised_step(model, start, drive.inputs(np.zeros(1))[:, 0], rhs=rhs)
+    factor = 1
+    while (
+        2 * factor <= CORRECTION_COARSENING
+        and count % (2 * factor) == 0
+        and 2 * factor * numerics.step <= CORRECTION_STABILITY_SHARE * limit
+    ):
+        factor *= 2
+    return factor * numerics.step
+
+
 def verify_profile(
-    scene, control, parameters: np.ndarray, quiet: bool = True, compiled: bool = False
+    scene,
+    control,
+    parameters: np.ndarray,
+    quiet: bool = True,
+    compiled: bool = False,
+    step: float | None = None,
 ) -> Verification:
     """Check the bounds of a profile and simulate the scene's own model under it.
 
@@ -95,27 +144,34 @@ def verify_profile(
         No progress bar.
     compiled : bool
         Simulate the compiled model.
+    step : float, optional, s
+        Run at this multiple of the scene's step first (a model-correction run,
+        :func:`correction_step`), falling back to the scene's step (and its halvings) if that
+        run fails; the scene's step by default.
 
     Returns
     -------
     Verification
         Never raises for a failed check: the reason says what failed and where.
     """
-    step = scene.numerics.step
+    numerics = scene.numerics
     reason = violation(scene, control, parameters)
     if reason is not None:
-        return Verification(None, reason, step)
+        return Verification(None, reason, numerics.step)
     angle = control.angle_function(parameters)
+    trials = [
+        (numerics.step / 2**halving, numerics.output_every * 2**halving)
+        for halving in range(STEP_HALVINGS + 1)
+    ]
+    if step is not None and step > numerics.step:
+        factor = round(step / numerics.step)
+        every = numerics.output_every
+        trials.insert(0, (step, every // factor if every % factor == 0 else 1))
     drifted = []
-    for halving in range(STEP_HALVINGS + 1):
+    for trial_step, every in trials:
         trial = scene
-        if halving:
-            trial = scene.updated(
-                {
-                    "numerics.step": step / 2**halving,
-                    "numerics.output_every": scene.numerics.output_every * 2**halving,
-                }
-            )
+        if trial_step != numerics.step:
+            trial = scene.updated({"numerics.step": trial_step, "numerics.output_every": every})
         try:
             trajectory = simulate(trial, winch=angle, quiet=quiet, compiled=compiled)
         except OffGridError as error:
@@ -131,8 +187,8 @@ def verify_profile(
         note = ""
         if drifted:
             note = (
-                f"verified at h = {trial.numerics.step:g} s, since the run at the scene's step "
-                f"h = {step:g} s failed ({drifted[0]})"
+                f"verified at h = {trial.numerics.step:g} s, since the run at "
+                f"h = {trials[0][0]:g} s failed ({drifted[0]})"
             )
         lowest, when, broken = lowest_clearance(scene.seabed, trajectory)
         return Verification(
@@ -150,7 +206,7 @@ def verify_profile(
         f"no trustworthy full-model simulation at the scene's step or {STEP_HALVINGS} halvings "
         f"of it: {'; '.join(drifted)}"
     )
-    return Verification(None, reason, step / 2**STEP_HALVINGS)
+    return Verification(None, reason, numerics.step / 2**STEP_HALVINGS)
 
 
 def bound_time(scene, control, parameters: np.ndarray, trajectory: Trajectory) -> float:

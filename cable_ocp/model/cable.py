@@ -17,6 +17,7 @@ from __future__ import annotations
 from collections.abc import Callable
 from dataclasses import dataclass, field
 from functools import cached_property, lru_cache
+from typing import Any
 
 import casadi as ca
 import numpy as np
@@ -229,8 +230,8 @@ class CableModel(ModelLayout):
         self.x, self.u = self.parametric.x, self.parametric.u
         self._memo: dict = {}
 
-    def memo(self, key: tuple, build: Callable[[], ca.Function]) -> ca.Function:
-        """A Function derived from this model (a step, a map), built once per ``key``."""
+    def memo(self, key: tuple, build: Callable[[], Any]) -> Any:
+        """A Function derived from this model (a step, a map) or a cache, built once per key."""
         if key not in self._memo:
             self._memo[key] = build()
         return self._memo[key]

@@ -25,6 +25,7 @@ import tempfile
 import time
 import warnings
 from collections.abc import Callable
+from functools import cache
 from pathlib import Path
 
 import casadi as ca
@@ -35,14 +36,20 @@ COMPILER_FLAGS = ("-fPIC", "-shared")
 def optimisation_flags(function: ca.Function) -> tuple[str, ...]:
     """The C compiler's optimisation flags for a Function's code.
 
-    A flat SX Function is one long straight-line C function, for which -O1 compiles in a
-    fraction of -O2's time at the same speed (measured at n = 15: 14.4 vs 14.3 us per call). An
-    MX Function (loops over small Functions, :mod:`cable_ocp.model.structured`) compiles in seconds,
-    so it gets -O3 for this processor: at n = 100, 56 us against 63 us at -O2 (-ffast-math would
-    gain 10 % more, but lets the compiler assume that no NaN occurs, which blow-up detection
-    relies on).
+    A flat SX Function is one long straight-line C function, on which gcc spends most of its
+    time allocating registers: -Og compiles it several times faster than -O1 for a tenth more per
+    call (gcc 12; the right-hand side's Jacobian at n = 3, 4.4e4 instructions: 4.6 s and 40 us
+    against 22.9 s and 36 us; the flat RK4 step at n = 15: 9.4 s and 67 us against 15.1 s and
+    61 us; -O0 runs twice as slow again). An MX Function (loops over small Functions,
+    :mod:`cable_ocp.model.structured`) compiles in seconds, so it gets -O3 for this processor:
+    at n = 100, 56 us against 63 us at -O2 (-ffast-math would gain 10 % more, but lets the
+    compiler assume that no NaN occurs, which blow-up detection relies on).
     """
-    return ("-O1",) if function.is_a("SXFunction") else ("-O3", "-march=native")
+    return _flags(function.is_a("SXFunction"))
+
+
+def _flags(flat: bool) -> tuple[str, ...]:
+    return ("-Og",) if flat else ("-O3", "-march=native")
 
 
 def _processor() -> str:
@@ -161,27 +168,30 @@ def _remove(library: Path) -> None:
 
 
 def _build(
-    function: ca.Function, compiler: str, library: Path, derivatives: bool, quiet: bool
+    functions: list[ca.Function], compiler: str, library: Path, derivatives: bool, quiet: bool
 ) -> None:
-    """Generate C, compile it, and install the library and its record atomically.
+    """Generate C for the Functions, compile it, and install the library and its record atomically.
 
-    Raises _CompilerFailed when the compiler fails, OSError when the cache cannot be written.
+    The Functions share one C file, so the Functions they call are compiled once. Raises
+    _CompilerFailed when the compiler fails, OSError when the cache cannot be written.
     """
     folder = library.parent
     folder.mkdir(parents=True, exist_ok=True)
-    name = function.name()
+    name = functions[0].name()
     if not quiet:
-        print(f"compiling {name} to C (cached in {folder}) ...", flush=True)
+        names = ", ".join(f.name() for f in functions)
+        print(f"compiling {names} to C (cached in {folder}) ...", flush=True)
     with tempfile.TemporaryDirectory(dir=folder) as scratch:
         source = Path(scratch) / f"{name}.c"
         generator = ca.CodeGenerator(source.name, {"with_header": False})
-        generator.add(function)
-        if derivatives:
-            generator.add(function.forward(1))
-            generator.add(function.reverse(1))
+        for function in functions:
+            generator.add(function)
+            if derivatives:
+                generator.add(function.forward(1))
+                generator.add(function.reverse(1))
         generator.generate(str(Path(scratch)) + os.sep)
         target = Path(scratch) / library.name
-        flags = [*optimisation_flags(function), *COMPILER_FLAGS]
+        flags = [*optimisation_flags(functions[0]), *COMPILER_FLAGS]
         command = [compiler, *flags, str(source), "-o", str(target), "-lm"]
         try:
             result = subprocess.run(command, capture_output=True, text=True)
@@ -234,40 +244,48 @@ def compiled(
         The external (compiled) Function, or ``function`` itself (interpreted) after a warning.
     report : CompileReport
     """
-    interpreted = function, CompileReport(False, 0.0, None)
+    key = key or cache_key(function, f"{description}|derivatives={derivatives}")
+    functions, report = _compiled_together([function], key, derivatives, quiet)
+    return functions[0], report
+
+
+def _compiled_together(
+    functions: list[ca.Function], key: str, derivatives: bool, quiet: bool
+) -> tuple[list[ca.Function], CompileReport]:
+    """:func:`compiled` of Functions that share one library (named after the first) and key."""
+    interpreted = functions, CompileReport(False, 0.0, None)
     compiler = find_compiler()
     if compiler is None:
         warnings.warn(
             "no C compiler found (set $CC or install gcc): using the interpreted model",
             RuntimeWarning,
-            stacklevel=2,
+            stacklevel=3,
         )
         return interpreted
-    name = function.name()
-    key = key or cache_key(function, f"{description}|derivatives={derivatives}")
-    library = cache_dir() / f"{name}_{key}.so"
+    names = [f.name() for f in functions]
+    library = cache_dir() / f"{names[0]}_{key}.so"
     if library.is_file():
         problem = damage(library)
         if problem is None:
             try:
-                return ca.external(name, str(library)), CompileReport(True, 0.0, library)
+                return _loaded(names, library), CompileReport(True, 0.0, library)
             except RuntimeError as error:
                 problem = f"CasADi cannot load it: {_first_line(error)}"
         warnings.warn(
             f"cached library {library} is damaged ({problem}): rebuilding",
             RuntimeWarning,
-            stacklevel=2,
+            stacklevel=3,
         )
         _remove(library)
     started = time.perf_counter()
     try:
-        _build(function, compiler, library, derivatives, quiet)
+        _build(functions, compiler, library, derivatives, quiet)
     except _CompilerFailed as error:
         warnings.warn(
-            f"compiling {name} into {library} failed: {error}\nusing the interpreted model "
-            "(fix the compiler or point $CC at a working one)",
+            f"compiling {', '.join(names)} into {library} failed: {error}\nusing the interpreted "
+            "model (fix the compiler or point $CC at a working one)",
             RuntimeWarning,
-            stacklevel=2,
+            stacklevel=3,
         )
         return interpreted
     except OSError as error:
@@ -275,54 +293,96 @@ def compiled(
             f"cannot write the compiled-model cache {library.parent} ({error}): using the "
             "interpreted model (point $CABLE_OCP_CACHE at a writable folder)",
             RuntimeWarning,
-            stacklevel=2,
+            stacklevel=3,
         )
         return interpreted
     elapsed = time.perf_counter() - started
     try:
-        return ca.external(name, str(library)), CompileReport(False, elapsed, library)
+        return _loaded(names, library), CompileReport(False, elapsed, library)
     except RuntimeError as error:
         _remove(library)
         warnings.warn(
             f"the freshly compiled library {library} cannot be loaded ({_first_line(error)}): "
             "using the interpreted model (check the compiler and the CasADi installation)",
             RuntimeWarning,
-            stacklevel=2,
+            stacklevel=3,
         )
         return interpreted
 
 
-def compiled_from(
-    build: Callable[[], ca.Function],
-    name: str,
-    source: ca.Function,
-    description: str,
-    quiet: bool = True,
-) -> tuple[ca.Function, CompileReport]:
-    """:func:`compiled` of ``build()``, keyed by the Function it derives from (no derivatives).
+def _loaded(names: list[str], library: Path) -> list[ca.Function]:
+    """The Functions ``names`` of a library (RuntimeError when CasADi cannot load one)."""
+    return [ca.external(name, str(library)) for name in names]
 
-    For a Function derived deterministically from ``source`` (its Jacobian): the key hashes
-    ``source``, ``name`` and the description, so that a cache hit loads the library without
-    building the derived expression (1-2 s for the right-hand side's Jacobian at n = 3).
+
+def source_digest(sources: tuple[str, ...] = ()) -> str:
+    """SHA-256 (hex) of the model package's code and of ``sources`` (paths of further modules).
+
+    What the symbolic graphs are built from: with the model's structure it determines them, so a
+    library keyed by it needs no graph built to be found (:func:`compiled_from`).
+    """
+    return _source_digest(tuple(sorted(sources)))
+
+
+@cache
+def _source_digest(sources: tuple[str, ...]) -> str:
+    digest = hashlib.sha256()
+    for path in [*sorted(Path(__file__).parent.glob("*.py")), *map(Path, sources)]:
+        digest.update(path.name.encode())
+        digest.update(path.read_bytes())
+    return digest.hexdigest()
+
+
+def compiled_from(
+    build: Callable[[], list[ca.Function]],
+    names: list[str],
+    description: str,
+    flat: bool,
+    sources: tuple[str, ...] = (),
+    quiet: bool = True,
+) -> tuple[list[ca.Function], CompileReport]:
+    """Functions compiled into one library (no derivatives), keyed by the code that builds them.
+
+    For Functions that the model package's code (and the modules ``sources``) build
+    deterministically from a structure: the key hashes that code (:func:`source_digest`), the
+    description (the structure and the derivation), the names, CasADi's version, the processor
+    and the flags, so that a cache hit loads the library without building the expression graphs
+    (0.1 s for the structured right-hand side at n = 15, 1-2 s for the right-hand side's Jacobian
+    at n = 3). Any change to that code compiles anew. Functions built from one graph (the
+    structured right-hand side, outputs and bond check) compile together in about the time of
+    the largest alone: the Functions they call are compiled once.
 
     Parameters
     ----------
     build : callable
-        Builds the SX Function named ``name``; called only on a cache miss.
-    name : str
-    source : casadi.Function
+        Builds the Functions ``names``, in that order; called only on a cache miss.
+    names : list of str
     description : str
-        Everything else that built it (the derivation included).
+        Everything else that built them: the model's structure, the derivation.
+    flat : bool
+        Whether ``build`` gives SX Functions (it sets the flags, :func:`optimisation_flags`).
+    sources : tuple of str
+        Paths of the modules outside the model package whose code builds them.
     quiet : bool
+
+    Returns
+    -------
+    functions : list of casadi.Function
+        The external (compiled) Functions, or the interpreted ones after a warning.
+    report : CompileReport
     """
-    key = cache_key(source, f"{description}|{name}|derivatives=False")
-    library = cache_dir() / f"{name}_{key}.so"
+    flags = [*_flags(flat), *COMPILER_FLAGS]
+    text = "|".join(
+        [description, *names, source_digest(sources), ca.__version__, _processor(), *flags]
+    )
+    key = hashlib.sha256(text.encode()).hexdigest()[:20]
+    library = cache_dir() / f"{names[0]}_{key}.so"
     if library.is_file() and damage(library) is None:
         try:
-            return ca.external(name, str(library)), CompileReport(True, 0.0, library)
+            return _loaded(names, library), CompileReport(True, 0.0, library)
         except RuntimeError:
-            pass  # compiled() reports and rebuilds it
-    return compiled(build(), description, derivatives=False, quiet=quiet, key=key)
+            pass  # _compiled_together reports and rebuilds it
+    return _compiled_together(build(), key, derivatives=False, quiet=quiet)
 
 
 def _first_line(error: Exception) -> str:

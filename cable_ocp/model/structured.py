@@ -19,7 +19,7 @@ from __future__ import annotations
 import casadi as ca
 
 from cable_ocp.model.cable import CableModel
-from cable_ocp.model.compile import compiled as compile_function
+from cable_ocp.model.compile import CompileReport, compiled_from
 from cable_ocp.model.kinematics import POSITION
 from cable_ocp.model.kkt import cholesky_solve, inverse_3x3
 from cable_ocp.model.layout import INPUT_SIZE, INPUTS
@@ -229,18 +229,55 @@ def compiled_structured(model: CableModel, which: str, count: int | None = None)
     bound Function once per model.
     """
     parametric = model.parametric
-
-    def compile_library() -> ca.Function:
-        build = {"rhs": structured_rhs, "outputs": structured_outputs}[which]
-        description = repr(parametric.structure)
-        return compile_function(build(parametric), description, derivatives=False)[0]
-
-    library = parametric.memo(("structured", which, "compiled"), compile_library)
+    library = compiled_library(parametric, which)[0]
     mapped = parametric.memo(
         ("structured", which, "compiled", count),
         lambda: library if count is None else library.map(count),
     )
     return model.memo(("structured", which, "compiled", count), lambda: model.bind(mapped))
+
+
+def structured_bond_norm(model: ParametricModel) -> ca.Function:
+    """``(x, u, p) ->`` the largest bond residual (m), by the loops of :func:`structured_rhs`."""
+
+    def build() -> ca.Function:
+        residual_function = structured_bond_residual(model)
+        x, u, p = (residual_function.mx_in(k) for k in range(3))
+        norm = ca.mmax(ca.fabs(residual_function(x, u, p)))
+        return ca.Function("bond_norm", [x, u, p], [norm], ["x", "u", "p"], ["norm"], {"cse": True})
+
+    return model.memo(("structured", "bond_norm"), build)
+
+
+# The structure's Functions compiled into one library: each one's name and what builds it.
+LIBRARY = {
+    "rhs": ("rhs", structured_rhs),
+    "outputs": ("joints_tensions", structured_outputs),
+    "bond_norm": ("bond_norm", structured_bond_norm),
+}
+
+
+def compiled_library(model: ParametricModel, which: str) -> tuple[ca.Function, CompileReport]:
+    """The structure's ``(x, u, p)`` Function ``which`` (a key of :data:`LIBRARY`), compiled to C.
+
+    The right-hand side, the outputs and the bond check of a structure share one library (they
+    call the same element Functions, compiled once), without derivatives, from the disk cache
+    when possible; once per structure and process. The compiled RK4 step of a 5-DOF model calls
+    this right-hand side too (:func:`cable_ocp.simulation.integrate.compiled_parametric_step`),
+    so the statics and the simulations of a structure share it.
+    """
+
+    def compile_library() -> tuple[dict[str, ca.Function], CompileReport]:
+        functions, report = compiled_from(
+            lambda: [build(model) for _, build in LIBRARY.values()],
+            [name for name, _ in LIBRARY.values()],
+            f"{model.structure!r}|structured right-hand side, outputs and bond check",
+            flat=False,
+        )
+        return dict(zip(LIBRARY, functions, strict=True)), report
+
+    functions, report = model.memo(("structured", "compiled"), compile_library)
+    return functions[which], report
 
 
 def _shared_graph(model: ParametricModel) -> tuple[ca.MX, ...]:

@@ -104,24 +104,26 @@ def compiled_parametric_step(
 ) -> tuple[ca.Function, CompileReport]:
     """The RK4 step of a structure compiled to C: ``(x, stage_inputs, p, h) -> x_next``.
 
-    A small model's whole step is compiled as one flat Function. With derivatives it is built
-    around the compiled right-hand side and its derivatives instead: gcc spends superlinear time
-    on one long function, so those compile about ten times faster than the flat step's, for the
-    same nominal cost and a slightly slower reverse sweep (``cable-ocp bench --only ocp-speed``).
-    A large model's four copies of the right-hand side made gcc run out of memory at n = 100, so
-    its step is compiled around the structured right-hand side (5 DOF) or its flat right-hand
-    side alone (torsion). Built once per structure and process; the library is keyed by the
-    structure, not by its numbers.
+    A 5-DOF model's step (without derivatives) calls the structure's compiled structured
+    right-hand side four times (:func:`cable_ocp.model.structured.compiled_library`), the library
+    its statics use too: at n = 15 a step costs 51 us against 60 us for the flat step compiled as
+    one Function, and nothing is compiled for it beyond the right-hand side (2 s at -O3, against
+    13 s at n = 15 and 6 s at n = 3 for the flat step; ``cable-ocp bench --only ocp-speed``).
+    A torsion model's whole step is compiled as one flat Function while it is small enough
+    (:func:`whole_step_fits`), else around its flat right-hand side. With derivatives the step is
+    built around the compiled flat right-hand side and its derivatives: gcc spends superlinear
+    time on one long function, so those compile about ten times faster than the flat step's, for
+    the same nominal cost and a slightly slower reverse sweep. Built once per structure and
+    process; the library is keyed by the structure, not by its numbers.
     """
 
     def build() -> tuple[ca.Function, CompileReport]:
         description = repr(parametric.structure)
-        flat = whole_step_fits(parametric)
-        if flat and not derivatives:
+        if not derivatives and structured.supports(parametric):
+            rhs, report = structured.compiled_library(parametric, "rhs")
+            return parametric_rk4_step(parametric, rhs), report
+        if not derivatives and whole_step_fits(parametric):
             return compile_function(parametric_rk4_step(parametric), description, derivatives)
-        if not flat and structured.supports(parametric):
-            looped = parametric_rk4_step(parametric, structured.structured_rhs(parametric))
-            return compile_function(looped, description, derivatives)
         rhs, report = compile_function(parametric.rhs, description, derivatives)
         return parametric_rk4_step(parametric, rhs), report
 
@@ -324,18 +326,14 @@ def _residual_norms(model: CableModel, count: int, compiled: bool) -> ca.Functio
 
     def parametric_norm() -> ca.Function:
         parametric = model.parametric
-        if structured.supports(parametric) and not whole_step_fits(parametric):
+        if structured.supports(parametric):
             # Stepped by the structured loops: its bonds too, without the flat graph.
-            residual_function = structured.structured_bond_residual(parametric)
-            x, u, p = (residual_function.mx_in(k) for k in range(3))
-            residual = residual_function(x, u, p)
-        else:
-            x, u, p = parametric.x, parametric.u, parametric.p
-            residual = parametric.bond_residual()
+            return structured.compiled_library(parametric, "bond_norm")[0]
+        x, u, p = parametric.x, parametric.u, parametric.p
         norm = ca.Function(
             "bond_norm",
             [x, u, p],
-            [ca.mmax(ca.fabs(residual))],
+            [ca.mmax(ca.fabs(parametric.bond_residual()))],
             ["x", "u", "p"],
             ["norm"],
             {"cse": True},

@@ -22,7 +22,8 @@ modes are the fastest.
 Modules, one job each:
 
 - ``push``: the pushed scene (:data:`PUSH`, :data:`SHARP_PUSH`, :func:`pushed_scene`);
-- ``linearised``: the RK4 step limit of a linearisation (:func:`linearised_step`);
+- the RK4 step limit of a linearisation, :func:`linearised_step`, lives in
+  :mod:`cable_ocp.simulation.stability` (model correction picks its step by it);
 - ``stable_step``: the largest stable step of one model (:func:`largest_stable_step`);
 - ``limits``: the step limits against ``n`` and their fits (:func:`step_limits`);
 - ``baumgarte``: the drift for several Baumgarte gains (:func:`baumgarte_drift`);
@@ -32,6 +33,7 @@ Modules, one job each:
 - ``markdown``: markdown helpers (:func:`table_cell`).
 """
 
+from cable_ocp.simulation.stability import GROWTH_SLACK, linearised_step, rk4_growth
 from cable_ocp.studies.stability.baumgarte import (
     BaumgarteDrift,
     GainRun,
@@ -40,7 +42,6 @@ from cable_ocp.studies.stability.baumgarte import (
 )
 from cable_ocp.studies.stability.knots import KnotRun, KnotsComparison, knots_comparison
 from cable_ocp.studies.stability.limits import StepLimits, power_law, step_limits
-from cable_ocp.studies.stability.linearised import GROWTH_SLACK, linearised_step, rk4_growth
 from cable_ocp.studies.stability.markdown import table_cell
 from cable_ocp.studies.stability.push import PUSH, SHARP_PUSH, pushed_scene
 from cable_ocp.studies.stability.singular import SingularCase, singular_states

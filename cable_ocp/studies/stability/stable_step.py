@@ -12,10 +12,10 @@ from cable_ocp.drive.drive import Drive
 from cable_ocp.model.cable import CableModel
 from cable_ocp.simulation.integrate import SimulationError
 from cable_ocp.simulation.run import simulate
+from cable_ocp.simulation.stability import linearised_step
 from cable_ocp.simulation.statics import equilibrium
 from cable_ocp.simulation.trajectory import Trajectory
 from cable_ocp.studies.convergence import end_difference
-from cable_ocp.studies.stability.linearised import linearised_step
 from cable_ocp.studies.stability.push import pushed_scene
 
 # A twist angle beyond this (rad) marks a torsional blow-up: the push exerts no torque.

@@ -1,7 +1,13 @@
-"""The RK4 step limit of a linearisation: eigenvalues of the Jacobian against RK4's region."""
+"""The RK4 step limit of a linearisation: eigenvalues of the Jacobian against RK4's region.
+
+Used by the stability study (:mod:`cable_ocp.studies.stability`) and by model correction, which
+runs the full model at a coarser step while it stays well inside this limit
+(:func:`cable_ocp.control.verification.correction_step`).
+"""
 
 from __future__ import annotations
 
+import casadi as ca
 import numpy as np
 
 from cable_ocp.model.cable import CableModel
@@ -15,7 +21,13 @@ def rk4_growth(z: np.ndarray) -> np.ndarray:
     return np.abs(1 + z + z**2 / 2 + z**3 / 6 + z**4 / 24)
 
 
-def linearised_step(model: CableModel, x: np.ndarray, u: np.ndarray, relative: float = 1e-7):
+def linearised_step(
+    model: CableModel,
+    x: np.ndarray,
+    u: np.ndarray,
+    relative: float = 1e-7,
+    rhs: ca.Function | None = None,
+) -> float:
     """Largest RK4 step (s) stable for the linearisation of the model at ``(x, u)``.
 
     The Jacobian of the right-hand side is taken by forward differences (one batched call;
@@ -31,11 +43,14 @@ def linearised_step(model: CableModel, x: np.ndarray, u: np.ndarray, relative: f
     u : array (15,)
     relative : float
         Difference step, relative to ``max(1, |x_j|)``.
+    rhs : casadi.Function, optional
+        ``(x, u) -> x'`` to difference, e.g. a compiled one; the model's own by default.
     """
     size = model.state_size
     steps = relative * np.maximum(1.0, np.abs(x))
     probes = np.hstack([x[:, None], x[:, None] + np.diag(steps)])
-    values = np.array(model.rhs.map(size + 1)(probes, np.tile(u[:, None], (1, size + 1))))
+    rhs = model.rhs if rhs is None else rhs
+    values = np.array(rhs.map(size + 1)(probes, np.tile(u[:, None], (1, size + 1))))
     eigenvalues = np.linalg.eigvals((values[:, 1:] - values[:, :1]) / steps)
     eigenvalues = eigenvalues[np.abs(eigenvalues) > 0]
     # The RK4 region lies inside |z| < 3, so h = 3 / |lambda| is unstable for every lambda.
