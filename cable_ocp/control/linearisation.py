@@ -26,8 +26,9 @@ import numpy as np
 
 from cable_ocp.control.parameters import ProblemParameters
 from cable_ocp.model.cable import CableModel
-from cable_ocp.model.compile import CompileReport, compiled_from
+from cable_ocp.model.compile import CompileReport, compile_in_background, compiled_from
 from cable_ocp.model.layout import INPUTS
+from cable_ocp.model.parametric import ParametricModel
 from cable_ocp.simulation.integrate import evaluate_into, step_function
 from cable_ocp.simulation.seabed import seabed_height
 
@@ -41,7 +42,19 @@ def rhs_jacobian(model: CableModel) -> tuple[ca.Function, CompileReport]:
 
     One library per model structure, the model's numbers bound as inputs.
     """
-    parametric = model.parametric
+    functions, report = model.parametric.memo(
+        ("rhs_jacobian",), lambda: compiled_from(*_jacobian_arguments(model.parametric))
+    )
+    return model.memo(("rhs_jacobian",), lambda: model.bind(functions[0])), report
+
+
+def compile_rhs_jacobian_in_background(model: CableModel) -> None:
+    """Start compiling the library of :func:`rhs_jacobian` if it is not in the cache."""
+    compile_in_background(*_jacobian_arguments(model.parametric))
+
+
+def _jacobian_arguments(parametric: ParametricModel) -> tuple:
+    """What :func:`~cable_ocp.model.compile.compiled_from` takes for the Jacobian's library."""
 
     def derive() -> ca.Function:
         x, u, p = parametric.x, parametric.u, parametric.p
@@ -56,16 +69,9 @@ def rhs_jacobian(model: CableModel) -> tuple[ca.Function, CompileReport]:
             {"cse": True},
         )  # fmt: skip
 
-    def build() -> tuple[ca.Function, CompileReport]:
-        # Keyed by the code that derives it: a cache hit builds no right-hand side.
-        description = f"{parametric.structure!r}|columns of d xdot / d [x; winch inputs]"
-        functions, report = compiled_from(
-            lambda: [derive()], ["rhs_jacobian"], description, True, (__file__,)
-        )
-        return functions[0], report
-
-    function, report = parametric.memo(("rhs_jacobian",), build)
-    return model.memo(("rhs_jacobian",), lambda: model.bind(function)), report
+    # Keyed by the code that derives it: a cache hit builds no right-hand side.
+    description = f"{parametric.structure!r}|columns of d xdot / d [x; winch inputs]"
+    return lambda: [derive()], ["rhs_jacobian"], description, True, (__file__,)
 
 
 def sweep_step_function(model: CableModel, step: float) -> ca.Function:

@@ -23,11 +23,15 @@ import numpy as np
 
 from cable_ocp.control.gauss_newton import CLEARANCE_BACKOFF
 from cable_ocp.control.interrupts import keeping_interrupts
-from cable_ocp.control.linearisation import clearance_error_function
+from cable_ocp.control.linearisation import (
+    clearance_error_function,
+    compile_rhs_jacobian_in_background,
+)
 from cable_ocp.control.parameters import ProblemParameters, symbols
 from cable_ocp.control.problem import SolverOutcome, WinchProblem
 from cable_ocp.drive.controls import HermiteIntervals, KnotSpline
 from cable_ocp.drive.drive import stage_times
+from cable_ocp.model import structured
 from cable_ocp.model.cable import CableModel
 from cable_ocp.model.compile import CompileReport
 from cable_ocp.model.layout import INPUT_SIZE
@@ -195,13 +199,32 @@ def steps_per_interval(duration: float, step: float, intervals: int) -> int:
 def ipopt_problem(scene, settings: IpoptSettings) -> WinchProblem:
     """The scene's winch problem with the control, model and step the IPOPT settings ask for.
 
-    The shooting intervals are checked first, before any model is built.
+    The shooting intervals are checked first, before any model is built; with compiled models,
+    the libraries that the solve and its verification load start compiling then
+    (:func:`compile_ahead`).
     """
     step = settings.step or scene.numerics.step
     steps_per_interval(scene.numerics.duration, step, settings.intervals)
+    if settings.compiled:
+        compile_ahead(scene, settings)
     return WinchProblem.from_scene(
-        scene, make_control(scene, settings), settings.elements, settings.step
+        scene, make_control(scene, settings), settings.elements, settings.step, settings.compiled
     )
+
+
+def compile_ahead(scene, settings: IpoptSettings) -> None:
+    """Start compiling, side by side, the libraries that a solve and its verification load.
+
+    Those not in the disk cache: Gauss-Newton's Jacobian first (the solve waits for it), then the
+    structured libraries of the optimisation model and of the scene's model. Their C compilers
+    run at once while the problem and the transcription are built (on paper_hill with an empty
+    cache the default ``optimize`` took 8.3 s against 10.0 s compiling one after the other).
+    """
+    reduced = CableModel.from_scene(scene, settings.elements)
+    if settings.solver == "gauss-newton":
+        compile_rhs_jacobian_in_background(reduced)
+    structured.compile_library_in_background(reduced.parametric)
+    structured.compile_library_in_background(CableModel.from_scene(scene).parametric)
 
 
 def ocp_step(

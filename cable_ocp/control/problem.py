@@ -78,7 +78,12 @@ class WinchProblem:
 
     @classmethod
     def from_scene(
-        cls, scene, control: Control, elements: int | None = None, step: float | None = None
+        cls,
+        scene,
+        control: Control,
+        elements: int | None = None,
+        step: float | None = None,
+        compiled: bool = False,
     ) -> WinchProblem:
         """The problem of a scene with a winch parametrisation, on a model of ``elements``.
 
@@ -90,6 +95,9 @@ class WinchProblem:
             Elements of the optimisation model (None: the scene's).
         step : float, optional, s
             Its RK4 step (None: the scene's); it must divide ``numerics.duration``.
+        compiled : bool
+            Find the starting equilibrium on the compiled model
+            (:func:`cable_ocp.simulation.statics.equilibrium`: the same tolerance).
 
         The open loop knows the vessel's whole motion: a heave that the scene does not
         compensate is paid out by eq. 38 as a feedforward, and the control optimises the slow
@@ -99,7 +107,8 @@ class WinchProblem:
         if feedforward:
             scene = scene.updated({"top.heave.compensation": True})
         step = step or scene.numerics.step
-        return cls._over(scene, control, elements, step, scene.numerics.duration, feedforward)
+        duration = scene.numerics.duration
+        return cls._over(scene, control, elements, step, duration, feedforward, compiled)
 
     @classmethod
     def receding(
@@ -132,6 +141,7 @@ class WinchProblem:
         step: float,
         horizon: float,
         feedforward: bool = False,
+        compiled: bool = False,
     ) -> WinchProblem:
         """The problem on ``[0, horizon]``: the model, its locked drive, start and bounds."""
         grid = np.arange(step_count(horizon, step) + 1) * step
@@ -144,7 +154,7 @@ class WinchProblem:
             step=step,
             grid=grid,
             drive=drive,
-            x0=starting_state(model, drive),
+            x0=starting_state(model, drive, compiled=compiled),
             control=control,
             low=low,
             high=high,

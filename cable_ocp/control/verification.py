@@ -31,8 +31,8 @@ from cable_ocp.drive.bounds import angle_bounds, violation
 from cable_ocp.drive.drive import Drive
 from cable_ocp.model import structured
 from cable_ocp.model.cable import CableModel
-from cable_ocp.simulation.integrate import SimulationError, bond_residuals, step_count
-from cable_ocp.simulation.run import simulate
+from cable_ocp.simulation.integrate import SimulationError, step_count
+from cable_ocp.simulation.run import checked_simulation
 from cable_ocp.simulation.seabed import OffGridError, clearance, clearance_reference
 from cable_ocp.simulation.stability import linearised_step
 from cable_ocp.simulation.statics import starting_state
@@ -173,7 +173,9 @@ def verify_profile(
         if trial_step != numerics.step:
             trial = scene.updated({"numerics.step": trial_step, "numerics.output_every": every})
         try:
-            trajectory = simulate(trial, winch=angle, quiet=quiet, compiled=compiled)
+            trajectory, residual = checked_simulation(
+                trial, winch=angle, quiet=quiet, compiled=compiled
+            )
         except OffGridError as error:
             return Verification(None, str(error), trial.numerics.step)
         except SimulationError as error:
@@ -182,8 +184,6 @@ def verify_profile(
         except Exception as error:  # noqa: BLE001 - any other failure of the check fails it
             reason = f"the full-model simulation raised {type(error).__name__}: {error}"
             return Verification(None, reason, trial.numerics.step)
-        model = CableModel.from_scene(trial)
-        residual = bond_residuals(model, trajectory.states, trajectory.inputs, compiled)
         note = ""
         if drifted:
             note = (
@@ -195,7 +195,7 @@ def verify_profile(
             None if broken else trajectory,
             broken,
             trial.numerics.step,
-            float(residual.max()),
+            residual,
             bound_time(scene, control, parameters, trajectory),
             note,
             lowest,

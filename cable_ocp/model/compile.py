@@ -22,6 +22,7 @@ import platform
 import shutil
 import subprocess
 import tempfile
+import threading
 import time
 import warnings
 from collections.abc import Callable
@@ -137,6 +138,9 @@ def damage(library: Path) -> str | None:
 class CompileReport:
     """What :func:`compiled` did: ``cache_hit`` (bool) and ``compile_time`` (s).
 
+    For a library compiled in the background (:func:`compile_in_background`), ``compile_time``
+    is how long its caller waited for it.
+
     ``library`` is the shared library loaded, or None when the interpreted Function is returned.
     """
 
@@ -175,37 +179,60 @@ def _build(
     The Functions share one C file, so the Functions they call are compiled once. Raises
     _CompilerFailed when the compiler fails, OSError when the cache cannot be written.
     """
-    folder = library.parent
-    folder.mkdir(parents=True, exist_ok=True)
-    name = functions[0].name()
     if not quiet:
         names = ", ".join(f.name() for f in functions)
-        print(f"compiling {names} to C (cached in {folder}) ...", flush=True)
-    with tempfile.TemporaryDirectory(dir=folder) as scratch:
-        source = Path(scratch) / f"{name}.c"
+        print(f"compiling {names} to C (cached in {library.parent}) ...", flush=True)
+    scratch, command = _generate(functions, compiler, library, derivatives)
+    try:
+        _compile_and_install(command, library, scratch)
+    finally:
+        shutil.rmtree(scratch, ignore_errors=True)
+
+
+def _generate(
+    functions: list[ca.Function], compiler: str, library: Path, derivatives: bool
+) -> tuple[Path, list[str]]:
+    """Write the Functions' C into a scratch folder of the cache; returns it and the command.
+
+    Raises OSError when the cache cannot be written.
+    """
+    library.parent.mkdir(parents=True, exist_ok=True)
+    scratch = Path(tempfile.mkdtemp(dir=library.parent))
+    try:
+        source = scratch / f"{functions[0].name()}.c"
         generator = ca.CodeGenerator(source.name, {"with_header": False})
         for function in functions:
             generator.add(function)
             if derivatives:
                 generator.add(function.forward(1))
                 generator.add(function.reverse(1))
-        generator.generate(str(Path(scratch)) + os.sep)
-        target = Path(scratch) / library.name
-        flags = [*optimisation_flags(functions[0]), *COMPILER_FLAGS]
-        command = [compiler, *flags, str(source), "-o", str(target), "-lm"]
-        try:
-            result = subprocess.run(command, capture_output=True, text=True)
-        except OSError as error:
-            raise _CompilerFailed(f"cannot run {compiler}: {error}") from error
-        if result.returncode != 0 or not target.is_file():
-            output = (result.stderr or result.stdout).strip()[-2000:] or "no output"
-            raise _CompilerFailed(f"{compiler} exited with status {result.returncode}:\n{output}")
-        record = Path(scratch) / "fingerprint.json"
-        record.write_text(json.dumps(fingerprint(target)))
-        # Atomic renames, the record last: a reader never sees a half-written file, and a
-        # library whose record is not there yet counts as damaged (rebuilt, never loaded).
-        os.replace(target, library)
-        os.replace(record, fingerprint_path(library))
+        generator.generate(str(scratch) + os.sep)
+    except BaseException:
+        shutil.rmtree(scratch, ignore_errors=True)
+        raise
+    flags = [*optimisation_flags(functions[0]), *COMPILER_FLAGS]
+    return scratch, [compiler, *flags, str(source), "-o", str(scratch / library.name), "-lm"]
+
+
+def _compile_and_install(command: list[str], library: Path, scratch: Path) -> None:
+    """Run the compiler, then move the library and its record into place (the record last).
+
+    Raises _CompilerFailed when the compiler fails, OSError when the cache cannot be written.
+    """
+    target = scratch / library.name
+    try:
+        result = subprocess.run(command, capture_output=True, text=True)
+    except OSError as error:
+        raise _CompilerFailed(f"cannot run {command[0]}: {error}") from error
+    if result.returncode != 0 or not target.is_file():
+        output = (result.stderr or result.stdout).strip()[-2000:] or "no output"
+        raise _CompilerFailed(f"{command[0]} exited with status {result.returncode}:\n{output}")
+    record = scratch / "fingerprint.json"
+    record.write_text(json.dumps(fingerprint(target)))
+    # Atomic renames, the record last: a reader never sees a half-written file, and a library
+    # whose record is not there yet counts as damaged (rebuilt, never loaded).
+    os.replace(target, library)
+    os.replace(record, fingerprint_path(library))
 
 
 def compiled(
@@ -371,18 +398,83 @@ def compiled_from(
         The external (compiled) Functions, or the interpreted ones after a warning.
     report : CompileReport
     """
+    key, library = _source_key(names, description, flat, sources)
+    pending = _BACKGROUND.pop(library, None)
+    waited = 0.0
+    if pending is not None:  # compiling in the background (compile_in_background): wait for it
+        begun = time.perf_counter()
+        pending.join()
+        waited = time.perf_counter() - begun
+    if library.is_file() and damage(library) is None:
+        try:
+            # A background compile counts for the time the caller waited for it.
+            report = CompileReport(pending is None, waited, library)
+            return _loaded(names, library), report
+        except RuntimeError:
+            pass  # _compiled_together reports and rebuilds it
+    return _compiled_together(build(), key, derivatives=False, quiet=quiet)
+
+
+# Libraries being compiled in the background, by path (compile_in_background).
+_BACKGROUND: dict[Path, _Compiling] = {}
+
+
+def compile_in_background(
+    build: Callable[[], list[ca.Function]],
+    names: list[str],
+    description: str,
+    flat: bool,
+    sources: tuple[str, ...] = (),
+) -> None:
+    """Start compiling a library of :func:`compiled_from` while the caller goes on.
+
+    Nothing happens when the library is in the cache, is being compiled already or there is no
+    compiler. Otherwise its C is generated here and the compiler runs in a thread (the
+    compiler is a process of its own, so the two cores work at once); the next
+    :func:`compiled_from` of the library waits for it, and reports and retries a failure. The
+    process does not exit before the thread is done, so an interrupted run leaves no
+    half-written library.
+    """
+    _, library = _source_key(names, description, flat, sources)
+    compiler = find_compiler()
+    if library in _BACKGROUND or compiler is None or library.is_file():
+        return
+    try:
+        scratch, command = _generate(build(), compiler, library, derivatives=False)
+    except OSError:
+        return  # compiled_from reports the unwritable cache
+
+    thread = _Compiling(command, library, scratch)
+    _BACKGROUND[library] = thread
+    thread.start()
+
+
+class _Compiling(threading.Thread):
+    """A compiler run in the background, installing its library when it succeeds."""
+
+    def __init__(self, command: list[str], library: Path, scratch: Path):
+        super().__init__(name=f"compile {library.name}")
+        self.command, self.library, self.scratch = command, library, scratch
+
+    def run(self) -> None:
+        try:
+            _compile_and_install(self.command, self.library, self.scratch)
+        except (_CompilerFailed, OSError):
+            pass  # compiled_from compiles again and reports why it fails
+        finally:
+            shutil.rmtree(self.scratch, ignore_errors=True)
+
+
+def _source_key(
+    names: list[str], description: str, flat: bool, sources: tuple[str, ...]
+) -> tuple[str, Path]:
+    """The cache key of a library of :func:`compiled_from` and its path."""
     flags = [*_flags(flat), *COMPILER_FLAGS]
     text = "|".join(
         [description, *names, source_digest(sources), ca.__version__, _processor(), *flags]
     )
     key = hashlib.sha256(text.encode()).hexdigest()[:20]
-    library = cache_dir() / f"{names[0]}_{key}.so"
-    if library.is_file() and damage(library) is None:
-        try:
-            return _loaded(names, library), CompileReport(True, 0.0, library)
-        except RuntimeError:
-            pass  # _compiled_together reports and rebuilds it
-    return _compiled_together(build(), key, derivatives=False, quiet=quiet)
+    return key, cache_dir() / f"{names[0]}_{key}.so"
 
 
 def _first_line(error: Exception) -> str:

@@ -19,7 +19,7 @@ from __future__ import annotations
 import casadi as ca
 
 from cable_ocp.model.cable import CableModel
-from cable_ocp.model.compile import CompileReport, compiled_from
+from cable_ocp.model.compile import CompileReport, compile_in_background, compiled_from
 from cable_ocp.model.kinematics import POSITION
 from cable_ocp.model.kkt import cholesky_solve, inverse_3x3
 from cable_ocp.model.layout import INPUT_SIZE, INPUTS
@@ -187,8 +187,9 @@ def structured_outputs(model: ParametricModel) -> ca.Function:
 def structured_joints_and_forces(model: ParametricModel) -> ca.Function:
     """``(x, u, p) ->`` joints (3 x n+2, m) and bond forces (3 x n+1, N), as ``model.outputs``.
 
-    By the loops of :func:`structured_rhs`, not compiled: one evaluation (a static equilibrium's
-    tensions) without building the flat graph of ``model.outputs`` (1 s at n = 100).
+    By the loops of :func:`structured_rhs` (a static equilibrium's tensions, without the flat
+    graph of ``model.outputs``: 1 s at n = 100); compiled with the rest of the structure's
+    library (:func:`compiled_library`), so that a cache hit builds no graph at all.
     """
 
     def build() -> ca.Function:
@@ -254,6 +255,7 @@ LIBRARY = {
     "rhs": ("rhs", structured_rhs),
     "outputs": ("joints_tensions", structured_outputs),
     "bond_norm": ("bond_norm", structured_bond_norm),
+    "joints_and_forces": ("joints_bond_forces", structured_joints_and_forces),
 }
 
 
@@ -268,16 +270,32 @@ def compiled_library(model: ParametricModel, which: str) -> tuple[ca.Function, C
     """
 
     def compile_library() -> tuple[dict[str, ca.Function], CompileReport]:
-        functions, report = compiled_from(
-            lambda: [build(model) for _, build in LIBRARY.values()],
-            [name for name, _ in LIBRARY.values()],
-            f"{model.structure!r}|structured right-hand side, outputs and bond check",
-            flat=False,
-        )
+        functions, report = compiled_from(*_library_arguments(model))
         return dict(zip(LIBRARY, functions, strict=True)), report
 
     functions, report = model.memo(("structured", "compiled"), compile_library)
     return functions[which], report
+
+
+def compile_library_in_background(model: ParametricModel) -> None:
+    """Start compiling the library of :func:`compiled_library` if it is not in the cache.
+
+    The C compiler runs while the caller goes on
+    (:func:`cable_ocp.model.compile.compile_in_background`); a model the structured loops do
+    not support is left alone.
+    """
+    if supports(model):
+        compile_in_background(*_library_arguments(model))
+
+
+def _library_arguments(model: ParametricModel) -> tuple:
+    """What :func:`~cable_ocp.model.compile.compiled_from` takes for the structure's library."""
+    return (
+        lambda: [build(model) for _, build in LIBRARY.values()],
+        [name for name, _ in LIBRARY.values()],
+        f"{model.structure!r}|structured right-hand side, outputs and bond check",
+        False,
+    )
 
 
 def _shared_graph(model: ParametricModel) -> tuple[ca.MX, ...]:

@@ -202,11 +202,14 @@ class RawRun:
     time : array (k,), s
     states : array (k, state_size)
     inputs : array (k, 15)
+    bond_residual : float, m
+        Largest bond residual of the states after the first (checked as the run went).
     """
 
     time: np.ndarray
     states: np.ndarray
     inputs: np.ndarray
+    bond_residual: float = float("nan")
 
 
 def integrate(
@@ -262,6 +265,7 @@ def integrate(
     states = np.empty((outputs + 1, x0.size))
     states[0] = x0
     progress = Progress("simulate", duration, quiet)
+    largest = 0.0
     for first in range(0, outputs, per_segment):
         size = min(per_segment, outputs - first)
         rows = slice(first + 1, first + 1 + size)
@@ -276,9 +280,10 @@ def integrate(
             _residual_norms(model, size, compiled), [states[rows], all_inputs[rows]], [norms]
         )
         _check_block(model, states[rows], norms, all_times[rows], step, tolerance)
+        largest = max(largest, float(norms.max()))
         progress.update(all_times[rows][-1])
     progress.close()
-    return RawRun(all_times, states, all_inputs)
+    return RawRun(all_times, states, all_inputs, largest)
 
 
 def evaluate_into(

@@ -149,6 +149,21 @@ def simulate(
 ) -> Trajectory:
     """Simulate a scene by RK4 from its static equilibrium.
 
+    See :func:`checked_simulation`, which also returns the run's largest bond residual.
+    """
+    return checked_simulation(scene, winch, model, initial_state, quiet, compiled)[0]
+
+
+def checked_simulation(
+    scene,
+    winch: WinchSpec = None,
+    model: CableModel | None = None,
+    initial_state: np.ndarray | None = None,
+    quiet: bool = True,
+    compiled: bool = False,
+) -> tuple[Trajectory, float]:
+    """Simulate a scene by RK4 from its static equilibrium; with the largest bond residual (m).
+
     Parameters
     ----------
     scene : Scene
@@ -168,7 +183,10 @@ def simulate(
 
     Returns
     -------
-    Trajectory
+    trajectory : Trajectory
+    bond_residual : float, m
+        Largest bond residual of the run's states after the first, as the integration checked
+        them (the health check of the run).
 
     Raises
     ------
@@ -207,7 +225,7 @@ def simulate(
     joints, tensions = joints_and_tensions(model, run.states, run.inputs, compiled)
     check_on_grid(scene.seabed, joints[:, :, 0], run.time)
     error = clearance_error(scene.seabed, joints[:, :, 0])
-    return Trajectory(
+    trajectory = Trajectory(
         time=run.time,
         states=run.states,
         inputs=run.inputs,
@@ -219,3 +237,4 @@ def simulate(
         scene_name=scene.name,
         state_names=model.state_names,
     )
+    return trajectory, run.bond_residual

@@ -252,7 +252,7 @@ def _joints_and_forces(model: CableModel, state, u, compiled: bool) -> dict[str,
     """
     if not (compiled and structured.supports(model)):
         return model.output_values(state, u)
-    joints_and_forces = structured.structured_joints_and_forces(model.parametric)
+    joints_and_forces = structured.compiled_library(model.parametric, "joints_and_forces")[0]
     values = joints_and_forces(x=state, u=u, p=model.parameters)
     return {name: np.array(value) for name, value in values.items()}
 
