@@ -127,7 +127,7 @@ def test_verification_failure_is_a_failed_result(short, monkeypatch):
     def broken(*args, **kwargs):
         raise SimulationError("the bonds tore at t = 3 s")
 
-    monkeypatch.setattr(verification_module, "simulate", broken)
+    monkeypatch.setattr(verification_module, "checked_simulation", broken)
     result = optimize(short, "ipopt", IpoptSettings(intervals=2), quiet=True)
     assert not result.success
     assert "; verification failed: no trustworthy full-model simulation" in result.status
@@ -141,7 +141,7 @@ def test_nelder_mead_verification_failure_is_a_failed_result(short, monkeypatch)
     def broken(*args, **kwargs):
         raise ValueError("top element too long")
 
-    monkeypatch.setattr(verification_module, "simulate", broken)
+    monkeypatch.setattr(verification_module, "checked_simulation", broken)
     result = optimize(short, "nelder-mead", NelderMeadSettings(max_evaluations=400), quiet=True)
     assert not result.success
     assert result.status == (

@@ -22,7 +22,7 @@ from cable_ocp.control.closed_loop.forecast import BlendedHeight
 from cable_ocp.control.closed_loop.plant import Plant
 from cable_ocp.control.closed_loop.result import MpcResult
 from cable_ocp.control.closed_loop.settings import MpcSettings
-from cable_ocp.control.ocp import make_control
+from cable_ocp.control.ocp import compile_ahead, make_control
 from cable_ocp.control.optimization import METHODS, optimize
 from cable_ocp.drive.bounds import angle_bounds
 from cable_ocp.drive.controls import HermiteIntervals
@@ -127,6 +127,7 @@ def mpc(scene, settings: MpcSettings | None = None, quiet: bool = False, **field
     settings = settings or MpcSettings(**fields)
     settings.check(scene)
     started = time.perf_counter()
+    compile_ahead(scene, settings.elements, settings.solver == "gauss-newton")
     low, high = angle_bounds(scene)
     controller = RecedingHorizon(scene, settings)
     plant = Plant(scene, (low, high), settings.limiter_band)
