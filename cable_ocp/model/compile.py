@@ -22,10 +22,10 @@ import platform
 import shutil
 import subprocess
 import tempfile
-import threading
 import time
 import warnings
 from collections.abc import Callable
+from concurrent.futures import Future, ThreadPoolExecutor
 from functools import cache
 from pathlib import Path
 
@@ -403,7 +403,7 @@ def compiled_from(
     waited = 0.0
     if pending is not None:  # compiling in the background (compile_in_background): wait for it
         begun = time.perf_counter()
-        pending.join()
+        pending.result()
         waited = time.perf_counter() - begun
     if library.is_file() and damage(library) is None:
         try:
@@ -416,7 +416,9 @@ def compiled_from(
 
 
 # Libraries being compiled in the background, by path (compile_in_background).
-_BACKGROUND: dict[Path, _Compiling] = {}
+_BACKGROUND: dict[Path, Future] = {}
+# The compilers run one per processor, in the order asked (the library needed first, first).
+_COMPILERS = ThreadPoolExecutor(max_workers=os.cpu_count() or 1, thread_name_prefix="compile")
 
 
 def compile_in_background(
@@ -429,11 +431,11 @@ def compile_in_background(
     """Start compiling a library of :func:`compiled_from` while the caller goes on.
 
     Nothing happens when the library is in the cache, is being compiled already or there is no
-    compiler. Otherwise its C is generated here and the compiler runs in a thread (the
-    compiler is a process of its own, so the two cores work at once); the next
-    :func:`compiled_from` of the library waits for it, and reports and retries a failure. The
-    process does not exit before the thread is done, so an interrupted run leaves no
-    half-written library.
+    compiler. Otherwise its C is generated here and the compiler runs in a worker thread, one
+    per processor, in the order the libraries were asked for (the compiler is a process of its
+    own, so the cores work at once); the next :func:`compiled_from` of the library waits for it,
+    and reports and retries a failure. The process does not exit before the workers are done,
+    so an interrupted run leaves no half-written library.
     """
     _, library = _source_key(names, description, flat, sources)
     compiler = find_compiler()
@@ -443,26 +445,17 @@ def compile_in_background(
         scratch, command = _generate(build(), compiler, library, derivatives=False)
     except OSError:
         return  # compiled_from reports the unwritable cache
-
-    thread = _Compiling(command, library, scratch)
-    _BACKGROUND[library] = thread
-    thread.start()
+    _BACKGROUND[library] = _COMPILERS.submit(_compile_quietly, command, library, scratch)
 
 
-class _Compiling(threading.Thread):
-    """A compiler run in the background, installing its library when it succeeds."""
-
-    def __init__(self, command: list[str], library: Path, scratch: Path):
-        super().__init__(name=f"compile {library.name}")
-        self.command, self.library, self.scratch = command, library, scratch
-
-    def run(self) -> None:
-        try:
-            _compile_and_install(self.command, self.library, self.scratch)
-        except (_CompilerFailed, OSError):
-            pass  # compiled_from compiles again and reports why it fails
-        finally:
-            shutil.rmtree(self.scratch, ignore_errors=True)
+def _compile_quietly(command: list[str], library: Path, scratch: Path) -> None:
+    """:func:`_compile_and_install`, leaving a failure to :func:`compiled_from` to report."""
+    try:
+        _compile_and_install(command, library, scratch)
+    except (_CompilerFailed, OSError):
+        pass  # compiled_from compiles again and reports why it fails
+    finally:
+        shutil.rmtree(scratch, ignore_errors=True)
 
 
 def _source_key(

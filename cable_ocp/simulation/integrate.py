@@ -9,7 +9,6 @@ in segments so that progress can be shown and a run that blows up stops early wi
 from __future__ import annotations
 
 import math
-from collections.abc import Callable
 from dataclasses import dataclass, replace
 
 import casadi as ca
@@ -21,6 +20,7 @@ from cable_ocp.model.cable import INPUT_SIZE, CableModel
 from cable_ocp.model.compile import CompileReport
 from cable_ocp.model.compile import compiled as compile_function
 from cable_ocp.model.parametric import ParametricModel
+from cable_ocp.model.rk4 import parametric_rk4_step, rk4
 from cable_ocp.simulation.figures import apart
 from cable_ocp.simulation.progress import Progress
 
@@ -50,33 +50,8 @@ def rk4_step(model: CableModel, step: float) -> ca.Function:
     """
     x = ca.SX.sym("x", model.state_size)
     stages = ca.SX.sym("stage_inputs", INPUT_SIZE, 3)
-    x_next = _rk4(lambda state, u: model.rhs(state, u), x, stages, step)
+    x_next = rk4(lambda state, u: model.rhs(state, u), x, stages, step)
     return ca.Function("rk4_step", [x, stages], [x_next], ["x", "stage_inputs"], ["x_next"])
-
-
-def parametric_rk4_step(parametric: ParametricModel, rhs: ca.Function | None = None) -> ca.Function:
-    """One RK4 step of a structure: ``(x, stage_inputs, p, h) -> x_next``, ``h`` in s.
-
-    With the parametric right-hand side the step is one SX Function; with another ``rhs`` of
-    ``(x, u, p)`` (the structured one, a compiled one) it is an MX Function calling it four times.
-    """
-    kind = ca.SX if rhs is None else ca.MX
-    rhs = parametric.rhs if rhs is None else rhs
-    x = kind.sym("x", parametric.state_size)
-    stages = kind.sym("stage_inputs", INPUT_SIZE, 3)
-    p, h = kind.sym("p", parametric.p.numel()), kind.sym("h")
-    x_next = _rk4(lambda state, u: rhs(state, u, p), x, stages, h)
-    return ca.Function(
-        "rk4_step", [x, stages, p, h], [x_next], ["x", "stage_inputs", "p", "h"], ["x_next"]
-    )
-
-
-def _rk4(rhs: Callable, x, stages, step):
-    k1 = rhs(x, stages[:, 0])
-    k2 = rhs(x + step / 2 * k1, stages[:, 1])
-    k3 = rhs(x + step / 2 * k2, stages[:, 1])
-    k4 = rhs(x + step * k3, stages[:, 2])
-    return x + step / 6 * (k1 + 2 * k2 + 2 * k3 + k4)
 
 
 def step_function(
@@ -104,11 +79,11 @@ def compiled_parametric_step(
 ) -> tuple[ca.Function, CompileReport]:
     """The RK4 step of a structure compiled to C: ``(x, stage_inputs, p, h) -> x_next``.
 
-    A 5-DOF model's step (without derivatives) calls the structure's compiled structured
-    right-hand side four times (:func:`cable_ocp.model.structured.compiled_library`), the library
-    its statics use too: at n = 15 a step costs 51 us against 60 us for the flat step compiled as
-    one Function, and nothing is compiled for it beyond the right-hand side (2 s at -O3, against
-    13 s at n = 15 and 6 s at n = 3 for the flat step; ``cable-ocp bench --only ocp-speed``).
+    A 5-DOF model's step (without derivatives) is the RK4 step of the structure's library
+    (:func:`cable_ocp.model.structured.compiled_library`: the structured right-hand side, called
+    four times from C), the library its statics and outputs use too: at n = 15 a step costs
+    48 us against 60 us for the flat step compiled as one Function, and the library compiles in
+    2 to 3.5 s at -O3, against 13 s at n = 15 and 6 s at n = 3 for the flat step.
     A torsion model's whole step is compiled as one flat Function while it is small enough
     (:func:`whole_step_fits`), else around its flat right-hand side. With derivatives the step is
     built around the compiled flat right-hand side and its derivatives: gcc spends superlinear
@@ -120,8 +95,7 @@ def compiled_parametric_step(
     def build() -> tuple[ca.Function, CompileReport]:
         description = repr(parametric.structure)
         if not derivatives and structured.supports(parametric):
-            rhs, report = structured.compiled_library(parametric, "rhs")
-            return parametric_rk4_step(parametric, rhs), report
+            return structured.compiled_library(parametric, "rk4_step")
         if not derivatives and whole_step_fits(parametric):
             return compile_function(parametric_rk4_step(parametric), description, derivatives)
         rhs, report = compile_function(parametric.rhs, description, derivatives)
