@@ -288,3 +288,71 @@ def test_a_library_that_never_loads_is_rebuilt_once_then_interpreted(tmp_path, m
     assert "freshly compiled library" in messages[1] and "Cannot load shared library" in messages[1]
     assert function is tiny and report.library is None
     assert not first.library.exists()  # the unloadable rebuild is not left to fail again
+
+
+# --- Libraries keyed by the code that builds them, compiled in the background ---
+
+
+def test_the_source_digest_follows_the_code(tmp_path):
+    """The key of a code-keyed library changes with the code it is built from, not otherwise."""
+    module = tmp_path / "derive.py"
+    module.write_text("A = 1\n")
+    first = compile_module.source_digest((str(module),))
+    assert compile_module.source_digest((str(module),)) == first
+    other = tmp_path / "other.py"
+    other.write_text("A = 2\n")
+    assert compile_module.source_digest((str(other),)) != first
+    assert compile_module.source_digest() != first  # the model package alone
+
+
+def test_a_background_compile_is_waited_for_and_then_loaded(tmp_path, monkeypatch):
+    """compile_in_background writes the C and runs the compiler in a worker; compiled_from then
+    waits for it (not a cache hit, the wait as its compile time), a second call hits the cache,
+    and the compiled Functions equal the interpreted ones."""
+    import casadi as ca
+
+    monkeypatch.setenv("CABLE_OCP_CACHE", str(tmp_path))
+    x = ca.SX.sym("x", 3)
+    functions = [
+        ca.Function("tiny_sine", [x], [ca.sin(x) * x**2]),
+        ca.Function("tiny_square", [x], [x**2 + 1]),
+    ]
+    built = []
+
+    def build():
+        built.append(True)
+        return functions
+
+    names = ["tiny_sine", "tiny_square"]
+    arguments = (build, names, "background test", True)
+    compile_module.compile_in_background(*arguments)
+    assert len(built) == 1
+    compile_module.compile_in_background(*arguments)  # already under way: nothing new
+    assert len(built) == 1
+    loaded, report = compile_module.compiled_from(*arguments)
+    assert not report.cache_hit and report.library.is_file()
+    assert len(built) == 1  # built once, for the background compile
+    assert np.allclose(np.array(loaded[0](TINY_POINT)).ravel(), TINY_VALUE, rtol=1e-14, atol=0)
+    assert np.allclose(np.array(loaded[1](TINY_POINT)).ravel(), np.square(TINY_POINT) + 1)
+    again, second = compile_module.compiled_from(*arguments)
+    assert second.cache_hit and second.library == report.library and len(built) == 1
+    assert not list(tmp_path.glob("tmp*"))  # no scratch folder left behind
+
+
+def test_a_failed_background_compile_is_reported_by_the_foreground(tmp_path, monkeypatch):
+    """A compiler that fails in the background leaves compiled_from to try again, warn with its
+    reason and return the interpreted Functions."""
+    import casadi as ca
+
+    monkeypatch.setenv("CABLE_OCP_CACHE", str(tmp_path / "cache"))
+    compiler = tmp_path / "broken-cc"
+    compiler.write_text("#!/bin/sh\necho 'broken: no code today' >&2\nexit 3\n")
+    compiler.chmod(0o755)
+    monkeypatch.setenv("CC", str(compiler))
+    x = ca.SX.sym("x", 3)
+    tiny = ca.Function("tiny_failing", [x], [ca.sin(x) * x**2])
+    arguments = (lambda: [tiny], ["tiny_failing"], "failing background test", True)
+    compile_module.compile_in_background(*arguments)
+    with pytest.warns(RuntimeWarning, match="broken: no code today"):
+        functions, report = compile_module.compiled_from(*arguments)
+    assert functions[0] is tiny and report.library is None
