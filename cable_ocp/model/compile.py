@@ -5,7 +5,10 @@ direction each, so the code stays small; CasADi calls them once per direction), 
 the system C compiler into a shared library and loaded back as an external Function. The library
 is cached under a key that hashes the Function itself (its serialised expression graph), the
 caller's description, the CasADi version and the compiler flags, so a second run loads it without
-compiling, and a change to the model (and nothing else) compiles anew.
+compiling, and a change to the model (and nothing else) compiles anew. Libraries that the model's
+code builds deterministically from a structure (:func:`compiled_from`) are keyed by that code
+instead, so that a cache hit builds no expression graph at all; several Functions may share one
+library, and :func:`compile_in_background` runs their compilers while the caller goes on.
 
 A library is loaded only if its size and SHA-256 match the record written beside it (a truncated
 library makes the loader crash the process with SIGBUS; hashing a 2 MB library takes 1.3 ms,
@@ -240,7 +243,6 @@ def compiled(
     description: str,
     derivatives: bool = True,
     quiet: bool = True,
-    key: str | None = None,
 ) -> tuple[ca.Function, CompileReport]:
     """The Function compiled to C (with first derivatives), from the cache when possible.
 
@@ -261,9 +263,6 @@ def compiled(
         simulation; they roughly triple the code).
     quiet : bool
         No message about compiling.
-    key : str, optional
-        The cache key, when the caller has it (:func:`compiled_from`); by default
-        :func:`cache_key` of the Function and the description.
 
     Returns
     -------
@@ -271,7 +270,7 @@ def compiled(
         The external (compiled) Function, or ``function`` itself (interpreted) after a warning.
     report : CompileReport
     """
-    key = key or cache_key(function, f"{description}|derivatives={derivatives}")
+    key = cache_key(function, f"{description}|derivatives={derivatives}")
     functions, report = _compiled_together([function], key, derivatives, quiet)
     return functions[0], report
 
