@@ -219,7 +219,7 @@ def compile_ahead(scene, elements: int | None, jacobian: bool) -> None:
     it), then the structured libraries of the optimisation model (of ``elements``) and of the
     scene's model (the verification's, a closed loop's plant). Their C compilers run at once
     while the problem and the transcription are built (on paper_hill with an empty cache the
-    default ``optimize`` took 6.5 to 8.3 s against 10.0 s compiling one after the other).
+    default ``optimize`` took 7.5 and 8.7 s against 12.9 and 13.1 s compiling one after the other).
     """
     reduced = CableModel.from_scene(scene, elements)
     if jacobian:

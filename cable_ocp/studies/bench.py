@@ -379,7 +379,8 @@ def ocp_speed_report(models_dir: Path, quick: bool = False) -> list[tuple[str, d
         "alone; 'compile': how long the solve waited for the C compiler (the libraries start "
         "compiling in the background, side by side, when the problem is stated); 'verify': the "
         "full-model runs (model correction's at a coarser step, the reported profile's at the "
-        "scene's); 'other': first guess and model-correction runs; 'vs base': IPOPT's wall "
+        "scene's); 'other': stating the problem (cold: generating the C and waiting for the "
+        "optimisation model's library) and the first guess; 'vs base': IPOPT's wall "
         "(the default before, as cold or as warm) over the row's."
     )
     if not quick:
