@@ -101,7 +101,7 @@ def correction_step(scene, compiled: bool = False) -> float:
     :data:`CORRECTION_COARSENING` that divides the run into whole steps and stays within
     :data:`CORRECTION_STABILITY_SHARE` of the RK4 limit of the full model linearised at its start
     (:func:`cable_ocp.simulation.stability.linearised_step`). On paper_hill (n = 15) that is
-    0.2 s against the scene's 0.05 s: a quarter of the cost, and e(t) within 2e-6 m of the
+    0.2 s against the scene's 0.05 s: a quarter of the cost, and e(t) within 7e-6 m of the
     scene's step. The profile that is reported is always verified at the scene's step.
     """
     numerics = scene.numerics
@@ -112,7 +112,10 @@ def correction_step(scene, compiled: bool = False) -> float:
     rhs = None
     if compiled and structured.supports(model):
         rhs = structured.compiled_structured(model, "rhs")
-    limit = linearised_step(model, start, drive.inputs(np.zeros(1))[:, 0], rhs=rhs)
+    try:
+        limit = linearised_step(model, start, drive.inputs(np.zeros(1))[:, 0], rhs=rhs)
+    except (ValueError, RuntimeError):  # no eigenvalues to go by (numpy's LinAlgError included)
+        return numerics.step
     factor = 1
     while (
         2 * factor <= CORRECTION_COARSENING
