@@ -261,8 +261,7 @@ class ErrorLinearisation:
         evaluate_into(self.run, [values.initial_state, inputs], [states[1:]])
         if not np.all(np.isfinite(states)):
             return Linearised(states, np.full(count + 1, np.nan), np.zeros((0, 0)), False)
-        error, _ = self.slope(states[:, :3].T, values.end_offset, values.reference)
-        error = np.asarray(error).ravel() + values.bias
+        error, _ = self._error_and_slope(values, states)
         return Linearised(states, error, np.zeros((0, 0)), True)
 
     def __call__(self, values: ProblemParameters, parameters: np.ndarray) -> Linearised:
@@ -276,7 +275,13 @@ class ErrorLinearisation:
             empty = np.zeros((count + 1, self.winch.shape[2]))
             return Linearised(states, np.full(count + 1, np.nan), empty, False)
         sensitivities = propagate_sensitivities(self._jacobians, self.winch, self.step)
-        error, slope = self.slope(states[:, :3].T, values.end_offset, values.reference)
-        error = np.asarray(error).ravel() + values.bias
-        jacobian = np.einsum("ik,ksi->ks", np.asarray(slope), sensitivities[:, :, :3])
+        error, slope = self._error_and_slope(values, states)
+        jacobian = np.einsum("ik,ksi->ks", slope, sensitivities[:, :, :3])
         return Linearised(states, error, jacobian, True)
+
+    def _error_and_slope(
+        self, values: ProblemParameters, states: np.ndarray
+    ) -> tuple[np.ndarray, np.ndarray]:
+        """``e + bias`` (K + 1,) of a run's states and ``de/d end`` (3, K + 1) there."""
+        error, slope = self.slope(states[:, :3].T, values.end_offset, values.reference)
+        return np.asarray(error).ravel() + values.bias, np.asarray(slope)
