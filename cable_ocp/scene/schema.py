@@ -719,12 +719,22 @@ class Scene(_Validated):
     def _check_relations(self) -> None:
         water = self.environment.water_density
         if self.environment.submerged and self.cable.density <= water:
-            raise SceneError(
-                "cable.density",
-                f" = {self.cable.density!r} is out of range: must be > environment.water_density "
-                f"= {water!r} kg/m^3 when environment.submerged is true (a cable lighter than "
-                "water floats)",
-            )
+            # A rope lighter than water hangs only while the load at its end outweighs its
+            # buoyancy: every bond in tension in still water (the statics check the rest).
+            area = self.cable.area or math.pi * self.cable.diameter**2 / 4
+            lift = (water - self.cable.density) * area * self.cable.length
+            payload = self.end.payload
+            load = (payload.mass - water * payload.volume) if payload is not None else 0.0
+            load -= self.end.force[2] / self.environment.gravity
+            if load <= lift:
+                raise SceneError(
+                    "cable.density",
+                    f" = {self.cable.density!r} kg/m^3 is lighter than environment.water_density "
+                    f"= {water!r} kg/m^3: the rope's buoyancy ({lift:.4g} kg) must be outweighed "
+                    f"by the load at its end (end.payload mass less its displaced water, less "
+                    f"end.force[2]/g: {load:.4g} kg), or the rope floats. Add a payload of more "
+                    f"than {lift - load:.4g} kg, or use a rope denser than water",
+                )
         w, top = self.winch, self.top_element_length
         reach = w.top_length_min - w.drum_radius * w.angle_min
         if reach >= self.cable.length / 2:
