@@ -7,6 +7,9 @@ whose Omega the same hill on a grid must reproduce; the trajectory's own e(t) fo
 
 from __future__ import annotations
 
+import os
+import warnings
+
 import casadi as ca
 import numpy as np
 import pytest
@@ -256,6 +259,78 @@ def test_a_bad_grid_file_is_one_scene_error_naming_the_field_file_and_point(
     text = str(info.value)
     assert text.startswith(f"seabed.grid.file: {path.resolve()}: "), text
     assert "\n" not in text
+    assert info.match(message)
+
+
+def _text(path, text, encoding="utf-8"):
+    path.write_text(text, encoding=encoding)
+    return path
+
+
+ROWS = "\n".join(f"{x:g},{y:g},-300" for x in X4 for y in Y4)
+CSV_FILES = {
+    "empty": (lambda p: _text(p / "g.csv", ""), r"no data rows \(an empty file\)"),
+    "header only": (lambda p: _text(p / "g.csv", "x,y,z\n"),
+                    r"no data rows \(only a header line\)"),
+    "trailing comma": (lambda p: _text(p / "g.csv", "x,y,z\n" + ROWS.replace("\n", ",\n", 3)),
+                       r"line 2 has 4 fields \(a trailing comma\?\); expected 3: x, y, z \(m\)$"),
+    "two columns": (lambda p: _text(p / "g.csv", "x,y\n0,0\n10,0\n"), r"line 2 has 2 fields"),
+    "a word": (lambda p: _text(p / "g.csv", "x,y,z\n" + ROWS.replace("-300", "deep", 1)),
+               r"line 2 = '0,0,deep' is not three numbers x, y, z$"),
+    "latin-1": (lambda p: _text(p / "g.csv", "x,y,z # \xe9\n" + ROWS, "latin-1"),
+                r"not a UTF-8 text file"),
+}  # fmt: skip
+
+
+@pytest.mark.parametrize("case", CSV_FILES, ids=str)
+def test_a_bad_csv_grid_is_one_line_without_a_warning(case, paper_hill, tmp_path):
+    """Empty, header only, a trailing comma, a short line, a word: one line naming the line."""
+    make, message = CSV_FILES[case]
+    path = make(tmp_path)
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")  # genfromtxt warned "Empty input file" before its error
+        with pytest.raises(SceneError) as info:
+            paper_hill.updated({"seabed.grid": {"file": str(path)}})
+    text = str(info.value)
+    assert text.startswith(f"seabed.grid.file: {path.resolve()}: "), text
+    assert "\n" not in text and len(text) < 300
+    assert info.match(message)
+
+
+def test_an_excel_csv_with_a_byte_order_mark_reads_as_its_plain_twin(tmp_path):
+    """A UTF-8 byte-order mark before the header (or before the first row) is not a NaN."""
+    plain = Seabed(grid=_grid(_text(tmp_path / "plain.csv", "x,y,z\n" + ROWS)))
+    for name, text in (("header.csv", "x,y,z\n" + ROWS), ("rows.csv", ROWS)):
+        marked = Seabed(grid=_grid(_text(tmp_path / name, "\ufeff" + text)))
+        assert seabed_height(marked, 15.0, 12.0) == seabed_height(plain, 15.0, 12.0) == -300.0
+
+
+def _loop(path):
+    (path / "a.nc").symlink_to(path / "b.nc")
+    (path / "b.nc").symlink_to(path / "a.nc")
+    return path / "a.nc"
+
+
+def _fifo(path):
+    os.mkfifo(path / "g.nc")
+    return path / "g.nc"
+
+
+NOT_FILES = {
+    "symlink loop": (_loop, r"a loop of symbolic links$"),
+    "folder": (lambda p: (p / "g.nc").mkdir() or p / "g.nc", r"is a folder, not a file$"),
+    "fifo": (_fifo, r"not a regular file \(a pipe, socket or device\)$"),
+    "missing": (lambda p: p / "g.nc", r"file not found$"),
+}
+
+
+@pytest.mark.parametrize("case", NOT_FILES, ids=str)
+def test_a_grid_that_is_not_a_file_says_what_it_is_naming_the_field(case, paper_hill, tmp_path):
+    make, message = NOT_FILES[case]
+    path = make(tmp_path)
+    with pytest.raises(SceneError, match=r"^seabed\.grid\.file = ") as info:
+        paper_hill.updated({"seabed.grid": {"file": str(path)}})
+    assert "\n" not in str(info.value)
     assert info.match(message)
 
 

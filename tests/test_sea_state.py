@@ -135,10 +135,19 @@ def test_compensation_pays_out_the_whole_vertical_motion(models_dir):
     "sea, message",
     [
         ({**SEA, "significant_height": 0.0},
-         r"^top\.heave\.sea_state\.significant_height = 0\.0 is out of range: must be > 0 \(m\)"),
+         r"^top\.heave\.sea_state\.significant_height = 0\.0 is out of range: must be > 0 and "
+         r"<= 30 \(m\): the highest seas"),
+        ({**SEA, "significant_height": 1e50},
+         r"^top\.heave\.sea_state\.significant_height = 1e\+50 is out of range: must be > 0 and "
+         r"<= 30 \(m\): the highest seas measured have a significant height of about 20 m$"),
         ({**SEA, "significant_height": -1.0}, r"^top\.heave\.sea_state\.significant_height = -1"),
         ({**SEA, "peak_period": 0.0},
-         r"^top\.heave\.sea_state\.peak_period = 0\.0 is out of range: must be > 0 \(s\)"),
+         r"^top\.heave\.sea_state\.peak_period = 0\.0 is out of range: must be >= 1 and <= 30 "
+         r"\(s\): waves at sea peak between"),
+        ({**SEA, "peak_period": 0.05},
+         r"^top\.heave\.sea_state\.peak_period = 0\.05 is out of range: must be >= 1 and <= 30 "),
+        ({**SEA, "peak_period": 1e10},
+         r"^top\.heave\.sea_state\.peak_period = 10000000000\.0 is out of range: must be >= 1 "),
         ({**SEA, "peak_enhancement": 0.5},
          r"^top\.heave\.sea_state\.peak_enhancement = 0\.5 is out of range: must be >= 1"),
         ({**SEA, "components": 0},
@@ -160,9 +169,10 @@ def test_compensation_pays_out_the_whole_vertical_motion(models_dir):
         ({**SEA, "winch_offset": [1.0, 2.0]},
          r"^top\.heave\.sea_state\.winch_offset: expected 3 numbers"),
     ],
-    ids=["hs-zero", "hs-negative", "tp-zero", "gamma-below-1", "no-components", "components-float",
-         "no-hs", "rao-row-list", "rao-columns", "rao-no-frequency", "rao-not-increasing",
-         "rao-negative-gain", "rao-unknown", "offset-shape"],
+    ids=["hs-zero", "hs-huge", "hs-negative", "tp-zero", "tp-short", "tp-huge", "gamma-below-1",
+         "no-components", "components-float", "no-hs", "rao-row-list", "rao-columns",
+         "rao-no-frequency", "rao-not-increasing", "rao-negative-gain", "rao-unknown",
+         "offset-shape"],
 )  # fmt: skip
 def test_bad_sea_states_are_one_line_errors(models_dir, sea, message):
     with pytest.raises(SceneError, match=message) as caught:

@@ -11,9 +11,11 @@ be > 0 (m)``.
 from __future__ import annotations
 
 import copy
+import errno
 import math
 import numbers
 import os
+import stat
 from collections.abc import Callable, Collection, Mapping, Set
 from dataclasses import MISSING, dataclass, field, fields
 from pathlib import Path
@@ -54,6 +56,14 @@ __all__ = [
 Vector3 = tuple[float, float, float]
 
 MAX_STEPS = 10**8  # RK4 steps of a simulation: numerics.duration / numerics.step
+# Rows of environment.current_profile: every row adds the same instructions to the drag at each
+# Gauss point (about 390 at n = 15, against 19 000 for the whole right-hand side with 3 rows), so
+# 100 rows double the model's size, compile time and cost per step; thin a longer profile.
+MAX_CURRENT_ROWS = 100
+# The fastest currents at sea, the tidal streams of straits such as Saltstraumen, run at about
+# 10 m/s; the statics still find the hanging line there (paper_hill: measured), not at 50 m/s.
+CURRENT_LIMIT = 10.0  # m/s, each component
+CURRENT_REASON = "currents at sea stay under 10 m/s, the fastest tidal streams"
 REQUIRED_TABLES = ("model", "top", "numerics")  # tables every scene file must have
 
 
@@ -82,6 +92,7 @@ class _Spec:
     optional: bool = False
     choices: tuple[str, ...] = ()
     item: type | None = None  # dataclass of a "section" or of the items of a "tuple"
+    why: str = ""  # the physical reason for the range, said when a value is out of it
 
     def rule(self) -> str:
         """Describe the allowed range, e.g. ``> 0 (m)``."""
@@ -129,7 +140,8 @@ def _number(value: Any, path: str, spec: _Spec, integer: bool = False) -> float 
     if not integer and not math.isfinite(value):
         raise SceneError(path, f" = {value!r} is out of range: must be finite")
     if not spec.accepts(value):
-        raise SceneError(path, f" = {_short(value)} is out of range: must be {spec.rule()}")
+        why = f": {spec.why}" if spec.why else ""
+        raise SceneError(path, f" = {_short(value)} is out of range: must be {spec.rule()}{why}")
     return value
 
 
@@ -150,9 +162,7 @@ def _check(spec: _Spec, value: Any, path: str) -> Any:
     if kind == "path":
         if not isinstance(value, str | os.PathLike) or "\0" in str(value):
             raise SceneError(path, f": expected a file path string, got {_describe(value)}")
-        value = str(Path(value).resolve())
-        if not Path(value).is_file():
-            raise SceneError(path, f" = {_short(value)}: file not found")
+        value = _existing_file(path, value)
     if kind in ("vec3", "tuple"):
         if isinstance(value, str | bytes | Mapping | Set) or not isinstance(value, Collection):
             expected = "3 numbers" if kind == "vec3" else "a list"
@@ -171,6 +181,30 @@ def _check(spec: _Spec, value: Any, path: str) -> Any:
     if kind == "section" and not isinstance(value, spec.item):
         raise SceneError(path, f": expected a {spec.item.__name__}, got {_describe(value)}")
     return value
+
+
+def _existing_file(path: str, value: str | os.PathLike) -> str:
+    """The absolute path of a regular file, or one SceneError saying what ``value`` is instead."""
+    try:
+        resolved = Path(value).resolve()
+        kind = resolved.stat().st_mode
+    except RuntimeError:  # Python < 3.13 raises it for a loop of symbolic links
+        raise SceneError(path, f" = {_short(str(value))}: a loop of symbolic links") from None
+    except OSError as error:
+        if error.errno == errno.ELOOP:
+            raise SceneError(path, f" = {_short(str(value))}: a loop of symbolic links") from None
+        if isinstance(error, FileNotFoundError):
+            raise SceneError(path, f" = {_short(str(resolved))}: file not found") from None
+        raise SceneError(
+            path, f" = {_short(str(value))}: cannot be read ({error.strerror})"
+        ) from None
+    if stat.S_ISDIR(kind):
+        raise SceneError(path, f" = {_short(str(resolved))}: is a folder, not a file")
+    if not stat.S_ISREG(kind):
+        raise SceneError(
+            path, f" = {_short(str(resolved))}: not a regular file (a pipe, socket or device)"
+        )
+    return str(resolved)
 
 
 class _Validated:
@@ -297,8 +331,14 @@ class CurrentRow(_Validated):
     """
 
     z: float = _param(doc="Height of the row (the sea surface is 0).", le=0, unit="m")
-    u: float = _param(0.0, doc="Current along x.", unit="m/s")
-    v: float = _param(0.0, doc="Current along y.", unit="m/s")
+    u: float = _param(
+        0.0, doc="Current along x.", ge=-CURRENT_LIMIT, le=CURRENT_LIMIT, unit="m/s",
+        why=CURRENT_REASON,
+    )  # fmt: skip
+    v: float = _param(
+        0.0, doc="Current along y.", ge=-CURRENT_LIMIT, le=CURRENT_LIMIT, unit="m/s",
+        why=CURRENT_REASON,
+    )  # fmt: skip
 
 
 @_section("environment")
@@ -311,16 +351,27 @@ class Environment(_Validated):
     water_density: float = _param(
         1025.0, doc="Water density rho_w (> 0 when submerged).", ge=0, unit="kg/m^3"
     )
-    current: Vector3 = _param((0.0, 0.0, 0.0), "vec3", "Uniform current velocity.", unit="m/s")
+    current: Vector3 = _param(
+        (0.0, 0.0, 0.0), "vec3", "Uniform current velocity.", ge=-CURRENT_LIMIT,
+        le=CURRENT_LIMIT, unit="m/s", why=CURRENT_REASON,
+    )  # fmt: skip
     current_profile: tuple[CurrentRow, ...] = _param(
-        (), "tuple", "Current by depth, rows from the surface down (none: uniform).",
-        item=CurrentRow,
+        (), "tuple", f"Current by depth, rows from the surface down (none: uniform; at most "
+        f"{MAX_CURRENT_ROWS} rows).", item=CurrentRow,
     )  # fmt: skip
 
     def _check_relations(self) -> None:
         if self.submerged and self.water_density <= 0:
             raise self._fail("water_density", "> 0 when environment.submerged is true")
         rows = self.current_profile
+        if len(rows) > MAX_CURRENT_ROWS:
+            raise SceneError(
+                self._path("current_profile"),
+                f": {len(rows)} rows; at most {MAX_CURRENT_ROWS}: each row adds to the drag at "
+                f"every Gauss point, so the model's size, compile time and cost per step grow "
+                f"with the rows ({MAX_CURRENT_ROWS} rows double them). Thin the profile (e.g. "
+                "keep the rows where the current's slope in depth changes)",
+            )
         for k in range(1, len(rows)):
             if rows[k].z >= rows[k - 1].z:
                 raise SceneError(
@@ -412,8 +463,15 @@ class SeaState(_Validated):
     along x).
     """
 
-    significant_height: float = _param(doc="Significant wave height H_s.", gt=0, unit="m")
-    peak_period: float = _param(doc="Spectral peak period T_p.", gt=0, unit="s")
+    significant_height: float = _param(
+        doc="Significant wave height H_s.", gt=0, le=30, unit="m",
+        why="the highest seas measured have a significant height of about 20 m",
+    )  # fmt: skip
+    peak_period: float = _param(
+        doc="Spectral peak period T_p.", ge=1, le=30, unit="s",
+        why="waves at sea peak between about 1 s (ripples of a light wind) and 25 s (the "
+        "longest ocean swell)",
+    )  # fmt: skip
     peak_enhancement: float = _param(3.3, doc="JONSWAP peak enhancement gamma.", ge=1)
     components: int = _param(100, "int", "Number of wave components.", ge=1, le=10000)
     seed: int = _param(0, "int", "Seed of the components' frequencies and phases.", ge=0)
