@@ -10,11 +10,12 @@ that keeps them. The returned profile is checked again; a violation makes the se
 from __future__ import annotations
 
 import time
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import numpy as np
 from scipy.optimize import minimize
 
+from cable_ocp.control import defaults
 from cable_ocp.control.problem import SolverOutcome, WinchProblem
 from cable_ocp.drive.bounds import violation
 from cable_ocp.drive.controls import KnotSpline
@@ -35,9 +36,11 @@ class NelderMeadSettings:
     Attributes
     ----------
     elements : int or None
-        Elements of the model each evaluation simulates (None: the scene's).
+        Elements of the model each evaluation simulates (None: derived from the scene, as for
+        the shooting solvers, :mod:`cable_ocp.control.defaults`).
     step : float or None, s
-        RK4 step of the evaluations (None: the scene's).
+        RK4 step of the evaluations (None: derived from that model's RK4 limit along its locked
+        run); a step above that limit is refused.
     max_evaluations : int
     xatol : float, rad
     fatol : float, m
@@ -59,6 +62,31 @@ class NelderMeadSettings:
             raise ValueError(f"elements = {self.elements}: must be >= 1")
         if self.step is not None and self.step <= 0:
             raise ValueError(f"step = {self.step}: must be > 0 s")
+
+
+def resolved_nelder_mead(scene, settings: NelderMeadSettings, compiled: bool | None = None):
+    """The settings with the elements and step left unset derived from the scene, and how.
+
+    As :func:`cable_ocp.control.ocp.resolved`, the step a whole fraction of the duration.
+    """
+    compiled = settings.compiled if compiled is None else compiled
+    duration = scene.numerics.duration
+    notes = []
+    elements = settings.elements or defaults.reduced_elements(scene)
+    if settings.elements is None:
+        notes.append(f"reduced model of {elements} elements")
+    open_loop, _ = WinchProblem.open_loop_scene(scene)
+    limit, at = defaults.run_limit(open_loop, elements, duration, compiled)
+    if settings.step is not None:
+        defaults.check_step(
+            settings.step, limit, "step", "leave it unset to derive one, or give a smaller step"
+        )
+        step = settings.step
+    else:
+        step = defaults.step_within(limit, duration, defaults.STEP_CAP)
+        notes.append(defaults.StepChoice(step, limit, at).describe("at"))
+    text = "derived settings: " + ", ".join(notes) if notes else ""
+    return replace(settings, elements=elements, step=step), text
 
 
 def nelder_mead_problem(scene, settings: NelderMeadSettings) -> WinchProblem:

@@ -16,11 +16,12 @@ objective is ``Omega^2`` of eq. 39 by the trapezoidal rule over the RK4 steps.
 from __future__ import annotations
 
 import time
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 
 import casadi as ca
 import numpy as np
 
+from cable_ocp.control import defaults
 from cable_ocp.control.gauss_newton import CLEARANCE_BACKOFF
 from cable_ocp.control.interrupts import keeping_interrupts
 from cable_ocp.control.linearisation import (
@@ -64,16 +65,22 @@ class IpoptSettings:
     Attributes
     ----------
     elements : int or None
-        Elements of the optimisation model (None: the scene's). Fewer elements make a cheaper
-        model; Omega is always verified on the scene's own model.
+        Elements of the optimisation model (None: derived from the scene,
+        :func:`cable_ocp.control.defaults.reduced_elements`; the scene's ``model.elements`` asks
+        for its own model). Fewer elements make a cheaper model; Omega is always verified on the
+        scene's own model.
     step : float or None, s
-        RK4 step inside the intervals (None: the scene's step).
+        RK4 step inside the intervals (None: derived from the model's RK4 limit along its locked
+        run, :mod:`cable_ocp.control.defaults`). A step above that limit is refused.
     shooting : str
         ``"single"`` (only the winch parameters are variables) or ``"multiple"`` (the states at
         the interval ends too, joined by continuity constraints).
-    intervals : int
-        Shooting intervals; the number of RK4 steps must be a multiple of it. With single
-        shooting they only cut the chain of RK4 steps (and set the Hermite control's intervals).
+    intervals : int or None
+        Shooting intervals (None: about one per 5 s of the duration,
+        :func:`cable_ocp.control.defaults.control_intervals`); the number of RK4 steps must be a
+        multiple of it (a derived step is chosen so; with a fixed step, derived intervals are the
+        nearest count that divides its steps). With single shooting they only cut the chain of
+        RK4 steps (and set the Hermite control's intervals).
     control : str
         ``"hermite"`` (piecewise cubic per control interval) or ``"spline"`` (the paper's knots).
     control_intervals : int or None
@@ -100,7 +107,7 @@ class IpoptSettings:
     elements: int | None = None
     step: float | None = None
     shooting: str = "single"
-    intervals: int = 42
+    intervals: int | None = None
     control: str = "hermite"
     control_intervals: int | None = None
     solver: str = "gauss-newton"
@@ -130,9 +137,11 @@ class IpoptSettings:
             )
         if self.hessian not in ("limited-memory", "exact"):
             raise ValueError(f"hessian = {self.hessian!r}: must be 'limited-memory' or 'exact'")
-        for name in ("intervals", "max_iter", "threads"):
+        for name in ("max_iter", "threads"):
             if getattr(self, name) < 1:
                 raise ValueError(f"{name} = {getattr(self, name)}: must be >= 1")
+        if self.intervals is not None and self.intervals < 1:
+            raise ValueError(f"intervals = {self.intervals}: must be >= 1")
         if self.elements is not None and self.elements < 1:
             raise ValueError(f"elements = {self.elements}: must be >= 1")
         if self.step is not None and self.step <= 0:
@@ -187,24 +196,78 @@ def make_control(scene, settings: IpoptSettings) -> KnotSpline | HermiteInterval
 
 def steps_per_interval(duration: float, step: float, intervals: int) -> int:
     """RK4 steps in each shooting interval; ``intervals`` must divide the steps of the run."""
-    total_steps = step_count(duration, step)
+    total_steps = round(duration / step)
+    if total_steps < 1 or abs(total_steps * step - duration) > 1e-9 * max(duration, 1.0):
+        raise ValueError(
+            f"step = {step:g} s (of the optimisation model) must divide numerics.duration = "
+            f"{duration:g} s into whole RK4 steps: leave step unset to derive it"
+        )
     if total_steps % intervals:
         raise ValueError(
             f"intervals = {intervals} must divide the {total_steps} RK4 steps "
-            f"(T = {duration} s, h = {step} s)"
+            f"(T = {duration:g} s, step = {step:g} s): leave intervals or step unset to derive it"
         )
     return total_steps // intervals
 
 
-def ipopt_problem(scene, settings: IpoptSettings) -> WinchProblem:
-    """The scene's winch problem with the control, model and step the IPOPT settings ask for.
+def resolved(scene, settings: IpoptSettings, compiled: bool | None = None):
+    """The settings with every number left unset derived from the scene, and how (a phrase).
 
-    The shooting intervals are checked first, before any model is built; with compiled models,
-    the libraries that the solve and its verification load start compiling then
+    Elements, RK4 step and intervals follow :mod:`cable_ocp.control.defaults`; a step the user
+    fixed is refused when it is above the model's RK4 limit along the locked run, and one that
+    does not divide the duration (or the intervals) is refused too, both naming the setting.
+
+    Returns
+    -------
+    (IpoptSettings, str)
+
+    Raises
+    ------
+    ValueError
+        A fixed setting that cannot work. RuntimeError (the locked run's statics or blow-up)
+        passes through: :func:`cable_ocp.optimize` reports it as a failed result.
+    """
+    compiled = settings.compiled if compiled is None else compiled
+    duration = scene.numerics.duration
+    notes = []
+    elements = settings.elements or defaults.reduced_elements(scene)
+    if settings.elements is None:
+        notes.append(f"reduced model of {elements} elements")
+    if settings.step is not None and settings.intervals is not None:
+        steps_per_interval(duration, settings.step, settings.intervals)
+    open_loop, _ = WinchProblem.open_loop_scene(scene)
+    limit, at = defaults.run_limit(open_loop, elements, duration, compiled)
+    choice = None
+    if settings.step is not None:
+        defaults.check_step(
+            settings.step, limit, "step",
+            "leave it unset to derive one, or give a smaller step",
+        )  # fmt: skip
+        steps_per_interval(duration, settings.step, 1)
+        step = settings.step
+        intervals = settings.intervals or defaults.intervals_for(
+            duration, step, defaults.control_intervals(duration)
+        )
+    else:
+        intervals = settings.intervals or defaults.control_intervals(duration)
+        step = defaults.step_within(limit, duration / intervals, defaults.STEP_CAP)
+        choice = defaults.StepChoice(step, limit, at)
+        notes.append(choice.describe("at"))
+    if settings.intervals is None:
+        notes.append(f"{intervals} intervals of {duration / intervals:.3g} s")
+    chosen = replace(settings, elements=elements, step=step, intervals=intervals)
+    text = "derived settings: " + ", ".join(notes) if notes else ""
+    return chosen, text
+
+
+def ipopt_problem(scene, settings: IpoptSettings) -> WinchProblem:
+    """The scene's winch problem with the control, model and step of resolved settings.
+
+    ``settings`` come from :func:`resolved` (every number set); with compiled models, the
+    libraries that the solve and its verification load start compiling first
     (:func:`compile_ahead`).
     """
-    step = settings.step or scene.numerics.step
-    steps_per_interval(scene.numerics.duration, step, settings.intervals)
+    steps_per_interval(scene.numerics.duration, settings.step, settings.intervals)
     if settings.compiled:
         compile_ahead(scene, settings.elements, settings.solver == "gauss-newton")
     return WinchProblem.from_scene(

@@ -20,8 +20,13 @@ import xarray as xr
 
 from cable_ocp.control import labelled
 from cable_ocp.control.gauss_newton import GaussNewton, GaussNewtonSettings
-from cable_ocp.control.nelder_mead import NelderMeadSettings, nelder_mead_problem, solve_nelder_mead
-from cable_ocp.control.ocp import IpoptSettings, ShootingProblem, ipopt_problem
+from cable_ocp.control.nelder_mead import (
+    NelderMeadSettings,
+    nelder_mead_problem,
+    resolved_nelder_mead,
+    solve_nelder_mead,
+)
+from cable_ocp.control.ocp import IpoptSettings, ShootingProblem, ipopt_problem, resolved
 from cable_ocp.control.problem import SolverOutcome, WinchProblem
 from cable_ocp.control.verification import Verification, correction_step
 from cable_ocp.scene import labelled as results
@@ -469,6 +474,9 @@ class Method:
     ----------
     default : IpoptSettings or NelderMeadSettings
         Settings when none are given.
+    resolve : callable
+        ``(scene, settings) -> (settings, str)``: every number left unset derived from the scene
+        (:mod:`cable_ocp.control.defaults`), and how.
     problem : callable
         ``(scene, settings) -> WinchProblem``: the control, model and step the settings ask for.
     solve : callable
@@ -476,15 +484,16 @@ class Method:
     """
 
     default: IpoptSettings | NelderMeadSettings
+    resolve: Callable[..., tuple]
     problem: Callable[..., WinchProblem]
     solve: Callable[..., OcpResult]
 
 
-# A reduced model of 3 elements at h = 0.5 s optimises; the scene's own model verifies.
+# A reduced model derived from the scene optimises; the scene's own model verifies.
 METHODS = {
-    "ipopt": Method(IpoptSettings(elements=3, step=0.5), ipopt_problem, solve_ipopt),
+    "ipopt": Method(IpoptSettings(), resolved, ipopt_problem, solve_ipopt),
     "nelder-mead": Method(
-        NelderMeadSettings(elements=3, step=0.5), nelder_mead_problem, solve_nelder_mead_verified
+        NelderMeadSettings(), resolved_nelder_mead, nelder_mead_problem, solve_nelder_mead_verified
     ),
 }
 
@@ -509,8 +518,11 @@ def optimize(
     method : str
         ``"ipopt"`` (direct shooting) or ``"nelder-mead"`` (the paper's method).
     settings : IpoptSettings or NelderMeadSettings, optional
-        Defaults: a reduced model of 3 elements at h = 0.5 s; IPOPT with single shooting and a
-        Hermite control on 42 intervals, Nelder-Mead over the scene's spline knots.
+        Defaults: a reduced model derived from the scene (3 elements, more on a long rope; its
+        RK4 step from its limit along the locked run, at most 0.5 s:
+        :mod:`cable_ocp.control.defaults`); Gauss-Newton on single shooting with a Hermite
+        control of about 5 s intervals, Nelder-Mead over the scene's spline knots. The result's
+        ``notes`` say what was derived.
     quiet : bool
         Print nothing at all.
     verbose : bool
@@ -542,18 +554,33 @@ def optimize(
             f"{type(chosen.default).__name__}"
         )
     started = time.perf_counter()
+    model = "the optimisation model"
     try:
+        settings, derived = chosen.resolve(scene, settings)
+        model = (
+            f"the optimisation model ({settings.elements} elements at h = {settings.step:.4g} s"
+            f"{'; ' + derived if derived else ''})"
+        )
         problem = chosen.problem(scene, settings)
-        return chosen.solve(problem, settings, quiet=quiet, verbose=verbose, **kwargs)
+        result = chosen.solve(problem, settings, quiet=quiet, verbose=verbose, **kwargs)
     except RuntimeError as error:  # SimulationError, EquilibriumError, CasADi's errors
-        return failed_result(method, settings, error, time.perf_counter() - started)
+        return failed_result(method, settings, error, time.perf_counter() - started, model)
+    notes = "; ".join(text for text in (result.notes, derived) if text)
+    return replace(result, notes=notes)
 
 
 def failed_result(
-    method: str, settings: IpoptSettings | NelderMeadSettings, error: Exception, wall_time: float
+    method: str,
+    settings: IpoptSettings | NelderMeadSettings,
+    error: Exception,
+    wall_time: float,
+    model: str = "the optimisation model",
 ) -> OcpResult:
-    """The result of an optimisation that stopped on ``error`` before it had a profile."""
-    reason = f"{type(error).__name__}: {error}"
+    """The result of an optimisation that stopped on ``error`` before it had a profile.
+
+    ``model`` names the model that was being worked on (the reduced one, with its settings).
+    """
+    reason = f"{type(error).__name__} on {model}: {error}"
     return OcpResult(
         method=method,
         parameters=np.zeros(0),

@@ -103,12 +103,22 @@ class WinchProblem:
         compensate is paid out by eq. 38 as a feedforward, and the control optimises the slow
         profile on top (the winch bounds apply to the sum).
         """
-        feedforward = scene.top.heave is not None and not scene.top.heave.compensation
-        if feedforward:
-            scene = scene.updated({"top.heave.compensation": True})
+        scene, feedforward = cls.open_loop_scene(scene)
         step = step or scene.numerics.step
         duration = scene.numerics.duration
         return cls._over(scene, control, elements, step, duration, feedforward, compiled)
+
+    @staticmethod
+    def open_loop_scene(scene):
+        """The scene the open loop simulates, and whether it pays a heave out (eq. 38).
+
+        A heave that the scene does not compensate is paid out as a feedforward: the scene is
+        then the user's with ``top.heave.compensation`` on.
+        """
+        feedforward = scene.top.heave is not None and not scene.top.heave.compensation
+        if feedforward:
+            scene = scene.updated({"top.heave.compensation": True})
+        return scene, feedforward
 
     @classmethod
     def receding(

@@ -7,6 +7,8 @@ runs the full model at a coarser step while it stays well inside this limit
 
 from __future__ import annotations
 
+import math
+
 import casadi as ca
 import numpy as np
 
@@ -61,3 +63,70 @@ def linearised_step(
         stable = rk4_growth(z) <= np.maximum(1.0, np.exp(z.real)) + GROWTH_SLACK
         low, high = np.where(stable, middle, low), np.where(stable, high, middle)
     return float(low.min())
+
+
+# Share of the linearised RK4 limit that a step chosen from it may take. The stability study's
+# runs at 0.53 and 0.68 of the limit (n = 15 at h = 0.2 s, n = 100 at 0.025 s) kept the end within
+# 2e-6 m and 1e-7 m of runs at a quarter of their step (notebooks/studies/bench.md).
+STABLE_SHARE = 0.7
+# States along a run at which the limit is taken (evenly spaced in time, the start included).
+LIMIT_PROBES = 24
+
+
+def limit_along_run(
+    model: CableModel,
+    x0: np.ndarray,
+    drive,
+    duration: float,
+    compiled: bool = False,
+) -> tuple[float, float]:
+    """The smallest linearised RK4 limit (s) over a run of ``drive``, and when it is reached (s).
+
+    Drag stiffens the model as the cable moves through the water (its linearisation grows with
+    the relative speed), so the limit at rest says too little: the run is integrated at a share
+    of the limit at rest (halved while it blows up) and :func:`linearised_step` is taken at
+    :data:`LIMIT_PROBES` of its states, evenly spaced in time.
+
+    Parameters
+    ----------
+    model : CableModel
+    x0 : array (state_size,)
+        The run's start.
+    drive : Drive
+        Its inputs (e.g. the locked winch).
+    duration : float, s
+    compiled : bool
+        Run and difference the compiled model (5-DOF structures).
+
+    Raises
+    ------
+    cable_ocp.simulation.integrate.SimulationError
+        When the run blows up even at a sixteenth of the limit at rest.
+    """
+    from cable_ocp.model import structured
+    from cable_ocp.simulation.integrate import SimulationError, integrate
+
+    rhs = None
+    if compiled and structured.supports(model):
+        rhs = structured.compiled_structured(model, "rhs")
+    rest = linearised_step(model, x0, drive.inputs(np.zeros(1))[:, 0], rhs=rhs)
+    probe = STABLE_SHARE * rest / 2
+    for attempt in range(4):
+        count = max(LIMIT_PROBES, math.ceil(duration / probe))
+        count = LIMIT_PROBES * math.ceil(count / LIMIT_PROBES)
+        try:
+            run = integrate(
+                model, x0, drive, duration, duration / count,
+                output_every=count // LIMIT_PROBES, tolerance=math.inf, compiled=compiled,
+            )  # fmt: skip
+            break
+        except SimulationError:
+            if attempt == 3:
+                raise
+            probe /= 2
+    limits = [
+        linearised_step(model, state, inputs, rhs=rhs)
+        for state, inputs in zip(run.states, run.inputs, strict=True)
+    ]
+    worst = int(np.argmin(limits))
+    return float(limits[worst]), float(run.time[worst])

@@ -1,0 +1,110 @@
+"""Numerical settings that follow from the scene: what the optimiser and the controller work on.
+
+A user states a scene (a rope, a payload, a tow, a duration); the numbers the optimisation needs
+beside it (the reduced model's elements and RK4 step, the control grid; the controller's model,
+step and sample) are derived from that scene here, and every result says how
+(:func:`describe`). CONVENTIONS.md §5 ("numerical settings") gives the rules:
+
+- **Control grid** from the duration: intervals of about :data:`CONTROL_INTERVAL` seconds,
+  ``N = max(1, round(T / 5 s))`` (42 on the paper's 210 s), so any duration works.
+- **Reduced model's step** from its RK4 limit along the run it will make: the locked winch's run
+  of the reduced model, linearised at :data:`~cable_ocp.simulation.stability.LIMIT_PROBES`
+  states (drag stiffens the model as it moves through the water, so the limit at rest says too
+  little), times :data:`~cable_ocp.simulation.stability.STABLE_SHARE`, at most
+  :data:`STEP_CAP`, and a whole fraction of the control interval, so that the steps divide
+  every interval.
+- **Reduced model's elements**: :data:`REDUCED_ELEMENTS`, and more on a long rope, so that no
+  element is longer than :data:`REDUCED_ELEMENT_LENGTH`; never more than the scene's.
+
+A step the user fixes is checked against the same limit before the solve: above it, the error
+names the setting, the limit and the remedy.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+from cable_ocp.drive import winch
+from cable_ocp.drive.drive import Drive
+from cable_ocp.model.cable import CableModel
+from cable_ocp.simulation.integrate import step_count
+from cable_ocp.simulation.stability import STABLE_SHARE, limit_along_run
+from cable_ocp.simulation.statics import starting_state
+
+# s: intervals of the Hermite control (paper_hill's 210 s in 42), and of the controller's plan.
+CONTROL_INTERVAL = 5.0
+# The reduced model: 3 elements (at n_ocp = 3, 5, 8 the verified Omega of paper_flat was 8.9e-6,
+# 7.4e-6, 7.3e-6 m for 39, 105, 222 s of IPOPT: README, "speed against accuracy"), and no element
+# longer than this (m), so that a long rope keeps its shape.
+REDUCED_ELEMENTS = 3
+REDUCED_ELEMENT_LENGTH = 150.0
+# s: the reduced model's step is never coarser than this, the step that served the paper's rope
+# (its limit along the run is 1.02 s at n = 3), whatever a stiff-free scene would allow.
+STEP_CAP = 0.5
+
+
+@dataclass(frozen=True)
+class StepChoice:
+    """A step chosen from a model's RK4 limit along a run.
+
+    Attributes
+    ----------
+    step : float, s
+    limit : float, s
+        The smallest linearised RK4 limit along the run.
+    limit_time : float, s
+        When the run reached it.
+    """
+
+    step: float
+    limit: float
+    limit_time: float
+
+    def describe(self, what: str) -> str:
+        """One phrase: the step and where it came from."""
+        return (
+            f"{what} h = {self.step:.4g} s (RK4 limit {self.limit:.3g} s along the locked run, "
+            f"at t = {self.limit_time:.0f} s; at most {STABLE_SHARE:g} of it)"
+        )
+
+
+def reduced_elements(scene) -> int:
+    """Elements of the reduced optimisation model of a scene (module docstring)."""
+    by_length = math.ceil(scene.cable.length / REDUCED_ELEMENT_LENGTH)
+    return min(scene.model.elements, max(REDUCED_ELEMENTS, by_length))
+
+
+def control_intervals(duration: float) -> int:
+    """Hermite intervals of about :data:`CONTROL_INTERVAL` over ``duration`` (s)."""
+    return max(1, round(duration / CONTROL_INTERVAL))
+
+
+def run_limit(scene, elements: int, duration: float, compiled: bool = True) -> tuple[float, float]:
+    """The RK4 limit (s) of a scene's model of ``elements`` along its locked run, and when (s)."""
+    model = CableModel.from_scene(scene, elements)
+    drive = Drive.from_scene(scene, winch.locked, elements=elements)
+    start = starting_state(model, drive, compiled=compiled)
+    return limit_along_run(model, start, drive, duration, compiled=compiled)
+
+
+def step_within(limit: float, unit: float, cap: float) -> float:
+    """The largest whole fraction ``unit / k`` (s) of ``unit`` within the share of ``limit``."""
+    target = min(cap, STABLE_SHARE * limit)
+    return unit / max(1, math.ceil(unit / target * (1 - 1e-12)))
+
+
+def check_step(step: float, limit: float, name: str, remedy: str) -> None:
+    """Refuse a step the user fixed above the model's RK4 limit (ValueError naming it)."""
+    if step > limit:
+        raise ValueError(
+            f"{name} = {step:g} s is above the RK4 limit of the model it steps, {limit:.3g} s "
+            f"along the locked run (the drag's linearisation sets it): {remedy}"
+        )
+
+
+def intervals_for(duration: float, step: float, wanted: int) -> int:
+    """Intervals nearest ``wanted`` that divide the ``duration / step`` RK4 steps."""
+    steps = step_count(duration, step)
+    divisors = [k for k in range(1, steps + 1) if steps % k == 0]
+    return min(divisors, key=lambda k: (abs(k - wanted), -k))
