@@ -36,7 +36,7 @@ from cable_ocp.model import structured
 from cable_ocp.model.cable import CableModel
 from cable_ocp.model.compile import CompileReport
 from cable_ocp.model.layout import INPUT_SIZE
-from cable_ocp.simulation.integrate import step_compile_report, step_count, step_function
+from cable_ocp.simulation.integrate import step_compile_report, step_function
 from cable_ocp.simulation.progress import IterationLog, check_verbosity
 from cable_ocp.simulation.seabed import trapezoid_weights
 
