@@ -1,14 +1,17 @@
 """Fixed-step RK4 integration of the model as CasADi maps, with blow-up detection.
 
-One RK4 step is one SX Function; a run is ``step.fold(output_every).mapaccum(count)``, evaluated
-in segments so that progress can be shown and a run that blows up stops early with a clear error
-(CONVENTIONS.md §5). :func:`reference_solution` integrates the same right-hand side adaptively
+One RK4 step is one SX Function; a run is ``step.fold(k).mapaccum(m)``, evaluated in calls of
+bounded size and wall time, so that progress can be shown, a run that blows up stops early with a
+clear error (CONVENTIONS.md §5) and an interrupt (Ctrl-C) is acted on within a fraction of a
+second. How a run is cut into calls does not change its numbers: every call steps the same RK4
+step in the same order. :func:`reference_solution` integrates the same right-hand side adaptively
 (DOP853) as an independent reference.
 """
 
 from __future__ import annotations
 
 import math
+import time
 from dataclasses import dataclass, replace
 
 import casadi as ca
@@ -24,10 +27,19 @@ from cable_ocp.model.rk4 import parametric_rk4_step, rk4
 from cable_ocp.simulation.figures import apart
 from cable_ocp.simulation.progress import Progress
 
-SEGMENTS = 40  # progress updates (and blow-up checks) per run
+SEGMENTS = 40  # progress updates (and blow-up checks) per run, at least
 # Blow-up checks per run without a progress bar: each costs a call and a bond check (about 3 ms at
 # n = 15, as much as 50 RK4 steps), so a quiet run checks less often.
 QUIET_SEGMENTS = 8
+# Wall time (s) of one call of the RK4 loops: Python acts on a SIGINT only between calls.
+CALL_SECONDS = 0.2
+# Largest fold and mapaccum of one call: CasADi takes superlinear time to build them (the
+# compiled step at n = 15: fold(1000) 0.15 s, fold(10000) 2 s; mapaccum(512) 0.009 s,
+# mapaccum(1000) 0.34 s, mapaccum(10000) 8 s).
+MAX_FOLD = 200
+MAX_MAP = 500
+MAX_CALL_STEPS = 20_000  # RK4 steps of one call: its stage inputs are 360 B a step
+PROBE_STEPS = 20  # RK4 steps of the first call, which times a step
 # Largest RK4 step (SX instructions) compiled as one flat Function. A larger 5-DOF model compiles
 # its step around the structured right-hand side (loops over elements: at n = 100 it compiles in
 # 2 s instead of 150 s and a call takes 56 us against 69 us); a larger torsion model its flat
@@ -229,35 +241,59 @@ def integrate(
     x0 = np.asarray(x0, dtype=float).ravel()
     model.check_regular(x0)
     outputs = count // output_every
-    per_segment = max(1, math.ceil(outputs / (QUIET_SEGMENTS if quiet else SEGMENTS)))
-
-    times = np.arange(count) * step
+    # An output is `repeats` calls' units of `inner` RK4 steps, folded into one Function.
+    inner = largest_divisor(output_every, MAX_FOLD)
+    repeats = output_every // inner
+    units = outputs * repeats
+    per_segment = max(1, math.ceil(outputs / (QUIET_SEGMENTS if quiet else SEGMENTS))) * repeats
+    most = max(1, min(per_segment, MAX_MAP, MAX_CALL_STEPS // inner))
     all_times = np.arange(outputs + 1) * output_every * step
     all_inputs = drive.inputs(all_times).T
     # Row k is the state at all_times[k]: the C-ordered rows of a block are CasADi's columns, so
-    # the compiled code writes each segment straight into its rows (no conversion of the states).
+    # the compiled code writes each call straight into its rows (no conversion of the states).
     states = np.empty((outputs + 1, x0.size))
     states[0] = x0
+    scratch = np.empty((most, x0.size)) if repeats > 1 else None
     progress = Progress("simulate", duration, quiet)
-    largest = 0.0
-    for first in range(0, outputs, per_segment):
-        size = min(per_segment, outputs - first)
-        rows = slice(first + 1, first + 1 + size)
-        steps = times[first * output_every : (first + size) * output_every]
-        evaluate_into(
-            _segment_function(model, step, compiled, output_every, size),
-            [states[first], stage_inputs(drive, steps, step).T],
-            [states[rows]],
-        )
-        norms = np.empty(size)
-        evaluate_into(
-            _residual_norms(model, size, compiled), [states[rows], all_inputs[rows]], [norms]
-        )
-        _check_block(model, states[rows], norms, all_times[rows], step, tolerance)
-        largest = max(largest, float(norms.max()))
-        progress.update(all_times[rows][-1])
+    largest, done, size = 0.0, 0, max(1, min(most, PROBE_STEPS // inner))
+    current = x0.copy()  # the state after `done` units
+    while done < units:
+        size = min(size, units - done)
+        function = _segment_function(model, step, compiled, inner, size)
+        steps = np.arange(done * inner, (done + size) * inner) * step
+        target = states[done + 1 : done + 1 + size] if repeats == 1 else scratch[:size]
+        started = time.perf_counter()
+        evaluate_into(function, [current, stage_inputs(drive, steps, step).T], [target])
+        elapsed = time.perf_counter() - started
+        ends = np.arange(done + 1, done + size + 1)
+        last = ends % repeats == 0
+        kept = ends[last] // repeats  # the output rows this call completed
+        if repeats > 1:
+            states[kept] = target[last]
+        current = target[size - 1].copy()
+        done += size
+        if kept.size:
+            block = slice(int(kept[0]), int(kept[-1]) + 1)
+            norms = np.empty(kept.size)
+            evaluate_into(
+                _residual_norms(model, kept.size, compiled),
+                [states[block], all_inputs[block]],
+                [norms],
+            )
+            _check_block(model, states[block], norms, all_times[block], step, tolerance)
+            largest = max(largest, float(norms.max()))
+            progress.update(all_times[block][-1])
+        # The next call takes about CALL_SECONDS at this one's wall time per step; its size a power
+        # of two (or `most`), so that few Functions are built.
+        wanted = CALL_SECONDS * size / max(elapsed, 1e-9)
+        size = most if wanted >= most else 2 ** max(0, int(math.log2(max(wanted, 1.0))))
     progress.close()
     return RawRun(all_times, states, all_inputs, largest)
+
+
+def largest_divisor(number: int, most: int) -> int:
+    """The largest divisor of ``number`` that is at most ``most`` (1 at least)."""
+    return max(k for k in range(1, min(number, most) + 1) if number % k == 0)
 
 
 def evaluate_into(
@@ -282,7 +318,7 @@ def evaluate_into(
 def _segment_function(
     model: CableModel, step: float, compiled: bool, output_every: int, size: int
 ) -> ca.Function:
-    """``size`` outputs of ``output_every`` RK4 steps each, in one call.
+    """``size`` states ``output_every`` RK4 steps apart, in one call.
 
     Compiled, the structure's library is folded and mapped first and the numbers bound once
     around the loops, not at every step.

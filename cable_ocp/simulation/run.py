@@ -2,7 +2,7 @@
 
 from __future__ import annotations
 
-from collections.abc import Callable
+from collections.abc import Callable, Iterator
 
 import casadi as ca
 import numpy as np
@@ -13,6 +13,7 @@ from cable_ocp.drive.drive import Drive
 from cable_ocp.model import structured
 from cable_ocp.model.cable import CableModel
 from cable_ocp.model.layout import INPUTS
+from cable_ocp.simulation.budget import check_simulation_memory
 from cable_ocp.simulation.integrate import evaluate_into, integrate
 from cable_ocp.simulation.seabed import (
     check_on_grid,
@@ -27,6 +28,9 @@ WinchSpec = None | np.ndarray | Callable
 # States per call of the mapped outputs: CasADi's map takes superlinear time in its count (at
 # n = 100, 0.4 s to map over 4001 states, 0.02 s over 500), the call the same time per state.
 OUTPUT_BLOCK = 500
+# Times per block of the top-length check: the inputs of a block are 120 B a time, so a run of
+# 3.6e7 steps is checked in 4 MB blocks, not one 4.3 GB array.
+TIME_BLOCK = 32_768
 
 
 def winch_function(scene, winch: WinchSpec) -> winch_angles.WinchAngleFunction:
@@ -61,8 +65,20 @@ def check_top_length(scene, drive: Drive, times: np.ndarray) -> None:
     """Raise before integrating if the winch takes the top element out of its length range.
 
     A length outside by at most ``winch.drum_radius * BOUND_TOLERANCE`` (the angle tolerance of
-    :mod:`cable_ocp.drive.bounds` as a length, m) counts as within it.
+    :mod:`cable_ocp.drive.bounds` as a length, m) counts as within it. The inputs are evaluated
+    :data:`TIME_BLOCK` times at a time.
+
+    Parameters
+    ----------
+    scene : Scene
+    drive : Drive
+    times : array (k,), s
     """
+    for first in range(0, len(times), TIME_BLOCK):
+        _check_top_length(scene, drive, times[first : first + TIME_BLOCK])
+
+
+def _check_top_length(scene, drive: Drive, times: np.ndarray) -> None:
     length = drive.inputs(times)[INPUTS.top_length]
     low, high = scene.winch.top_length_min, scene.winch.top_length_max
     high = np.inf if high is None else high
@@ -75,6 +91,21 @@ def check_top_length(scene, drive: Drive, times: np.ndarray) -> None:
             f"outside [winch.top_length_min, winch.top_length_max] = [{low}, {high}] m by more "
             f"than the tolerance {tolerance:.3g} m"
         )
+
+
+def step_times(duration: float, step: float) -> Iterator[np.ndarray]:
+    """The times of a run's RK4 grid, ``0, h, ..., T`` (s), in blocks of :data:`TIME_BLOCK`.
+
+    Together they are ``np.linspace(0, duration, count + 1)``, without the array of all of them.
+    """
+    count = int(round(duration / step))
+    spacing = duration / count
+    for first in range(0, count + 1, TIME_BLOCK):
+        stop = min(first + TIME_BLOCK, count + 1)
+        times = np.arange(first, stop) * spacing
+        if stop == count + 1:
+            times[-1] = duration  # as linspace ends
+        yield times
 
 
 def checked_state(state, size: int) -> np.ndarray:
@@ -198,13 +229,12 @@ def checked_simulation(
         bathymetry grid or under the seabed (before integrating), or leaves the grid.
     """
     numerics = scene.numerics
+    check_simulation_memory(scene, model.spec.elements if model is not None else None)
     angle = winch_function(scene, winch)
     model = model or CableModel.from_scene(scene)
     drive = Drive.from_scene(scene, angle, elements=model.spec.elements)
-    sample_times = np.linspace(
-        0.0, numerics.duration, 1 + int(round(numerics.duration / numerics.step))
-    )
-    check_top_length(scene, drive, sample_times)
+    for times in step_times(numerics.duration, numerics.step):
+        check_top_length(scene, drive, times)
     if initial_state is not None:
         initial_state = checked_state(initial_state, model.state_size)
     if initial_state is None:
