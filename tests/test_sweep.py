@@ -586,3 +586,52 @@ def test_a_sweep_folder_of_an_older_version_is_refused_with_how_to_resume(two_do
     (out / ".cable_ocp-results").write_text("")
     report = run_sweep(spec, out, quiet=True, processes=False)
     assert report.ran == [] and report.skipped == [0, 1]
+
+
+# --- paths, implausible inputs and memory, before any case runs (issue 24) --------------------
+
+
+def test_a_sweeps_relative_grid_paths_resolve_against_the_sweep_file(tmp_path):
+    """In [set] and in [grid], as the scene path does; not against the base scene's folder."""
+    folder = tmp_path / "study"
+    folder.mkdir()
+    for name in ("mine.nc", "other.nc"):
+        (folder / name).write_bytes((MODELS / "data" / "survey_grid.nc").read_bytes())
+    set_path = write(folder, f'scene = "{MODELS / "survey.toml"}"\n[set]\n"seabed.grid.file" = '
+                     '"mine.nc"\n', "set.toml")  # fmt: skip
+    spec = load_sweep(set_path)
+    assert spec.cases[0].scene.seabed.grid.file == str(folder / "mine.nc")
+    grid_path = write(folder, f'scene = "{MODELS / "survey.toml"}"\n[grid]\n"seabed.grid" = '
+                      '[{file = "mine.nc"}]\n"seabed.grid.file" = ["mine.nc", "other.nc"]\n',
+                      "grid.toml")  # fmt: skip
+    with pytest.raises(ValueError, match="a swept value must be a number, a string"):
+        load_sweep(grid_path)  # a table is not a coordinate
+    grid_path.write_text(f'scene = "{MODELS / "survey.toml"}"\n[grid]\n'
+                         '"seabed.grid.file" = ["mine.nc", "other.nc"]\n')  # fmt: skip
+    spec = load_sweep(grid_path)
+    files = [case.scene.seabed.grid.file for case in spec.cases]
+    assert files == [str(folder / "mine.nc"), str(folder / "other.nc")]
+    assert [case.overrides["seabed.grid.file"] for case in spec.cases] == ["mine.nc", "other.nc"]
+
+
+def test_an_implausible_sea_state_in_one_case_is_refused_before_any_case_runs(tmp_path):
+    path = write(tmp_path, f'scene = "{MODELS / "survey.toml"}"\n[grid]\n'
+                 '"top.heave.sea_state.significant_height" = [2.0, 1e50]\n')  # fmt: skip
+    with pytest.raises(ValueError) as error:
+        load_sweep(path)
+    assert str(error.value).startswith(
+        "grid.top.heave.sea_state.significant_height[1] = 1e+50 (case 1): "
+        "top.heave.sea_state.significant_height = 1e+50 is out of range: must be > 0 and <= 30"
+    )
+
+
+def test_a_case_whose_outputs_cannot_fit_is_refused_before_any_case_runs(tmp_path):
+    """5e7 kept states of a 100-element cable: about 0.5 TB, on any machine of today."""
+    path = write(tmp_path, HEADER + '[grid]\n"numerics.output_every" = [100000, 1]\n'
+                 '"numerics.duration" = [1000.0]\n"numerics.step" = [2e-5]\n'
+                 '"model.elements" = [100]\n')  # fmt: skip
+    with pytest.raises(ValueError) as error:
+        load_sweep(path)
+    text = str(error.value)
+    assert text.startswith("case 1: numerics.output_every = 1 (numerics.step = 2e-05 s, ")
+    assert "need about" in text and "numerics.output_every = " in text and "\n" not in text

@@ -24,8 +24,13 @@ or, instead of ``[grid]``, a random design::
     "top.tow.surge_speed" = [0.8, 1.4]            # [low, high]
     "environment.current" = [[0, 0, 0], [1, 0.5, 0]]   # componentwise [low, high] vectors
 
+A file path among the overrides (``"seabed.grid.file"``, ``"top.table.file"``, in ``[set]`` or
+``[grid]``) is relative to the sweep file's folder, as the scene is; the base scene's own paths
+stay relative to the base scene.
+
 Every error is a ``ValueError`` naming the sweep file key (and the case), raised before any
-case runs.
+case runs: a bad value, a scene the schema refuses (an H_s of 1e200), or a case whose run cannot
+fit in memory (:mod:`cable_ocp.simulation.budget`).
 """
 
 from __future__ import annotations
@@ -48,6 +53,7 @@ from cable_ocp.control.ocp import IpoptSettings
 from cable_ocp.control.optimization import METHODS as DEFAULTS
 from cable_ocp.scene.bundled import models_dir
 from cable_ocp.scene.schema import Scene, SceneError, load_scene
+from cable_ocp.simulation.budget import check_memory, check_simulation_memory, optimisation_memory
 from cable_ocp.simulation.integrate import step_count
 
 try:
@@ -151,6 +157,40 @@ def _find_scene(value: Any, sweep_path: Path) -> Path:
         f" = {value!r}: file not found (relative to {sweep_path.parent}); bundled scenes: "
         f"{bundled}",
     )
+
+
+def _field_spec(key: str):
+    """The schema's declaration of a dotted scene key, or None if there is no such field."""
+    cls, spec = Scene, None
+    for part in key.split("."):
+        if spec is not None and spec.kind != "section":
+            return None
+        declared = {f.name: f.metadata["spec"] for f in fields(cls) if "spec" in f.metadata}
+        spec = declared.get(part)
+        if spec is None:
+            return None
+        cls = spec.item
+    return spec
+
+
+def _anchored(key: str, value: Any, folder: Path) -> Any:
+    """An override's value with its relative file paths made relative to ``folder``."""
+    spec = _field_spec(key)
+    if spec is None:
+        return value
+    if (
+        spec.kind == "path"
+        and isinstance(value, str)
+        and not Path(value).expanduser().is_absolute()
+    ):
+        return str(folder / Path(value).expanduser())
+    if spec.kind == "section" and isinstance(value, dict):
+        return {name: _anchored(f"{key}.{name}", v, folder) for name, v in value.items()}
+    return value
+
+
+def _anchored_all(overrides: dict, folder: Path) -> dict:
+    return {key: _anchored(key, value, folder) for key, value in overrides.items()}
 
 
 def bundled_sweeps() -> dict[str, Path]:
@@ -382,6 +422,18 @@ def _check_intervals(scene: Scene, settings: Any, case: int) -> None:
         )
 
 
+def _check_memory(scene: Scene, settings: Any, case: int) -> None:
+    """Each case's runs must fit in memory: the scene's simulation, and an optimiser's horizon."""
+    try:
+        check_simulation_memory(scene)
+        if isinstance(settings, IpoptSettings):
+            step = settings.step or scene.numerics.step
+            estimate = optimisation_memory(scene, step, elements=settings.elements)
+            check_memory(estimate, f"optimizer.step = {step} s", "give a longer optimizer.step")
+    except ValueError as error:
+        raise ValueError(f"case {case}: {error}") from None
+
+
 def load_sweep(path: str | Path) -> SweepSpec:
     """Read a sweep file, expand its cases and build (validate) every case's scene.
 
@@ -430,7 +482,7 @@ def load_sweep(path: str | Path) -> SweepSpec:
     settings = _settings(data, task, method)
     fixed = _table(data, "set")
     try:
-        base = load_scene(scene_path, fixed)
+        base = load_scene(scene_path, _anchored_all(fixed, path.parent))
     except SceneError as error:
         culprit = [k for k in fixed if error.path == k or error.path.startswith((k + ".", k + "["))]
         raise _fail(f"set.{culprit[0]}" if culprit else "set", f": {error}") from None
@@ -448,11 +500,12 @@ def load_sweep(path: str | Path) -> SweepSpec:
     cases = []
     for index, case in enumerate(overrides):
         try:
-            scene = base.updated(case)
+            scene = base.updated(_anchored_all(case, path.parent))
         except SceneError as error:
             where = positions[index] if positions else None
             raise ValueError(_blame(error, index, case, where)) from None
         _check_intervals(scene, settings, index)
+        _check_memory(scene, settings, index)
         cases.append(Case(index, case, scene, fingerprint(scene, task, method, settings)))
     for key, values in grid.items():
         lengths = sorted({len(v) for v in values if isinstance(v, list)})
