@@ -12,13 +12,14 @@ from __future__ import annotations
 import argparse
 import math
 import sys
-from collections.abc import Callable
 from pathlib import Path
 
+from cable_ocp.cli.arguments import integer, positive
+from cable_ocp.cli.files import results_folder
 from cable_ocp.cli.mpc import add_mpc_command
 from cable_ocp.cli.sweep import add_sweep_command
 from cable_ocp.scene.bundled import models_dir
-from cable_ocp.scene.output import atomic_directory, check_target, json_text
+from cable_ocp.scene.output import check_target, json_text
 from cable_ocp.scene.schema import load_scene
 
 try:
@@ -61,7 +62,7 @@ def _simulate(args) -> int:
     # model runs after the same warning as the API's.
     trajectory = simulate(scene, winch=knots, quiet=args.quiet, compiled=not args.interpreted)
     seabed = scene.seabed
-    with atomic_directory(args.out) as folder:
+    with results_folder(args.out) as folder:
         trajectory.save(folder / "trajectory")
         if args.animate:
             plots.animate(trajectory, folder / "animation.gif", seabed.clearance)
@@ -147,7 +148,7 @@ def _optimize(args) -> int:
     locked = simulate(scene, quiet=True)
     seabed, bounds = scene.seabed, (scene.winch.angle_min, scene.winch.angle_max)
     labels = ["locked winch", f"optimised ({result.method})"]
-    with atomic_directory(args.out) as folder:
+    with results_folder(args.out) as folder:
         result.save(folder)
         pair = [locked, result.trajectory] if result.trajectory is not None else [locked]
         labels = labels[: len(pair)]
@@ -207,36 +208,10 @@ def _compare(args) -> int:
             f"| {r.evaluations} | {r.wall_time:.1f} | {r.build_time:.1f} |"
         )
     table = "\n".join(lines)
-    with atomic_directory(args.out) as folder:
+    with results_folder(args.out) as folder:
         (folder / "comparison.md").write_text(table + "\n")
     print(table)
     return 0
-
-
-def _integer(low: int, high: int) -> Callable[[str], int]:
-    """An argparse type: an integer from ``low`` to ``high``."""
-
-    def convert(text: str) -> int:
-        try:
-            value = int(text)
-        except ValueError:
-            raise argparse.ArgumentTypeError(f"expected an integer, got {text!r:.40}") from None
-        if not low <= value <= high:
-            raise argparse.ArgumentTypeError(f"{text:.40} is out of range: must be {low} to {high}")
-        return value
-
-    return convert
-
-
-def _positive(text: str) -> float:
-    """An argparse type: a finite number > 0."""
-    try:
-        value = float(text)
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"expected a number, got {text!r:.40}") from None
-    if not (math.isfinite(value) and value > 0):
-        raise argparse.ArgumentTypeError(f"{text!r:.40} is out of range: must be finite and > 0")
-    return value
 
 
 def _knots(text: str) -> list[float]:
@@ -265,14 +240,14 @@ def _add_optimiser_options(parser) -> None:
     # No defaults here: unset options keep optimize()'s (cable_ocp.control.optimization.METHODS).
     parser.add_argument(
         "--elements",
-        type=_integer(1, 1000),
+        type=integer(1, 1000),
         help="elements of the optimisation model (default: optimize()'s reduced model; "
         "verification uses the scene's)",
     )
     parser.add_argument(
-        "--step", type=_positive, help="RK4 step of the optimisation [s] (default: optimize()'s)"
+        "--step", type=positive, help="RK4 step of the optimisation [s] (default: optimize()'s)"
     )
-    parser.add_argument("--intervals", type=_integer(1, 100_000), help="shooting intervals")
+    parser.add_argument("--intervals", type=integer(1, 100_000), help="shooting intervals")
     parser.add_argument(
         "--solver",
         choices=["gauss-newton", "ipopt"],
@@ -290,8 +265,8 @@ def _add_optimiser_options(parser) -> None:
         choices=["limited-memory", "exact"],
         help="exact: second derivatives, on the interpreted (not compiled) model",
     )
-    parser.add_argument("--max-iter", type=_integer(1, 10**6), help="IPOPT iterations")
-    parser.add_argument("--max-evaluations", type=_integer(1, 10**8), help="Nelder-Mead runs")
+    parser.add_argument("--max-iter", type=integer(1, 10**6), help="IPOPT iterations")
+    parser.add_argument("--max-evaluations", type=integer(1, 10**8), help="Nelder-Mead runs")
     parser.add_argument("--set", action="append", default=[], metavar="KEY=VALUE")
     talk = parser.add_mutually_exclusive_group()
     talk.add_argument("--quiet", action="store_true", help="print nothing while solving")
@@ -322,7 +297,7 @@ def _validate(args) -> int:
         x, z, _ = catenary_shape(s, c.length, c.mass_per_length * scene.environment.gravity,
                                  float(np.hypot(*e.force[:2])), e.force[2],
                                  c.youngs_modulus * c.cross_section_area)  # fmt: skip
-        with atomic_directory(args.out) as folder:
+        with results_folder(args.out) as folder:
             plots.catenary_comparison(check.joints, np.vstack([x, z]), folder / "catenary.png")
         print(f"figure written to {Path(args.out).resolve() / 'catenary.png'}")
     return 0
@@ -379,7 +354,7 @@ def _study(args) -> int:
     if args.scene is None:
         raise ValueError(f"study {args.name} needs a scene file, e.g. models/paper_flat.toml")
     scene = load_scene(args.scene, parse_overrides(args.set))
-    with atomic_directory(args.out) as folder:
+    with results_folder(args.out) as folder:
         if args.name == "step":
             result = studies.step_halving(scene, quiet=args.quiet)
         elif args.name == "elements":
@@ -426,7 +401,7 @@ def build_parser() -> argparse.ArgumentParser:
 
     val = commands.add_parser("validate", help="statics check against the analytic catenary")
     val.add_argument("scene", type=Path, nargs="?", help="default: the bundled catenary.toml")
-    val.add_argument("--elements", type=_integer(1, 1000), nargs="+", default=[15, 5, 30, 60])
+    val.add_argument("--elements", type=integer(1, 1000), nargs="+", default=[15, 5, 30, 60])
     val.add_argument("--out", type=Path, help="folder for the comparison figure; " + OUT_HELP)
     val.set_defaults(run=_validate)
 
@@ -434,7 +409,7 @@ def build_parser() -> argparse.ArgumentParser:
     opt.add_argument("scene", type=Path)
     opt.add_argument("--method", choices=["ipopt", "nelder-mead"], default="ipopt")
     opt.add_argument("--out", type=Path, required=True, help=OUT_HELP)
-    opt.add_argument("--refinements", type=_integer(0, 100), default=3,
+    opt.add_argument("--refinements", type=integer(0, 100), default=3,
                      help="model-correction solves")  # fmt: skip
     _add_optimiser_options(opt)
     opt.add_argument("--animate", action="store_true", help=ANIMATE_HELP)
@@ -480,7 +455,7 @@ def build_parser() -> argparse.ArgumentParser:
     )
     bench.add_argument(
         "--cases",
-        type=_integer(1, 10_000),
+        type=integer(1, 10_000),
         default=None,
         help="robustness: random scenes to draw (default 50, 6 with --quick)",
     )

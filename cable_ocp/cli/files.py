@@ -1,0 +1,72 @@
+"""A results folder whose files cannot be written is a file-system error that names its cause.
+
+netCDF reports a write that the operating system refused (a full disk, a file-size limit) as
+``RuntimeError("NetCDF: HDF error")``, without the system's reason. :func:`results_folder` writes
+as :func:`cable_ocp.scene.output.atomic_directory` does and turns that error into an ``OSError``
+(exit 1) that says which limit was hit, found from the file system.
+"""
+
+from __future__ import annotations
+
+import os
+import shutil
+from collections.abc import Iterator
+from contextlib import contextmanager
+from pathlib import Path
+
+from cable_ocp.scene.output import atomic_directory
+
+try:
+    import resource
+except ImportError:  # Windows: no file-size limit to ask about
+    resource = None
+
+FULL_DISK = 1 << 20  # bytes free below which a failed write is put down to a full disk
+
+
+def _size_limit() -> int | None:
+    """The file-size limit of this process in bytes (None: unlimited)."""
+    if resource is None:
+        return None
+    limit = resource.getrlimit(resource.RLIMIT_FSIZE)[0]
+    return None if limit == resource.RLIM_INFINITY else limit
+
+
+def _cause(folder: Path, error: RuntimeError) -> str:
+    """Why writing into ``folder`` failed with netCDF's ``error``, as the file system tells it."""
+    files = sorted(folder.rglob("*.nc"), key=lambda p: p.stat().st_mtime)
+    name = files[-1].name if files else "the results"
+    limit = _size_limit()
+    if limit is not None and files and files[-1].stat().st_size >= limit:
+        return (
+            f"writing {name}: the file is too large for this process's file-size limit of "
+            f"{limit} bytes (ulimit -f, prlimit --fsize); raise the limit or write less "
+            "(numerics.output_every)"
+        )
+    free = shutil.disk_usage(folder).free
+    if free < FULL_DISK:
+        return (
+            f"writing {name}: the disk is full ({free} bytes free on the file system of "
+            f"{folder.parent}); free some space and run again"
+        )
+    return f"writing {name} failed ({error}); check the file system of {folder.parent}"
+
+
+@contextmanager
+def results_folder(target: str | os.PathLike) -> Iterator[Path]:
+    """:func:`~cable_ocp.scene.output.atomic_directory`, with netCDF's write errors as OSError.
+
+    Raises
+    ------
+    OSError
+        netCDF could not write a file: the disk is full, a file outgrew the file-size limit, or
+        the file system failed otherwise (the message says which). Nothing is left of the
+        folder's new contents; a previous results folder stays as it was.
+    """
+    with atomic_directory(target) as folder:
+        try:
+            yield folder
+        except RuntimeError as error:
+            if not str(error).startswith("NetCDF:"):
+                raise
+            raise OSError(f"{_cause(folder, error)}; nothing was written") from error
