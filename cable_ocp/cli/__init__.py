@@ -93,13 +93,22 @@ def _given(args, names: tuple[str, ...]) -> dict:
 def _ipopt_settings(args):
     """IPOPT settings: optimize()'s defaults (``METHODS``) with the options given.
 
-    ``--hessian exact`` needs the interpreted model.
+    ``--hessian exact`` needs the interpreted model; it and ``--shooting multiple`` are IPOPT's,
+    refused beside ``--solver gauss-newton``.
     """
     from dataclasses import replace
 
     from cable_ocp.control.optimization import METHODS
 
-    exact = args.hessian == "exact"
+    ipopt_only = {"--hessian exact": args.hessian == "exact",
+                  "--shooting multiple": args.shooting == "multiple"}  # fmt: skip
+    if args.solver == "gauss-newton" and any(ipopt_only.values()):
+        option = next(name for name, given in ipopt_only.items() if given)
+        raise ValueError(
+            f"{option} is an option of IPOPT (the Gauss-Newton solver works on single shooting "
+            f"with 2 J^T J, first derivatives only): give --solver ipopt, or leave {option} out"
+        )
+    exact = ipopt_only["--hessian exact"]
     if exact and not args.quiet:
         print(
             f"cable-ocp {args.command}: note: --hessian exact runs the interpreted model "
@@ -133,46 +142,80 @@ def _nelder_mead_settings(args):
     return replace(METHODS["nelder-mead"].default, **given)
 
 
+def _locked_reference(scene):
+    """The locked winch's run for comparison, or None and why it failed.
+
+    Only the verified profile must stay sound: a locked run that blows up or leaves the
+    bathymetry grid is reported beside the result, never in its place.
+    """
+    from cable_ocp.simulation.integrate import SimulationError
+    from cable_ocp.simulation.run import simulate
+
+    try:
+        return simulate(scene, quiet=True), ""
+    except SimulationError as error:
+        return None, f"the locked reference run failed ({_one_line(error)})"
+
+
+def _check_step(scene, step: float | None) -> None:
+    """Refuse a ``--step`` that does not divide the scene's duration, naming the option."""
+    from cable_ocp.simulation.integrate import step_count
+
+    if step is None:
+        return
+    try:
+        step_count(scene.numerics.duration, step)
+    except ValueError:
+        raise ValueError(
+            f"--step {step:g} s must divide the scene's numerics.duration = "
+            f"{scene.numerics.duration:g} s into a whole number of RK4 steps"
+        ) from None
+
+
 def _optimize(args) -> int:
     from cable_ocp import plots
     from cable_ocp.control.optimization import optimize
-    from cable_ocp.simulation.run import simulate
 
     scene = load_scene(args.scene, parse_overrides(args.set))
+    _check_step(scene, args.step)
     output = {"quiet": args.quiet, "verbose": args.verbose}
     if args.method == "ipopt":
         settings = _ipopt_settings(args)
         result = optimize(scene, "ipopt", settings, refinements=args.refinements, **output)
     else:
         result = optimize(scene, "nelder-mead", _nelder_mead_settings(args), **output)
-    locked = simulate(scene, quiet=True)
+    locked, locked_failure = _locked_reference(scene)
     seabed, bounds = scene.seabed, (scene.winch.angle_min, scene.winch.angle_max)
-    labels = ["locked winch", f"optimised ({result.method})"]
+    runs = [("locked winch", locked), (f"optimised ({result.method})", result.trajectory)]
+    runs = [(label, run) for label, run in runs if run is not None]
     with results_folder(args.out) as folder:
         result.save(folder)
-        pair = [locked, result.trajectory] if result.trajectory is not None else [locked]
-        labels = labels[: len(pair)]
-        plots.end_trajectory(pair, labels, path=folder / "end_trajectory.png")
-        plots.clearance(pair, seabed.clearance, labels, folder / "clearance.png",
-                        seabed.minimum_clearance)  # fmt: skip
-        plots.winch_angle(pair, labels, bounds, path=folder / "winch_angle.png")
-        plots.cable_shapes(pair[-1], seabed=seabed, path=folder / "cable_shapes.png")
-        if args.animate:
-            plots.animate(pair[-1], folder / "animation.gif", seabed.clearance)
+        if runs:
+            labels, pair = [label for label, _ in runs], [run for _, run in runs]
+            plots.end_trajectory(pair, labels, path=folder / "end_trajectory.png")
+            plots.clearance(pair, seabed.clearance, labels, folder / "clearance.png",
+                            seabed.minimum_clearance)  # fmt: skip
+            plots.winch_angle(pair, labels, bounds, path=folder / "winch_angle.png")
+            plots.cable_shapes(pair[-1], seabed=seabed, path=folder / "cable_shapes.png")
+            if args.animate:
+                plots.animate(pair[-1], folder / "animation.gif", seabed.clearance)
     n = scene.model.elements
     omega = (
         f"Omega = {result.omega:.3g} m verified on n = {n}"
         if math.isfinite(result.omega)
         else f"Omega not verified on n = {n}"
     )
+    locked_omega = "no locked run" if locked is None else f"locked: {locked.omega:.3f} m"
     print(
-        f"{result.method}: success = {result.success} ({result.status}); {omega} (locked: "
-        f"{locked.omega:.3f} m); iterations {result.iterations}, evaluations "
+        f"{result.method}: success = {result.success} ({result.status}); {omega} "
+        f"({locked_omega}); iterations {result.iterations}, evaluations "
         f"{result.evaluations}, wall {result.wall_time:.1f} s (build {result.build_time:.1f} s, "
         f"solver {result.solve_time:.1f} s of which functions {result.function_time:.1f} s)"
     )
     if result.notes:
         print(f"note: {result.notes}")
+    if locked_failure:
+        print(f"note: {locked_failure}; the comparison with the locked winch is left out")
     print(f"results and figures written to {Path(args.out).resolve()}")
     if not result.success:
         print(f"cable-ocp optimize: the optimiser failed: {result.status}", file=sys.stderr)
@@ -187,6 +230,8 @@ def _compare(args) -> int:
 
     overrides = parse_overrides(args.set)
     scenes = [load_scene(path, overrides) for path in args.scenes]  # all checked before solving
+    for scene in scenes:
+        _check_step(scene, args.step)
     base, simplex = _ipopt_settings(args), _nelder_mead_settings(args)
     output = {"quiet": args.quiet, "verbose": args.verbose}
     rows = []
