@@ -4,29 +4,18 @@ from __future__ import annotations
 
 import argparse
 import json
-import math
 import sys
 from pathlib import Path
 
+from cable_ocp.cli.arguments import fraction, integer, positive, weight
 from cable_ocp.control.closed_loop.settings import SOLVERS, MpcSettings
-
-
-def _weight(text: str) -> float:
-    """An argparse type: a finite number >= 0 (a weight of the objective)."""
-    try:
-        value = float(text)
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"expected a number, got {text!r:.40}") from None
-    if not (math.isfinite(value) and value >= 0):
-        raise argparse.ArgumentTypeError(f"{text!r:.40} is out of range: must be finite and >= 0")
-    return value
 
 
 def add_mpc_command(subparsers) -> None:
     """Add the ``mpc`` command to the ``cable-ocp`` sub-command parsers."""
     parser = subparsers.add_parser(
         "mpc",
-        help="closed-loop winch control: receding-horizon IPOPT driving the scene's model",
+        help="closed-loop winch control: a receding-horizon OCP driving the scene's model",
         description="Closed-loop winch control of SCENE: every --sample seconds a receding-"
         "horizon OCP on a reduced model is solved from the measured state; the scene's own model "
         "(with its heave, e.g. --set top.heave.amplitude=1 --set top.heave.period=8) is the "
@@ -36,19 +25,22 @@ def add_mpc_command(subparsers) -> None:
     parser.add_argument("--out", type=Path, required=True, help="results folder (atomic)")
     defaults = MpcSettings()
     parser.add_argument(
-        "--horizon", type=float, default=defaults.horizon, help="prediction horizon [s]"
+        "--horizon", type=positive, default=defaults.horizon, help="prediction horizon [s]"
     )
     parser.add_argument(
-        "--sample", type=float, default=defaults.sample, help="time between solves [s]"
+        "--sample", type=positive, default=defaults.sample, help="time between solves [s]"
     )
     parser.add_argument(
-        "--interval", type=float, default=defaults.interval, help="interval of the plan [s]"
+        "--interval", type=positive, default=defaults.interval, help="interval of the plan [s]"
     )
     parser.add_argument(
-        "--elements", type=int, default=defaults.elements, help="elements of the reduced model"
+        "--elements",
+        type=integer(1, 1000),
+        default=defaults.elements,
+        help="elements of the reduced model",
     )
     parser.add_argument(
-        "--step", type=float, default=defaults.step, help="RK4 step of the reduced model [s]"
+        "--step", type=positive, default=defaults.step, help="RK4 step of the reduced model [s]"
     )
     parser.add_argument(
         "--solver",
@@ -63,30 +55,33 @@ def add_mpc_command(subparsers) -> None:
     )
     parser.add_argument(
         "--heave-filter",
-        type=float,
+        type=positive,
         default=defaults.heave_filter,
         help="time constant of the heave low-pass [s]",
     )
     parser.add_argument(
         "--heave-margin",
-        type=float,
+        type=fraction,
         default=defaults.heave_margin,
         help="room kept for the heave feedback, 0..1",
     )
     parser.add_argument(
         "--limiter-band",
-        type=float,
+        type=positive,
         default=defaults.limiter_band,
         help="width of the plant's soft limiter at each end of the winch range [rad]",
     )
     parser.add_argument(
         "--rate-weight",
-        type=_weight,
+        type=weight,
         default=defaults.rate_weight,
         help="pay-out speed weight [s^2]",
     )
     parser.add_argument(
-        "--max-iter", type=int, default=defaults.max_iter, help="iterations per solve"
+        "--max-iter",
+        type=integer(1, 10**6),
+        help="iterations per solve (default: 1 with gauss-newton, the real-time iteration; "
+        "IPOPT's own default with ipopt)",
     )
     parser.add_argument(
         "--open-loop",
@@ -104,16 +99,19 @@ def add_mpc_command(subparsers) -> None:
     parser.set_defaults(run=run_mpc_command)
 
 
-def run_mpc_command(args) -> int:
-    """Run ``cable-ocp mpc``; returns the exit code (3 if a solve failed)."""
-    from cable_ocp.cli import parse_overrides
-    from cable_ocp.control.closed_loop.loop import mpc
-    from cable_ocp.plots import closed_loop as plots
-    from cable_ocp.scene.output import atomic_directory
-    from cable_ocp.scene.schema import load_scene
+def settings_from(args: argparse.Namespace) -> MpcSettings:
+    """The closed loop's settings from the command line's options.
 
-    scene = load_scene(args.scene, parse_overrides(args.set))
-    settings = MpcSettings(
+    ``--max-iter`` follows the solver when it is not given: one Gauss-Newton step (the real-time
+    iteration, ``MpcSettings``' default) or IPOPT's own default (``IpoptSettings.max_iter``),
+    since one IPOPT iteration never converges.
+    """
+    from cable_ocp.control.ocp import IpoptSettings
+
+    max_iter = args.max_iter
+    if max_iter is None:
+        max_iter = IpoptSettings().max_iter if args.solver == "ipopt" else MpcSettings().max_iter
+    return MpcSettings(
         horizon=args.horizon,
         sample=args.sample,
         interval=args.interval,
@@ -125,11 +123,22 @@ def run_mpc_command(args) -> int:
         heave_margin=args.heave_margin,
         limiter_band=args.limiter_band,
         rate_weight=args.rate_weight,
-        max_iter=args.max_iter,
+        max_iter=max_iter,
         references=("locked", "open-loop") if args.open_loop else ("locked",),
     )
-    result = mpc(scene, settings, quiet=args.quiet)
-    with atomic_directory(args.out) as folder:
+
+
+def run_mpc_command(args: argparse.Namespace) -> int:
+    """Run ``cable-ocp mpc``; returns the exit code (3 if a solve, the plant or a check failed)."""
+    from cable_ocp.cli import parse_overrides
+    from cable_ocp.cli.files import results_folder
+    from cable_ocp.control.closed_loop.loop import mpc
+    from cable_ocp.plots import closed_loop as plots
+    from cable_ocp.scene.schema import load_scene
+
+    scene = load_scene(args.scene, parse_overrides(args.set))
+    result = mpc(scene, settings_from(args), quiet=args.quiet)
+    with results_folder(args.out) as folder:
         result.save(folder)
         plots.clearance(result, path=folder / "clearance.png")
         plots.solve_times(result, path=folder / "solve_times.png")
@@ -139,10 +148,6 @@ def run_mpc_command(args) -> int:
     print(json.dumps(summary, indent=1))
     print(f"results and figures written to {Path(args.out).resolve()}")
     if not result.success:
-        print(
-            f"cable-ocp mpc: {len(result.failures)} solve(s) failed (the previous plan was kept): "
-            + "; ".join(result.failures),
-            file=sys.stderr,
-        )
+        print(f"cable-ocp mpc: the closed loop failed: {result.status}", file=sys.stderr)
         return 3
     return 0

@@ -12,7 +12,7 @@ through these measurements.
 from __future__ import annotations
 
 import time
-from dataclasses import replace
+from types import SimpleNamespace
 
 import numpy as np
 
@@ -22,15 +22,23 @@ from cable_ocp.control.closed_loop.forecast import BlendedHeight
 from cable_ocp.control.closed_loop.plant import Plant
 from cable_ocp.control.closed_loop.result import MpcResult
 from cable_ocp.control.closed_loop.settings import MpcSettings
-from cable_ocp.control.ocp import compile_ahead, make_control
+from cable_ocp.control.interrupts import interrupt_here
+from cable_ocp.control.ocp import compile_ahead, make_control, resolved
 from cable_ocp.control.optimization import METHODS, optimize
+from cable_ocp.control.verification import lowest_clearance
 from cable_ocp.drive.bounds import angle_bounds
 from cable_ocp.drive.controls import HermiteIntervals
 from cable_ocp.drive.drive import Drive
 from cable_ocp.drive.winch import heave_payout
 from cable_ocp.simulation.integrate import SimulationError
 from cable_ocp.simulation.progress import Progress
-from cable_ocp.simulation.seabed import clearance_error, clearance_reference, rms_objective
+from cable_ocp.simulation.seabed import (
+    OffGridError,
+    check_start,
+    clearance_error,
+    clearance_reference,
+    rms_objective,
+)
 
 
 class Plan:
@@ -114,13 +122,18 @@ def mpc(scene, settings: MpcSettings | None = None, quiet: bool = False, **field
     Returns
     -------
     MpcResult
-        ``success`` is False if any solve failed (see ``failures``) or the plant failed
-        (``status``); the loop then stops there, with the arrays up to that time.
+        ``success`` is False if any solve failed (see ``failures``), the plant failed or its end
+        left the bathymetry grid (the loop then stops there, with the arrays up to that time),
+        or the end came under ``seabed.minimum_clearance``; ``status`` says which, when and
+        where. A reference run that fails is left out, with the reason in ``status``.
 
     Raises
     ------
     ValueError
         A setting out of its range, or one that does not fit the scene, before any heavy work.
+    OffGridError
+        The end starts off the bathymetry grid or under the seabed (before the loop), as for
+        ``simulate``.
     """
     if settings is not None and fields:
         raise ValueError(f"mpc: pass settings or its fields ({', '.join(fields)}), not both")
@@ -149,6 +162,7 @@ def mpc(scene, settings: MpcSettings | None = None, quiet: bool = False, **field
     # With the heave feedback the winch already pays out the heave's speed at t = 0.
     applied = plant.apply(_command(plan, height, plant.top, radius), zero)
     x = plant.initial_state(applied)
+    check_start(scene.seabed, x[:3])
     estimator.reference = clearance_reference(scene.seabed, x)
     times, states = [zero], [x[None, :]]
     inputs = [plant.inputs(applied, zero).T]
@@ -177,8 +191,11 @@ def mpc(scene, settings: MpcSettings | None = None, quiet: bool = False, **field
         try:
             block, block_inputs, applied = plant.advance(x, now, per_sample, command)
         except SimulationError as error:
+            where = ", ".join(f"{value:.6g}" for value in x[:3])
+            verb = "stopped" if isinstance(error, OffGridError) else "failed"
             plant_failure = (
-                f"the plant failed between t = {now:g} and {now + settings.sample:g} s: {error}"
+                f"the plant {verb} between t = {now:g} and {now + settings.sample:g} s (the end "
+                f"at (x, y, z) = ({where}) m at t = {now:g} s): {error}"
             )
             break
         x = block[-1]
@@ -198,7 +215,9 @@ def mpc(scene, settings: MpcSettings | None = None, quiet: bool = False, **field
     end = np.concatenate(states)[:, 0:3]
     error = clearance_error(scene.seabed, end)
     ref_errors, ref_failures = _references(scene, plant, settings.references, time_grid)
-    status = _status(samples, failures, plant_failure, ref_failures)
+    # lowest_clearance reads a run's time and end, as a Trajectory has them.
+    _, _, too_low = lowest_clearance(scene.seabed, SimpleNamespace(time=time_grid, end=end))
+    status = _status(samples, failures, plant_failure, too_low, ref_failures)
     return MpcResult(
         time=time_grid,
         winch_angle=np.concatenate(angles),
@@ -212,7 +231,7 @@ def mpc(scene, settings: MpcSettings | None = None, quiet: bool = False, **field
         iterations=np.array(iterations),
         statuses=statuses,
         failures=failures,
-        success=not failures and plant_failure is None,
+        success=not failures and plant_failure is None and too_low is None,
         limited_steps=limited,
         angle_range=(low, high),
         real_time_factor=duration / wall_time,
@@ -230,11 +249,22 @@ def mpc(scene, settings: MpcSettings | None = None, quiet: bool = False, **field
     )
 
 
-def _status(samples: int, failures: list[str], plant_failure: str | None, references) -> str:
-    """One line on how the loop went: every solve, the plant, the reference runs."""
-    parts = [plant_failure] if plant_failure else []
+SHOWN_FAILURES = 3  # failed solves named in the status (all of them are in MpcResult.failures)
+
+
+def _status(
+    samples: int,
+    failures: list[str],
+    plant_failure: str | None,
+    too_low: str | None,
+    references: list[str],
+) -> str:
+    """One line on how the loop went: plant, minimum clearance, solves, reference runs."""
+    parts = [reason for reason in (plant_failure, too_low) if reason]
     parts.append(
-        f"{len(failures)} of {samples} solves failed (the plant kept the previous plan)"
+        f"{len(failures)} of {samples} solves failed (the plant kept the previous plan): "
+        + "; ".join(failures[:SHOWN_FAILURES])
+        + ("; ..." if len(failures) > SHOWN_FAILURES else "")
         if failures
         else "every solve succeeded"
     )
@@ -247,6 +277,7 @@ def _run_open(plant: Plant, angle, time_grid: np.ndarray) -> np.ndarray:
     Raises SimulationError when the plant fails under it.
     """
     x = plant.initial_state(plant.apply(angle, np.zeros(1)))
+    interrupt_here("reference run")
     states, _, _ = plant.advance(x, 0.0, time_grid.size - 1, angle)
     return clearance_error(plant.scene.seabed, states[:, 0:3])
 
@@ -266,23 +297,22 @@ def _references(scene, plant: Plant, names, time_grid) -> tuple[dict[str, np.nda
     if "locked" in names:
         run("locked", lambda t: tuple(np.zeros((3, np.size(t)))))
     if "open-loop" in names:
-        calm = scene.updated({"top.heave.amplitude": 0.0})
-        default = METHODS["ipopt"].default
-        settings = replace(default, intervals=_intervals(scene, default.step))
-        result = optimize(calm, "ipopt", settings, quiet=True)
+        # The open loop knows no heave at all: neither the sine nor the sea state.
+        calm = scene.updated({"top.heave": None})
+        try:
+            # The settings optimize() derives, fixed here: the profile's control needs them.
+            settings, _ = resolved(calm, METHODS["ipopt"].default)
+            result = optimize(calm, "ipopt", settings, quiet=True)
+        except (ValueError, RuntimeError) as error:  # the derivation's locked run, say
+            missing.append(f"reference 'open-loop' left out: {error}")
+            return out, missing
         if not result.success:
             missing.append(f"reference 'open-loop' left out: {result.status}")
             return out, missing
         profile = make_control(calm, settings).angle_function(result.parameters)
         run("open-loop", profile)
-        # The same profile with the heave paid out by eq. 38 (the drive's compensation).
-        compensated = scene.updated({"top.heave.compensation": True})
-        run("open-loop + heave feedback", Drive.from_scene(compensated, profile).winch_angle)
+        if scene.top.has_heave:
+            # The same profile with the heave paid out by eq. 38 (the drive's compensation).
+            compensated = scene.updated({"top.heave.compensation": True})
+            run("open-loop + heave feedback", Drive.from_scene(compensated, profile).winch_angle)
     return out, missing
-
-
-def _intervals(scene, step: float) -> int:
-    """Shooting intervals of about 5 s that divide the open-loop OCP's RK4 steps (42 at 210 s)."""
-    steps = round(scene.numerics.duration / step)
-    wanted = max(1, round(scene.numerics.duration / 5.0))
-    return max(k for k in range(1, wanted + 1) if steps % k == 0)

@@ -15,6 +15,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from cable_ocp.control.closed_loop.projection import chain_state, plant_joints
+from cable_ocp.control.interrupts import keeping_interrupts
 from cable_ocp.drive.drive import Drive, end_force, stage_times
 from cable_ocp.drive.vessel import top_motion
 from cable_ocp.drive.winch import with_left
@@ -22,6 +23,7 @@ from cable_ocp.model.cable import CableModel
 from cable_ocp.model.layout import INPUTS
 from cable_ocp.simulation.figures import apart
 from cable_ocp.simulation.integrate import SimulationError, step_function
+from cable_ocp.simulation.seabed import check_on_grid
 from cable_ocp.simulation.statics import equilibrium
 
 # Substeps per plant step tried in turn when a sample's run is in doubt (see Plant.advance).
@@ -148,6 +150,8 @@ class Plant:
         SimulationError
             If the state becomes non-finite or leaves its bonds (numerics.constraint_tolerance)
             at the scene's step and at each of :data:`SUBSTEPS`.
+        OffGridError
+            If the end leaves the bathymetry grid (a SimulationError naming the time and point).
 
         A sample in doubt at the scene's step is integrated again from the same state with
         substeps: the soft limiter bends the angle on a time scale of ``band / rate``
@@ -160,6 +164,8 @@ class Plant:
             states, inputs, applied = self._integrate(x, start, count, angle, substeps)
             failure = self._health(states[-1], inputs[-1], start + count * self.step, substeps)
             if failure is None:
+                times = start + np.arange(count + 1) * self.step
+                check_on_grid(self.scene.seabed, states[:, 0:3], times)
                 return states, inputs, applied
             failures.append(failure)
         raise SimulationError(
@@ -188,7 +194,11 @@ class Plant:
             lambda: step_function(self.model, h, compiled=True).mapaccum(steps),
         )
         stages = inputs[:, : times.size]
-        states = np.vstack([x, np.array(run(x, stages)).T[substeps - 1 :: substeps]])
+        # A Ctrl-C inside the CasADi call can leave Python's error set under a result that
+        # numpy then rejects (SystemError): it is the user's interrupt.
+        with keeping_interrupts():
+            run_states = np.array(run(x, stages))
+        states = np.vstack([x, run_states.T[substeps - 1 :: substeps]])
         return states, inputs[:, times.size :].T, applied.tail(count + 1)
 
     def _health(self, x: np.ndarray, u: np.ndarray, t: float, substeps: int) -> str | None:
