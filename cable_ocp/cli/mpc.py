@@ -3,7 +3,6 @@
 from __future__ import annotations
 
 import argparse
-import json
 import sys
 from pathlib import Path
 
@@ -134,6 +133,7 @@ def run_mpc_command(args: argparse.Namespace) -> int:
     from cable_ocp.cli.files import results_folder
     from cable_ocp.control.closed_loop.loop import mpc
     from cable_ocp.plots import closed_loop as plots
+    from cable_ocp.scene.output import json_text
     from cable_ocp.scene.schema import load_scene
 
     scene = load_scene(args.scene, parse_overrides(args.set))
@@ -143,9 +143,9 @@ def run_mpc_command(args: argparse.Namespace) -> int:
         plots.clearance(result, path=folder / "clearance.png")
         plots.solve_times(result, path=folder / "solve_times.png")
         plots.winch_angle(result, path=folder / "winch_angle.png")
-        (folder / "summary.json").write_text(json.dumps(result.summary(), indent=1))
+        (folder / "summary.json").write_text(json_text(result.summary()))
     summary = {k: v for k, v in result.summary().items() if k != "failures"}
-    print(json.dumps(summary, indent=1))
+    print(json_text(summary))
     print(f"results and figures written to {Path(args.out).resolve()}")
     if not result.success:
         print(f"cable-ocp mpc: the closed loop failed: {result.status}", file=sys.stderr)

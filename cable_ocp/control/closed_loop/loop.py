@@ -225,7 +225,8 @@ def mpc(scene, settings: MpcSettings | None = None, quiet: bool = False, **field
         end=end,
         top=np.concatenate(inputs)[:, 0:3],
         clearance_error=error,
-        omega=rms_objective(time_grid, error),
+        # No Omega of a plant that failed in its first sample (one point, no span).
+        omega=rms_objective(time_grid, error) if time_grid.size > 1 else float("nan"),
         sample_times=np.array(sample_times),
         solve_times=np.array(solve_times),
         iterations=np.array(iterations),
