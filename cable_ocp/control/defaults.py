@@ -5,8 +5,9 @@ beside it (the reduced model's elements and RK4 step, the control grid; the cont
 step and sample) are derived from that scene here, and every result says how
 (:func:`describe`). CONVENTIONS.md §5 ("numerical settings") gives the rules:
 
-- **Control grid** from the duration: intervals of about :data:`CONTROL_INTERVAL` seconds,
-  ``N = max(1, round(T / 5 s))`` (42 on the paper's 210 s), so any duration works.
+- **Control grid** from the duration: intervals of about :data:`CONTROL_INTERVAL` seconds
+  (42 on the paper's 210 s), the count nearest ``T / 5 s`` that divides the scene's RK4 steps,
+  so that the nodes (where the Hermite acceleration jumps) fall on step ends of every model.
 - **Reduced model's step** from its RK4 limit along the run it will make: the locked winch's run
   of the reduced model, linearised at :data:`~cable_ocp.simulation.stability.LIMIT_PROBES`
   states (drag stiffens the model as it moves through the water, so the limit at rest says too
@@ -106,5 +107,6 @@ def check_step(step: float, limit: float, name: str, remedy: str) -> None:
 def intervals_for(duration: float, step: float, wanted: int) -> int:
     """Intervals nearest ``wanted`` that divide the ``duration / step`` RK4 steps."""
     steps = step_count(duration, step)
-    divisors = [k for k in range(1, steps + 1) if steps % k == 0]
+    small = [k for k in range(1, math.isqrt(steps) + 1) if steps % k == 0]
+    divisors = small + [steps // k for k in small]
     return min(divisors, key=lambda k: (abs(k - wanted), -k))

@@ -33,6 +33,7 @@ from cable_ocp.control.interrupts import check, keeping_interrupts
 from cable_ocp.control.linearisation import ErrorLinearisation, Linearised
 from cable_ocp.control.parameters import ProblemParameters
 from cable_ocp.control.problem import SolverOutcome, WinchProblem
+from cable_ocp.drive.bounds import shrunk
 from cable_ocp.drive.drive import stage_times
 from cable_ocp.simulation.progress import IterationLog
 from cable_ocp.simulation.seabed import trapezoid_weights
@@ -49,6 +50,9 @@ DAMPING = 1e-9
 # of 20 robustness cases, over the verification's 1e-6 rad): the QP takes the winch bounds this
 # much inside (rad, rad/s, rad/s^2; 25 um of top element at r_D = 0.5 m).
 QP_MARGIN = 5e-5
+# DAQP's active-set iterations per QP (its default, 1000, ran out on a 198-parameter QP with rate
+# and acceleration rows: whole-space robustness case 9 of seed 0).
+QP_ITERATIONS = 20_000
 # A step is accepted once it achieves this fraction of the decrease the QP predicted (Armijo).
 ARMIJO = 1e-4
 BACKTRACKS = 12
@@ -160,7 +164,7 @@ class GaussNewton:
         """
         matrix = self.problem.bounds.matrix
         values = matrix @ parameters
-        lower, upper = lower + QP_MARGIN, upper - QP_MARGIN
+        lower, upper = shrunk(lower, upper, QP_MARGIN)
         pinned = all(parameters[i] == value for i, value in fixed.items())
         if pinned and np.all(values >= lower) and np.all(values <= upper):
             return parameters
@@ -203,7 +207,8 @@ class GaussNewton:
         hessian[np.diag_indices_from(hessian)] += DAMPING * max(np.max(np.diag(hessian)), 1e-30)
         matrix = self.problem.bounds.matrix
         values = matrix @ parameters
-        lba, uba = lower + QP_MARGIN - values, upper - QP_MARGIN - values
+        lower, upper = shrunk(lower, upper, QP_MARGIN)
+        lba, uba = lower - values, upper - values
         if self.floor is not None:
             matrix = np.vstack([matrix, linearised.jacobian[1:]])
             lba = np.concatenate([lba, self.floor - linearised.error[1:]])
@@ -431,7 +436,7 @@ def _dense_qp(name: str, size: int, rows: int) -> ca.Function:
         name,
         "daqp",
         {"h": ca.Sparsity.dense(size, size), "a": ca.Sparsity.dense(rows, size)},
-        {"error_on_fail": False},
+        {"error_on_fail": False, "daqp": {"iter_limit": QP_ITERATIONS}},
     )
 
 

@@ -249,7 +249,12 @@ def resolved(scene, settings: IpoptSettings, compiled: bool | None = None):
             duration, step, defaults.control_intervals(duration)
         )
     else:
-        intervals = settings.intervals or defaults.control_intervals(duration)
+        # Nodes on the scene's step ends too: the Hermite acceleration jumps there, and a jump
+        # inside an RK4 step of the verifying model costs its bonds (1e-4 m, not converging
+        # with h, on a whole-space case with nodes 5.04 s apart at h = 0.1 s).
+        intervals = settings.intervals or defaults.intervals_for(
+            duration, scene.numerics.step, defaults.control_intervals(duration)
+        )
         step = defaults.step_within(limit, duration / intervals, defaults.STEP_CAP)
         choice = defaults.StepChoice(step, limit, at)
         notes.append(choice.describe("at"))

@@ -283,7 +283,10 @@ def solve_ipopt(
     solves = 1 + (refinements if problem.reduced else 0)
     # Full-model runs that only steer the model correction take a coarser step; the profile
     # reported is verified at the scene's.
-    correction = correction_step(problem.scene, settings.compiled) if solves > 1 else None
+    correction = None
+    if solves > 1:
+        nodes = problem.control.breakpoints
+        correction = correction_step(problem.scene, settings.compiled, nodes)
     learned = None  # (full-model run, outcome) the next model correction starts from
     best_solve = None
     for solve in range(solves):

@@ -93,7 +93,7 @@ class Verification:
     run: Trajectory | None = None
 
 
-def correction_step(scene, compiled: bool = False) -> float:
+def correction_step(scene, compiled: bool = False, breakpoints=None) -> float:
     """RK4 step (s) of the full-model runs that model correction learns its bias from.
 
     The bias ``e_full - e_reduced`` is a correction to the optimisation model, so its runs need
@@ -103,6 +103,8 @@ def correction_step(scene, compiled: bool = False) -> float:
     (:func:`cable_ocp.simulation.stability.linearised_step`). On paper_hill (n = 15) that is
     0.2 s against the scene's 0.05 s: a quarter of the cost, and e(t) within 7e-6 m of the
     scene's step. The profile that is reported is always verified at the scene's step.
+    ``breakpoints`` (s), where given, are times (the control's nodes) that must stay on step
+    ends of the coarser run as they are on the scene's.
     """
     numerics = scene.numerics
     count = step_count(numerics.duration, numerics.step)
@@ -120,10 +122,19 @@ def correction_step(scene, compiled: bool = False) -> float:
     while (
         2 * factor <= CORRECTION_COARSENING
         and count % (2 * factor) == 0
+        and _on_steps(breakpoints, 2 * factor * numerics.step)
         and 2 * factor * numerics.step <= CORRECTION_STABILITY_SHARE * limit
     ):
         factor *= 2
     return factor * numerics.step
+
+
+def _on_steps(times, step: float) -> bool:
+    """Whether every time of ``times`` (s; None: none) is a whole multiple of ``step``."""
+    if times is None:
+        return True
+    counts = np.asarray(times) / step
+    return bool(np.all(np.abs(counts - np.round(counts)) <= 1e-9 * np.maximum(counts, 1.0)))
 
 
 def verify_profile(

@@ -101,6 +101,19 @@ def _heave(scene, times: np.ndarray) -> np.ndarray:
     return Drive.from_scene(scene).winch_angle(times)[0]
 
 
+def shrunk(lower, upper, margin) -> tuple[np.ndarray, np.ndarray]:
+    """Limits moved ``margin`` inside, or a quarter of the range where it is narrower.
+
+    A range narrower than twice the margin (a winch locked to +-1e-5 rad, a rate limit of
+    1e-6 rad/s) would otherwise be inverted, and a QP solver would refuse it as ill-posed.
+    All arguments broadcast (rad, rad/s or rad/s^2).
+    """
+    lower, upper = np.asarray(lower, dtype=float), np.asarray(upper, dtype=float)
+    width = np.where(np.isfinite(upper - lower), np.maximum(upper - lower, 0.0), np.inf)
+    inside = np.minimum(margin, width / 4)
+    return lower + inside, upper - inside
+
+
 @dataclass(frozen=True)
 class LinearBounds:
     """Linear constraints ``lower <= matrix @ p <= upper`` that hold the winch bounds everywhere.
@@ -135,8 +148,9 @@ class LinearBounds:
             shift_low = heave.min(axis=1) if derivative == 0 else np.zeros(starts.size)
             shift_high = heave.max(axis=1) if derivative == 0 else np.zeros(starts.size)
             matrices.append(rows.reshape(-1, control.size))
-            lower.append(np.repeat(low + margin - shift_low, count))
-            upper.append(np.repeat(high - margin - shift_high, count))
+            low, high = shrunk(low - shift_low, high - shift_high, margin)
+            lower.append(np.repeat(low, count))
+            upper.append(np.repeat(high, count))
             derivatives.append(np.full(starts.size * count, derivative))
             times.append(np.repeat(starts, count))
         return cls(
@@ -151,10 +165,11 @@ class LinearBounds:
         """Lower and upper limits with the angle range narrowed by ``margin`` (rad) on each side.
 
         The narrowing is phased in linearly over the first ``ramp`` seconds (a receding plan
-        starts where the winch is, which may be inside the margin).
+        starts where the winch is, which may be inside the margin); it takes at most a quarter
+        of the range from each side (:func:`shrunk`).
         """
         share = np.clip(self.starts / ramp, 0.0, 1.0) * (self.derivatives == 0)
-        return self.lower + margin * share, self.upper - margin * share
+        return shrunk(self.lower, self.upper, margin * share)
 
     def excess(
         self,

@@ -22,7 +22,9 @@ Y_RANGE = (-150.0, 200.0)  # m, across it
 FLAT_UNTIL, ONSET = 20.0, 40.0  # m: flat for x < 20 m, the features in full from x = 60 m
 
 
-def site_elevation(x: np.ndarray, y: np.ndarray, relief: dict, base: float) -> np.ndarray:
+def site_elevation(
+    x: np.ndarray, y: np.ndarray, relief: dict, base: float, start: float = 0.0
+) -> np.ndarray:
     """Elevation (m, up; shape (len(x), len(y))) of a site on the grid ``x`` by ``y`` (m).
 
     Parameters
@@ -36,11 +38,13 @@ def site_elevation(x: np.ndarray, y: np.ndarray, relief: dict, base: float) -> n
         deviation of the small-scale relief) and ``seed`` (of that relief).
     base : float, m
         Elevation of the flat part under the start.
+    start : float, m
+        Where the end starts along x: the site is flat up to :data:`FLAT_UNTIL` beyond it.
     """
     X, Y = np.meshgrid(x, y, indexing="ij")
-    tau = np.clip((X - FLAT_UNTIL) / ONSET, 0.0, 1.0)
+    tau = np.clip((X - start - FLAT_UNTIL) / ONSET, 0.0, 1.0)
     onset = tau**3 * (10 - 15 * tau + 6 * tau**2)
-    slope = relief["slope"] * np.maximum(X - FLAT_UNTIL, 0.0) * onset
+    slope = relief["slope"] * np.maximum(X - start - FLAT_UNTIL, 0.0) * onset
     angle = relief["ridge_angle"]
     across = (X - relief["ridge_x"]) * np.cos(angle) + Y * np.sin(angle)
     ridge = relief["ridge_height"] * np.exp(-((across / relief["ridge_width"]) ** 2)) * onset
@@ -51,16 +55,25 @@ def site_elevation(x: np.ndarray, y: np.ndarray, relief: dict, base: float) -> n
     return base + slope + ridge + waves + rough
 
 
-def write_site(path: str | Path, relief: dict, base: float) -> Path:
+def write_site(
+    path: str | Path,
+    relief: dict,
+    base: float,
+    x_range: tuple[float, float] = X_RANGE,
+    y_range: tuple[float, float] = Y_RANGE,
+    start: float = 0.0,
+) -> Path:
     """Write the site's grid to the netCDF file ``path``; returns the path.
 
-    ``relief`` and ``base`` (m) as in :func:`site_elevation`.
+    ``relief`` and ``base`` (m) as in :func:`site_elevation`; ``x_range``, ``y_range`` (m) the
+    area it covers (by default every end path of the paper_hill variants), ``start`` (m) where
+    the end starts along x.
     """
-    x = np.arange(X_RANGE[0], X_RANGE[1] + SPACING / 2, SPACING)
-    y = np.arange(Y_RANGE[0], Y_RANGE[1] + SPACING / 2, SPACING)
+    x = np.arange(x_range[0], x_range[1] + SPACING / 2, SPACING)
+    y = np.arange(y_range[0], y_range[1] + SPACING / 2, SPACING)
     metres = {"units": "m"}
     grid = xr.Dataset(
-        {"elevation": (("x", "y"), site_elevation(x, y, relief, base), metres)},
+        {"elevation": (("x", "y"), site_elevation(x, y, relief, base, start), metres)},
         coords={"x": ("x", x, metres), "y": ("y", y, metres)},
         attrs={"source": f"cable_ocp.studies.random_site {relief}"},
     )

@@ -44,6 +44,7 @@ from cable_ocp.simulation.run import simulate
 from cable_ocp.simulation.seabed import rms_objective, seabed_height
 from cable_ocp.simulation.statics import equilibrium
 from cable_ocp.studies.random_site import write_site
+from cable_ocp.studies.scene_space import PLACED, space_scene
 
 OMEGA_GOAL = 0.01  # m
 GAIN_GOAL = 3.0  # locked Omega over the optimum's
@@ -224,14 +225,19 @@ def run_case(overrides: dict, closed_loop: bool = True) -> dict:
 
 def _run_case(overrides: dict, closed_loop: bool, site_file: Path) -> dict:
     relief = overrides.get(SITE)
-    scene = load_scene(scene_path("paper_hill"), {k: v for k, v in overrides.items() if k != SITE})
-    row = {"overrides": overrides, "heave": scene.top.has_heave, "raised": None}
+    row = {"overrides": overrides, "heave": "top.heave" in overrides, "raised": None}
     started = time.perf_counter()
     try:
+        if PLACED in overrides:
+            scene = space_scene(overrides, site_file.parent)
+            row["step"] = scene.numerics.step
+        else:
+            given = {k: v for k, v in overrides.items() if k != SITE}
+            scene = load_scene(scene_path("paper_hill"), given)
         if relief is not None:
             scene = on_site(scene, relief, site_file)
     except Exception as error:  # noqa: BLE001 - the study's own failure, counted as a raise
-        row.update(success=False, status="raised", raised=f"writing the grid: {_last_line(error)}")
+        row.update(success=False, status="raised", raised=f"stating the scene: {_last_line(error)}")
         row["wall"] = time.perf_counter() - started
         return row
     started = time.perf_counter()
