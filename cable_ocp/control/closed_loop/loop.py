@@ -113,7 +113,9 @@ def mpc(scene, settings: MpcSettings | None = None, quiet: bool = False, **field
         The plant (its own model, step and top motion, heave included).
     settings : MpcSettings, optional
         How the controller is built and run (defaults: a 20 s horizon re-solved every 1 s by one
-        Gauss-Newton step on a 2-element model at h = 0.5 s).
+        Gauss-Newton step on a 2-element model; the sample, horizon, plan intervals and the
+        controller's step left unset are derived from the scene, :meth:`MpcSettings.resolved`,
+        and the result's ``settings["derived"]`` says how).
     quiet : bool
         Print nothing (otherwise a progress bar on stderr).
     **fields
@@ -138,7 +140,7 @@ def mpc(scene, settings: MpcSettings | None = None, quiet: bool = False, **field
     if settings is not None and fields:
         raise ValueError(f"mpc: pass settings or its fields ({', '.join(fields)}), not both")
     settings = settings or MpcSettings(**fields)
-    settings.check(scene)
+    settings, derived = settings.resolved(scene)
     started = time.perf_counter()
     compile_ahead(scene, settings.elements, settings.solver == "gauss-newton")
     low, high = angle_bounds(scene)
@@ -241,6 +243,7 @@ def mpc(scene, settings: MpcSettings | None = None, quiet: bool = False, **field
         build_time=build_time,
         settings={
             **settings.record(),
+            "derived": derived,
             "plant_elements": scene.model.elements,
             "plant_step_s": h,
         },

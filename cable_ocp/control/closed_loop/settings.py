@@ -3,9 +3,20 @@
 from __future__ import annotations
 
 import math
-from dataclasses import asdict, dataclass
+from dataclasses import asdict, dataclass, replace
+
+from cable_ocp.control import defaults
+from cable_ocp.drive.bounds import angle_bounds
 
 REFERENCES = ("locked", "open-loop")
+# Targets (s) of the derived timing: a solve every second, plan intervals of 5 s (1 s intervals
+# let the plan exploit the reduced model's errors, ``interval`` below), a 20 s horizon.
+SAMPLE, INTERVAL, HORIZON = 1.0, defaults.CONTROL_INTERVAL, 20.0
+# The controller's model: 2 elements, its step at most 1 s (what served the paper's rope; its
+# limit along the run is above 1.4 s there).
+CONTROLLER_ELEMENTS, CONTROLLER_STEP_CAP = 2, 1.0
+# rad: the plant's soft limiter band when the range allows (``limiter_band`` below).
+LIMITER_BAND = 0.5
 SOLVERS = ("gauss-newton", "ipopt")
 
 
@@ -21,19 +32,24 @@ class MpcSettings:
 
     Attributes
     ----------
-    horizon : float, s
-        Prediction horizon; a multiple of ``sample``, at most the scene's duration.
-    sample : float, s
-        Time between solves; a multiple of the plant's step and of ``step``.
-    interval : float, s
+    horizon : float or None, s
+        Prediction horizon; a multiple of ``interval``, at most the scene's duration (None:
+        about 20 s).
+    sample : float or None, s
+        Time between solves; a multiple of the plant's step and of ``step`` (None: the
+        duration's whole fraction nearest 1 s that the plant's steps divide).
+    interval : float or None, s
         Length of one interval of the plan (its Hermite nodes are this far apart); divides
         ``horizon``. Plans of 1 s intervals, re-solved every second, have the freedom to exploit
         the reduced model's errors: on the README's heave case Omega was 0.168 m with 1 s
         intervals against 0.046 m with 5 s ones (a 1 s sample, h = 1 s, converged solves).
+        None: the multiple of ``sample`` nearest 5 s.
     elements : int
         Elements of the controller's model.
-    step : float, s
-        Its RK4 step.
+    step : float or None, s
+        Its RK4 step (None: the largest whole fraction of ``sample`` within 0.7 of the
+        controller model's RK4 limit along the scene's locked run, at most 1 s,
+        :mod:`cable_ocp.control.defaults`); a step above that limit is refused.
     solver : str
         ``"gauss-newton"``: one Gauss-Newton step per sample from the shifted previous plan (a
         real-time iteration: one simulation with sensitivities and one QP); ``"ipopt"``: IPOPT
@@ -53,12 +69,13 @@ class MpcSettings:
         0.5 rad band) Omega was 0.0236 m at 0.5, 0.0473 m at 0.75; with a 0.2 rad band 0.0222 m
         at 0.5, 0.0619 m at 1, but the harder bend opened the plant's bonds on heaving
         robustness scenes (``limiter_band``).
-    limiter_band : float, rad
+    limiter_band : float or None, rad
         Width of the plant's soft limiter at each end of the winch range (the plan keeps clear
-        of it too). Its bend accelerates the winch by about ``rate^2 / band``: at 0.2 rad (the
-        earlier value) the heave feedback bent into a bound opened the plant's bonds by 1.4e-4
-        to 3.6e-4 m on 5 of 35 heaving robustness scenes (seeds 0 and 3, 1 s sample); at 0.5
-        rad on 1.
+        of it too); None: 0.5 rad, or a quarter of a narrower range. At most half the range.
+        Its bend accelerates the winch by about ``rate^2 / band``: at 0.2 rad (the earlier
+        value) the heave feedback bent into a bound opened the plant's bonds by 1.4e-4 to
+        3.6e-4 m on 5 of 35 heaving robustness scenes (seeds 0 and 3, 1 s sample); at 0.5 rad
+        on 1.
     rate_weight : float, s^2
         Weight of the pay-out speed ``(r_D phi')^2`` against ``e^2`` in the objective.
     max_iter : int
@@ -69,47 +86,42 @@ class MpcSettings:
         is and with the heave feedback).
     """
 
-    horizon: float = 20.0
-    sample: float = 1.0
-    interval: float = 5.0
-    elements: int = 2
-    step: float = 1.0
+    horizon: float | None = None
+    sample: float | None = None
+    interval: float | None = None
+    elements: int = CONTROLLER_ELEMENTS
+    step: float | None = None
     solver: str = "gauss-newton"
     heave_feedback: bool = True
     heave_filter: float = 15.0
     heave_margin: float = 0.5
-    limiter_band: float = 0.5
+    limiter_band: float | None = None
     rate_weight: float = 1e-4
     max_iter: int = 1
     references: tuple[str, ...] = ("locked",)
 
     def __post_init__(self):
-        sample, horizon, step = self.sample, self.horizon, self.step
-        if not (sample > 0 and math.isfinite(sample)):
-            raise ValueError(f"sample = {sample} s: must be > 0")
-        if not (horizon > sample and math.isfinite(horizon)):
-            raise ValueError(f"horizon = {horizon} s: must be > sample = {sample} s")
-        if not _multiple(horizon, sample):
-            raise ValueError(
-                f"horizon = {horizon} s must be a whole multiple of sample = {sample} s"
-            )
+        for name in ("horizon", "sample", "interval", "step"):
+            value = getattr(self, name)
+            if value is not None and not (
+                isinstance(value, int | float) and not isinstance(value, bool)
+            ):
+                raise ValueError(f"{name} = {value!r}: must be a number of seconds (or None)")
+            if value is not None and not (value > 0 and math.isfinite(value)):
+                raise ValueError(f"{name} = {value} s: must be finite and > 0")
         if not (isinstance(self.elements, int) and self.elements >= 1):
             raise ValueError(f"elements = {self.elements}: the controller's model needs >= 1")
-        if not (step > 0 and _multiple(sample, step)):
-            raise ValueError(f"step = {step} s: must be > 0 and divide sample = {sample} s")
-        if not (self.interval > 0 and _multiple(horizon, self.interval)):
-            raise ValueError(
-                f"interval = {self.interval} s: must be > 0 and divide horizon = {horizon} s"
-            )
-        if not _multiple(self.interval, step):
-            raise ValueError(f"step = {step} s: must divide interval = {self.interval} s")
+        if None not in (self.horizon, self.sample, self.interval, self.step):
+            self._check_timing()
         if self.solver not in SOLVERS:
             raise ValueError(f"solver = {self.solver!r}: must be one of {', '.join(SOLVERS)}")
         if not (self.heave_filter > 0 and math.isfinite(self.heave_filter)):
             raise ValueError(f"heave_filter = {self.heave_filter} s: must be > 0 (a time constant)")
         if not (isinstance(self.max_iter, int) and self.max_iter >= 1):
             raise ValueError(f"max_iter = {self.max_iter}: must be an integer >= 1")
-        if not (self.limiter_band > 0 and math.isfinite(self.limiter_band)):
+        if self.limiter_band is not None and not (
+            self.limiter_band > 0 and math.isfinite(self.limiter_band)
+        ):
             raise ValueError(f"limiter_band = {self.limiter_band} rad: must be > 0")
         if not 0 <= self.heave_margin <= 1:
             raise ValueError(f"heave_margin = {self.heave_margin}: must be in [0, 1]")
@@ -120,6 +132,75 @@ class MpcSettings:
             raise ValueError(
                 f"references = {self.references}: each must be one of {', '.join(REFERENCES)}"
             )
+
+    def _check_timing(self) -> None:
+        """The horizon, sample, interval and step fit together (ValueError naming the setting)."""
+        sample, horizon, step = self.sample, self.horizon, self.step
+        if not horizon > sample:
+            raise ValueError(f"horizon = {horizon} s: must be > sample = {sample} s")
+        if not _multiple(horizon, sample):
+            raise ValueError(
+                f"horizon = {horizon} s must be a whole multiple of sample = {sample} s"
+            )
+        if not _multiple(sample, step):
+            raise ValueError(f"step = {step} s: must divide sample = {sample} s")
+        if not _multiple(horizon, self.interval):
+            raise ValueError(f"interval = {self.interval} s: must divide horizon = {horizon} s")
+        if not _multiple(self.interval, step):
+            raise ValueError(f"step = {step} s: must divide interval = {self.interval} s")
+
+    def resolved(self, scene, compiled: bool = True) -> tuple[MpcSettings, str]:
+        """The settings with the timing left unset derived from the scene, and how (a phrase).
+
+        Checked against the scene (:meth:`check`); a fixed controller step above its model's
+        RK4 limit along the locked run is refused.
+        """
+        duration, plant_step = scene.numerics.duration, scene.numerics.step
+        notes = []
+        sample = self.sample
+        if sample is None:
+            samples = defaults.intervals_for(duration, plant_step, round(duration / SAMPLE))
+            sample = duration / samples
+            notes.append(f"sample {sample:.4g} s")
+        interval = self.interval
+        if interval is None:
+            interval = sample * max(1, round(INTERVAL / sample))
+            interval = min(interval, sample * max(1, math.floor(duration / sample + 1e-9)))
+            notes.append(f"plan intervals of {interval:.4g} s")
+        horizon = self.horizon
+        if horizon is None:
+            horizon = interval * max(1, round(HORIZON / interval))
+            if horizon > duration * (1 + 1e-9):
+                horizon = interval * max(1, math.floor(duration / interval + 1e-9))
+            if horizon <= sample * (1 + 1e-9):
+                horizon = 2 * sample
+            notes.append(f"horizon {horizon:.4g} s")
+        band = self.limiter_band
+        if band is None:
+            low, high = angle_bounds(scene)
+            band = min(LIMITER_BAND, (high - low) / 4)
+            if band < LIMITER_BAND:
+                notes.append(f"limiter band {band:.3g} rad (a quarter of the winch range)")
+        step = self.step
+        if self.elements > scene.model.elements:
+            raise ValueError(
+                f"elements = {self.elements}: the reduced model needs 1 .. model.elements = "
+                f"{scene.model.elements} elements"
+            )
+        limit, at = defaults.run_limit(scene, self.elements, duration, compiled)
+        if step is None:
+            step = defaults.step_within(limit, sample, CONTROLLER_STEP_CAP)
+            choice = defaults.StepChoice(step, limit, at)
+            notes.append(choice.describe(f"controller of {self.elements} elements at"))
+        else:
+            defaults.check_step(
+                step, limit, "step", "leave it unset to derive one, or give a smaller step"
+            )
+        chosen = replace(
+            self, horizon=horizon, sample=sample, interval=interval, step=step, limiter_band=band
+        )
+        chosen.check(scene)
+        return chosen, ("derived settings: " + ", ".join(notes)) if notes else ""
 
     @property
     def intervals(self) -> int:
@@ -151,6 +232,14 @@ class MpcSettings:
             )
         if scene.model.torsion:
             raise ValueError("model.torsion = true: the MPC supports 5-DOF models only")
+        low, high = angle_bounds(scene)
+        if self.limiter_band is not None and self.limiter_band > (high - low) / 2:
+            raise ValueError(
+                f"limiter_band = {self.limiter_band:g} rad: must be at most half the winch range "
+                f"[winch.angle_min, winch.angle_max] = [{low:g}, {high:g}] rad, "
+                f"{(high - low) / 2:g} rad (leave it unset to derive it)"
+            )
+        self._check_timing()
         if scene.top.heave_compensated:
             raise ValueError(
                 "top.heave.compensation = true: the MPC compensates heave from measurements "
