@@ -81,7 +81,11 @@ class HermiteIntervals:
     Parameters are ``[phi_1..phi_N, phi'_1..phi'_N]`` at the nodes ``t_k = k T / N``, node 0
     being held at ``phi = phi' = 0`` (the winch at rest at the start). With ``free_start`` (a
     receding horizon, which starts where the winch is) node 0 is a parameter too:
-    ``[phi_0..phi_N, phi'_0..phi'_N]``. Beyond ``duration`` the angle holds its end value.
+    ``[phi_0..phi_N, phi'_0..phi'_N]``. Beyond ``duration`` (where a closed loop holds a plan
+    after its last successful solve) the angle continues C2 and comes to rest: its rate decays
+    as ``(v + (a + v/c) tau) exp(-tau/c)`` from the end's rate ``v`` and acceleration ``a``,
+    ``c`` one interval. (Holding the end value dropped the rate to zero at once, and the jump
+    in the top element's speed opened the plant's bonds one horizon after the last solve.)
     """
 
     duration: float
@@ -110,11 +114,13 @@ class HermiteIntervals:
 
         A time on a node belongs to the interval that starts there (the last node to the last
         interval), or, where ``left`` (bool, or array like ``t``) is true, to the interval that
-        ends there (node 0 to the first). Beyond ``duration`` the rate and acceleration are 0.
+        ends there (node 0 to the first). Beyond ``duration``: the C2 extension (class docstring).
         """
-        t = np.atleast_1d(np.asarray(t, dtype=float))
+        t = t_given = np.atleast_1d(np.asarray(t, dtype=float))
         beyond = t > self.duration * (1 + 1e-9)
         t = np.clip(t, 0.0, self.duration)
+        if left is not None:
+            left = np.where(beyond, True, left)  # the end's rows from the last interval
         width = self.duration / self.intervals
         k = (t / width + 1e-9).astype(int)
         if left is not None:
@@ -133,15 +139,31 @@ class HermiteIntervals:
             for d in range(3):
                 out[d, rows[valid], column] += scale[d] * value_basis[d][valid]
                 out[d, rows[valid], rates + column] += scale[d] * width * rate_basis[d][valid]
-        out[1:, beyond] = 0.0
+        if np.any(beyond):
+            out[:, beyond] = self._extension(out[:, beyond], (t_given[beyond] - self.duration))
         return out[0], out[1], out[2]
+
+    def _extension(self, end: np.ndarray, tau: np.ndarray) -> np.ndarray:
+        """Rows (3, k, size) of the angle ``tau`` (s) past the end, from its rows there."""
+        c = self.duration / self.intervals
+        decay = np.exp(-tau / c)[:, None]
+        angle, rate, acceleration = end
+        slope = acceleration + rate / c  # B = a + v / c
+        tau = tau[:, None]
+        return np.stack(
+            [
+                angle + rate * c * (1 - decay) + slope * c * (c - (tau + c) * decay),
+                (rate + slope * tau) * decay,
+                (slope - (rate + slope * tau) / c) * decay,
+            ]
+        )
 
     def resampled(self, parameters: np.ndarray, offset: float) -> np.ndarray:
         """Free-start parameters of the same angle moved on by ``offset`` (s): a warm start.
 
         The new nodes take the angle and rate at ``offset + t_k``: exact where the nodes fall on
         old ones (an offset of whole intervals), a C1 interpolation between them otherwise;
-        beyond the old end the angle holds at rest.
+        beyond the old end it follows the extension that comes to rest.
         """
         if not self.free_start:
             raise ValueError("only a free-start control (a receding horizon) can be resampled")
