@@ -168,15 +168,12 @@ def test_settings_are_one_dataclass_for_the_api_and_the_command_line(short_hill)
     """The command line builds the same MpcSettings with the same defaults; mpc() checks once."""
     import argparse
 
-    from cable_ocp.cli.mpc import add_mpc_command
+    from cable_ocp.cli.mpc import add_mpc_command, settings_from
 
     parser = argparse.ArgumentParser(prog="cable-ocp")
     add_mpc_command(parser.add_subparsers(dest="command", required=True))
     args = parser.parse_args(["mpc", "scene.toml", "--out", "x"])
-    defaults = MpcSettings()
-    for name in ("horizon", "sample", "interval", "elements", "step", "solver", "max_iter",
-                 "heave_filter", "heave_margin", "rate_weight"):  # fmt: skip
-        assert getattr(args, name) == getattr(defaults, name), name
+    assert settings_from(args) == MpcSettings()
     with pytest.raises(ValueError, match="pass settings or its fields"):
         mpc(short_hill, MpcSettings(), horizon=10.0)
 
