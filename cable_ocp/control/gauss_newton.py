@@ -29,6 +29,7 @@ from dataclasses import dataclass
 import casadi as ca
 import numpy as np
 
+from cable_ocp.control.checks import Rule, check_fields
 from cable_ocp.control.interrupts import check, keeping_interrupts
 from cable_ocp.control.linearisation import ErrorLinearisation, Linearised
 from cable_ocp.control.parameters import ProblemParameters
@@ -98,12 +99,14 @@ class GaussNewtonSettings:
     real_time: bool = False
 
     def __post_init__(self):
-        if not (isinstance(self.max_iter, int) and self.max_iter >= 1):
-            raise ValueError(f"max_iter = {self.max_iter}: must be an integer >= 1")
-        if not self.tolerance > 0:
-            raise ValueError(f"tolerance = {self.tolerance}: must be > 0")
-        if not self.rate_weight >= 0:
-            raise ValueError(f"rate_weight = {self.rate_weight} s^2: must be >= 0")
+        check_fields(
+            self,
+            {
+                "max_iter": Rule("integer", low=1),
+                "tolerance": Rule("number", above=0),
+                "rate_weight": Rule("number", low=0, unit="s^2"),
+            },
+        )
 
 
 class GaussNewton:

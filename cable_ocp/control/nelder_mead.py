@@ -16,6 +16,7 @@ import numpy as np
 from scipy.optimize import minimize
 
 from cable_ocp.control import defaults
+from cable_ocp.control.checks import Rule, check_fields
 from cable_ocp.control.problem import SolverOutcome, WinchProblem
 from cable_ocp.drive.bounds import violation
 from cable_ocp.drive.controls import KnotSpline
@@ -56,12 +57,16 @@ class NelderMeadSettings:
     compiled: bool = True
 
     def __post_init__(self):
-        if self.max_evaluations < 1:
-            raise ValueError(f"max_evaluations = {self.max_evaluations}: must be >= 1")
-        if self.elements is not None and self.elements < 1:
-            raise ValueError(f"elements = {self.elements}: must be >= 1")
-        if self.step is not None and self.step <= 0:
-            raise ValueError(f"step = {self.step}: must be > 0 s")
+        check_fields(
+            self,
+            {
+                "elements": Rule("integer", low=1, optional=True),
+                "step": Rule("number", above=0, unit="s", optional=True),
+                "max_evaluations": Rule("integer", low=1),
+                "xatol": Rule("number", above=0, unit="rad"),
+                "fatol": Rule("number", above=0, unit="m"),
+            },
+        )
 
 
 def resolved_nelder_mead(scene, settings: NelderMeadSettings, compiled: bool | None = None):

@@ -22,6 +22,7 @@ import casadi as ca
 import numpy as np
 
 from cable_ocp.control import defaults
+from cable_ocp.control.checks import Rule, check_fields, check_ipopt_options
 from cable_ocp.control.gauss_newton import CLEARANCE_BACKOFF
 from cable_ocp.control.interrupts import keeping_interrupts
 from cable_ocp.control.linearisation import (
@@ -119,12 +120,9 @@ class IpoptSettings:
     ipopt_options: dict = field(default_factory=dict)
 
     def __post_init__(self):
-        if self.shooting not in ("single", "multiple"):
-            raise ValueError(f"shooting = {self.shooting!r}: must be 'single' or 'multiple'")
-        if self.control not in ("hermite", "spline"):
-            raise ValueError(f"control = {self.control!r}: must be 'hermite' or 'spline'")
-        if self.solver not in ("gauss-newton", "ipopt"):
-            raise ValueError(f"solver = {self.solver!r}: must be 'gauss-newton' or 'ipopt'")
+        check_fields(self, _IPOPT_RULES)
+        if not isinstance(self.ipopt_options, dict):
+            raise ValueError(f"IpoptSettings.ipopt_options = {self.ipopt_options!r}: a dict")
         if self.solver == "gauss-newton" and (self.shooting != "single" or not self.compiled):
             raise ValueError(
                 "solver = 'gauss-newton' works on the compiled single-shooting transcription: "
@@ -135,22 +133,26 @@ class IpoptSettings:
                 f"hessian = {self.hessian!r} is IPOPT's (the Gauss-Newton solver uses 2 J^T J, "
                 "first derivatives only, not second derivatives): set solver='ipopt'"
             )
-        if self.hessian not in ("limited-memory", "exact"):
-            raise ValueError(f"hessian = {self.hessian!r}: must be 'limited-memory' or 'exact'")
-        for name in ("max_iter", "threads"):
-            if getattr(self, name) < 1:
-                raise ValueError(f"{name} = {getattr(self, name)}: must be >= 1")
-        if self.intervals is not None and self.intervals < 1:
-            raise ValueError(f"intervals = {self.intervals}: must be >= 1")
-        if self.elements is not None and self.elements < 1:
-            raise ValueError(f"elements = {self.elements}: must be >= 1")
-        if self.step is not None and self.step <= 0:
-            raise ValueError(f"step = {self.step}: must be > 0 s")
         if self.solver == "ipopt" and self.hessian == "exact" and self.compiled:
             raise ValueError(
                 "hessian = 'exact' needs second derivatives, which the compiled step does not "
                 "carry: set compiled=False (interpreted) or hessian='limited-memory'"
             )
+
+
+_IPOPT_RULES = {
+    "elements": Rule("integer", low=1, optional=True),
+    "step": Rule("number", above=0, unit="s", optional=True),
+    "shooting": Rule("choice", choices=("single", "multiple")),
+    "intervals": Rule("integer", low=1, optional=True),
+    "control": Rule("choice", choices=("hermite", "spline")),
+    "control_intervals": Rule("integer", low=1, optional=True),
+    "solver": Rule("choice", choices=("gauss-newton", "ipopt")),
+    "hessian": Rule("choice", choices=("limited-memory", "exact")),
+    "max_iter": Rule("integer", low=1),
+    "tolerance": Rule("number", above=0),
+    "threads": Rule("integer", low=1),
+}
 
 
 def ipopt_options(
@@ -228,6 +230,8 @@ def resolved(scene, settings: IpoptSettings, compiled: bool | None = None):
         passes through: :func:`cable_ocp.optimize` reports it as a failed result.
     """
     compiled = settings.compiled if compiled is None else compiled
+    if settings.solver == "ipopt":
+        check_ipopt_options(settings.ipopt_options)
     duration = scene.numerics.duration
     notes = []
     elements = settings.elements or defaults.reduced_elements(scene)

@@ -6,6 +6,7 @@ import math
 from dataclasses import asdict, dataclass, replace
 
 from cable_ocp.control import defaults
+from cable_ocp.control.checks import Rule, check_fields
 from cable_ocp.drive.bounds import angle_bounds
 
 REFERENCES = ("locked", "open-loop")
@@ -24,6 +25,21 @@ def _multiple(value: float, unit: float) -> bool:
     """Whether ``value`` is a whole multiple of ``unit`` (to round-off)."""
     count = round(value / unit)
     return count >= 1 and abs(count * unit - value) <= 1e-9 * max(abs(value), 1.0)
+
+
+_RULES = {
+    "horizon": Rule("number", above=0, unit="s", optional=True),
+    "sample": Rule("number", above=0, unit="s", optional=True),
+    "interval": Rule("number", above=0, unit="s", optional=True),
+    "elements": Rule("integer", low=1),
+    "step": Rule("number", above=0, unit="s", optional=True),
+    "solver": Rule("choice", choices=SOLVERS),
+    "heave_filter": Rule("number", above=0, unit="s"),
+    "heave_margin": Rule("number", low=0),
+    "limiter_band": Rule("number", above=0, unit="rad", optional=True),
+    "rate_weight": Rule("number", low=0, unit="s^2"),
+    "max_iter": Rule("integer", low=1),
+}
 
 
 @dataclass(frozen=True)
@@ -101,32 +117,13 @@ class MpcSettings:
     references: tuple[str, ...] = ("locked",)
 
     def __post_init__(self):
-        for name in ("horizon", "sample", "interval", "step"):
-            value = getattr(self, name)
-            if value is not None and not (
-                isinstance(value, int | float) and not isinstance(value, bool)
-            ):
-                raise ValueError(f"{name} = {value!r}: must be a number of seconds (or None)")
-            if value is not None and not (value > 0 and math.isfinite(value)):
-                raise ValueError(f"{name} = {value} s: must be finite and > 0")
-        if not (isinstance(self.elements, int) and self.elements >= 1):
-            raise ValueError(f"elements = {self.elements}: the controller's model needs >= 1")
+        check_fields(self, _RULES)
+        if self.heave_margin > 1:
+            raise ValueError(f"MpcSettings.heave_margin = {self.heave_margin}: must be <= 1")
+        if not isinstance(self.heave_feedback, bool):
+            raise ValueError(f"MpcSettings.heave_feedback = {self.heave_feedback!r}: a bool")
         if None not in (self.horizon, self.sample, self.interval, self.step):
             self._check_timing()
-        if self.solver not in SOLVERS:
-            raise ValueError(f"solver = {self.solver!r}: must be one of {', '.join(SOLVERS)}")
-        if not (self.heave_filter > 0 and math.isfinite(self.heave_filter)):
-            raise ValueError(f"heave_filter = {self.heave_filter} s: must be > 0 (a time constant)")
-        if not (isinstance(self.max_iter, int) and self.max_iter >= 1):
-            raise ValueError(f"max_iter = {self.max_iter}: must be an integer >= 1")
-        if self.limiter_band is not None and not (
-            self.limiter_band > 0 and math.isfinite(self.limiter_band)
-        ):
-            raise ValueError(f"limiter_band = {self.limiter_band} rad: must be > 0")
-        if not 0 <= self.heave_margin <= 1:
-            raise ValueError(f"heave_margin = {self.heave_margin}: must be in [0, 1]")
-        if not (self.rate_weight >= 0 and math.isfinite(self.rate_weight)):
-            raise ValueError(f"rate_weight = {self.rate_weight} s^2: must be finite and >= 0")
         unknown = set(self.references) - set(REFERENCES)
         if unknown:
             raise ValueError(
