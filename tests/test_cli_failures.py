@@ -179,14 +179,15 @@ def test_the_plant_stops_where_its_end_leaves_the_grid(tmp_path, capsys):
 
 
 def test_the_loop_fails_an_end_under_the_minimum_clearance(tmp_path, capsys):
+    """The end hangs 4.5 m over the grid, under c_min = 4.7 m from the start; the plant runs."""
     out = tmp_path / "loop"
-    grid = flat_grid(tmp_path / "wide.csv", x_max=100.0)
-    hill = "seabed.hills=[{height = 4.0, x0 = 12.0, y0 = 0.0, width_x = 3.0, width_y = 20.0}]"
-    sets = ["--set", grid, "--set", hill, "--set", "seabed.clearance=5.0",
-            "--set", "seabed.minimum_clearance=4.9"]  # fmt: skip
+    grid = flat_grid(tmp_path / "flat.csv", x_max=100.0, depth=104.5)
+    sets = ["--set", grid, "--set", "seabed.clearance=5.0",
+            "--set", "seabed.minimum_clearance=4.7"]  # fmt: skip
     code, _, stderr = run_cli(["mpc", SMALL_TOW, *sets, *SHORT_LOOP, "--out", out], capsys)
     assert code == 3, stderr
-    assert "under seabed.minimum_clearance = 4.9 m" in stderr
+    assert "the end comes within 4.5 m of the seabed at t = 0 s" in stderr
+    assert "0.2 m under seabed.minimum_clearance = 4.7 m" in stderr
     assert not MpcResult.load(out).success
 
 
