@@ -54,6 +54,10 @@ QP_MARGIN = 5e-5
 # DAQP's active-set iterations per QP (its default, 1000, ran out on a 198-parameter QP with rate
 # and acceleration rows: whole-space robustness case 9 of seed 0).
 QP_ITERATIONS = 20_000
+# Price of the closed loop's clearance slack (per m and m^2, against Omega^2 in m^2), and the
+# slack (m) above which a solve's status says it was used.
+SOFT_PRICE = 1e3
+SOFT_REPORTED = 1e-6
 # A step is accepted once it achieves this fraction of the decrease the QP predicted (Armijo).
 ARMIJO = 1e-4
 BACKTRACKS = 12
@@ -146,8 +150,16 @@ class GaussNewton:
         if seabed.minimum_clearance is not None:
             self.floor = seabed.minimum_clearance + CLEARANCE_BACKOFF - seabed.clearance
         rows = bounds.matrix.shape[0] + (steps if self.floor is not None else 0)
-        self.qp = _dense_qp("gauss_newton_qp", size, rows)
-        self.screened_qp = _dense_qp("gauss_newton_screened_qp", size, min(SCREENED_ROWS, rows))
+        # A closed loop's QP takes the clearance rows soft: one slack (m) that every row may use,
+        # at a price (:data:`SOFT_PRICE`), so that a start already under the floor (a heave, the
+        # plant's error) still has a plan; the slack used is reported in the status.
+        self.soft = settings.real_time and self.floor is not None
+        variables = size + self.soft
+        self.qp = _dense_qp("gauss_newton_qp", variables, rows)
+        self.screened_qp = _dense_qp(
+            "gauss_newton_screened_qp", variables, min(SCREENED_ROWS, rows)
+        )
+        self.softened = 0.0  # m: the slack of the last step
         self._last: tuple[ProblemParameters, np.ndarray, Linearised] | None = None
         self.build_time = time.perf_counter() - started
 
@@ -217,9 +229,16 @@ class GaussNewton:
             lba = np.concatenate([lba, self.floor - linearised.error[1:]])
             uba = np.concatenate([uba, np.full(linearised.error.size - 1, np.inf)])
         lbx, ubx = _pinned_steps(parameters, fixed)
+        if self.soft:
+            hessian, gradient, matrix, lbx, ubx = _with_slack(
+                hessian, gradient, matrix, self.problem.bounds.matrix.shape[0], lbx, ubx
+            )
         step, status = self._screened_solve(hessian, gradient, matrix, lba, uba, lbx, ubx)
         if step is None:
             return None, 0.0, status
+        if self.soft:
+            self.softened = max(float(step[-1]), 0.0)
+            hessian, gradient, step = hessian[:-1, :-1], gradient[:-1], step[:-1]
         predicted = -float(gradient @ step + 0.5 * step @ hessian @ step)
         return step, 2 * predicted, "solved"
 
@@ -322,6 +341,11 @@ class GaussNewton:
                     if current.finite:
                         continue
                 status = f"{iterations} Gauss-Newton step(s) (real-time iteration)"
+                if self.softened > SOFT_REPORTED:
+                    status += (
+                        f"; the minimum clearance softened by {self.softened:.3g} m (the plan "
+                        "could not keep it from the state it started in)"
+                    )
                 success = True
                 break
             breach = self.breach(current)
@@ -431,6 +455,27 @@ class GaussNewton:
             return
         excess = self.problem.bounds.excess(parameters, lower, upper)
         self.log.line(len(history) - 1, float(np.sqrt(max(history[-1], 0.0))), excess)
+
+
+def _with_slack(hessian, gradient, matrix, bound_rows: int, lbx, ubx):
+    """The QP with one slack ``s >= 0`` added to every clearance row (those after the bounds').
+
+    Its price is ``SOFT_PRICE (s + s^2)`` (per m, m^2, against Omega^2 in m^2): linear, so that a
+    small breach is not bought cheaply, and quadratic, so that the QP stays strictly convex.
+    """
+    size = gradient.size
+    extended = np.zeros((size + 1, size + 1))
+    extended[:size, :size] = hessian
+    extended[size, size] = 2 * SOFT_PRICE
+    column = np.zeros((matrix.shape[0], 1))
+    column[bound_rows:] = 1.0
+    return (
+        extended,
+        np.append(gradient, SOFT_PRICE),
+        np.hstack([matrix, column]),
+        np.append(lbx, 0.0),
+        np.append(ubx, np.inf),
+    )
 
 
 def _dense_qp(name: str, size: int, rows: int) -> ca.Function:
