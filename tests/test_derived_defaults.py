@@ -1,0 +1,233 @@
+"""Numerical settings that follow from the scene (issue 23) and the winch limits that must not
+invert (issue 24, class 1): each class of failure on a scene of its class other than the one
+reported, on small_tow variants (100 m, n = 4) so that each case takes seconds."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+
+from cable_ocp.control import defaults
+from cable_ocp.control.checks import check_ipopt_options
+from cable_ocp.control.closed_loop import controller as controller_module
+from cable_ocp.control.closed_loop.loop import mpc
+from cable_ocp.control.closed_loop.settings import MpcSettings
+from cable_ocp.control.gauss_newton import GaussNewton, GaussNewtonSettings
+from cable_ocp.control.nelder_mead import NelderMeadSettings
+from cable_ocp.control.ocp import IpoptSettings, ipopt_problem, resolved
+from cable_ocp.control.optimization import optimize
+from cable_ocp.drive.controls import HermiteIntervals
+from cable_ocp.scene.schema import SceneError, load_scene
+from cable_ocp.simulation.run import simulate
+from cable_ocp.studies.robustness import reach_floor
+
+# A thin synthetic rope towed fast: its drag's linearisation puts the RK4 limit of a 3-element
+# model at about 0.3 s along the run (above 1 s for the paper's rope).
+THIN = {
+    "cable.diameter": 0.025,
+    "cable.density": 1800.0,
+    "top.tow.surge_speed": 1.6,
+    "numerics.step": 0.05,  # its own model needs it
+}
+
+
+@pytest.fixture(scope="module")
+def small(models_dir):
+    return load_scene(models_dir / "small_tow.toml")
+
+
+def test_any_duration_optimises_by_default(models_dir):
+    """T = 37 s (no multiple of 5 s, nor of 21 s): the default optimize derives its grid."""
+    scene = load_scene(models_dir / "small_tow.toml", {"numerics.duration": 37.0})
+    result = optimize(scene, quiet=True)
+    assert result.success, result.status
+    assert "derived settings" in result.notes and "intervals" in result.notes
+    nodes = HermiteIntervals(37.0, int(result.parameters.size / 2)).breakpoints
+    counts = nodes / scene.numerics.step  # the nodes fall on the scene's step ends
+    np.testing.assert_allclose(counts, np.round(counts), atol=1e-9)
+
+
+def test_intervals_nearest_the_wanted_count_divide_the_steps():
+    """4200 steps (paper_hill) keep 42 intervals; 2747 = 41 x 67 steps take 67 for 55."""
+    assert defaults.intervals_for(210.0, 0.05, 42) == 42
+    assert defaults.intervals_for(137.35, 0.05, 55) == 67
+
+
+def test_reduced_step_follows_the_limit_along_the_run(models_dir):
+    """The thin rope's reduced step is within 0.7 of its limit along the locked run, which is
+    below its limit at rest (drag grows with speed), and the default optimize succeeds."""
+    scene = load_scene(models_dir / "small_tow.toml", THIN)
+    settings, note = resolved(scene, IpoptSettings())
+    limit, _ = defaults.run_limit(scene, settings.elements, scene.numerics.duration)
+    assert settings.step <= defaults.STABLE_SHARE * limit * (1 + 1e-12)
+    assert settings.step < defaults.STEP_CAP
+    assert f"{settings.step:.4g}" in note
+    result = optimize(scene, quiet=True)
+    assert result.success, result.status
+    locked = simulate(scene, compiled=True)  # the end rises 10 m; the winch hauls in 5 m
+    assert result.omega <= 1.1 * reach_floor(scene, locked)
+
+
+def test_a_fixed_step_above_the_limit_is_refused(models_dir):
+    scene = load_scene(models_dir / "small_tow.toml", THIN)
+    with pytest.raises(ValueError, match=r"step = 2 s is above the RK4 limit"):
+        optimize(scene, settings=IpoptSettings(step=2.0), quiet=True)
+    with pytest.raises(ValueError, match=r"step = 2 s is above the RK4 limit"):
+        optimize(scene, "nelder-mead", NelderMeadSettings(step=2.0), quiet=True)
+    with pytest.raises(ValueError, match=r"step = 1.5 s is above the RK4 limit"):
+        mpc(scene, MpcSettings(step=1.5, sample=1.5, interval=6.0, horizon=12.0), quiet=True)
+
+
+def test_a_failure_names_the_model_that_failed(models_dir, monkeypatch):
+    """A blow-up of the reduced model is reported on it, with its elements and step."""
+    from cable_ocp.control import problem as problem_module
+    from cable_ocp.simulation.integrate import SimulationError
+
+    def blows_up(self, parameters, compiled=False):
+        raise SimulationError("the state became non-finite at t = 3 s")
+
+    monkeypatch.setattr(problem_module.WinchProblem, "simulate", blows_up)
+    scene = load_scene(models_dir / "small_tow.toml")
+    result = optimize(scene, quiet=True)
+    assert not result.success
+    assert "on the optimisation model (3 elements at h = 0.5 s" in result.status
+
+
+def test_controller_model_derived_for_a_thin_heaving_rope(models_dir):
+    """The thin rope in a 0.5 m heave: the controller's step comes from its limit (not 1 s)
+    and the closed loop runs through."""
+    heave = {"top.heave": {"amplitude": 0.5, "period": 8.0}}
+    scene = load_scene(models_dir / "small_tow.toml", {**THIN, **heave})
+    result = mpc(scene, quiet=True)
+    assert result.success, result.status
+    assert result.settings["step_s"] < 1.0
+    assert "controller of 2 elements" in result.settings["derived"]
+
+
+def test_hermite_plan_continues_C2_past_its_end():
+    """Angle, rate and acceleration are continuous at the end and the winch comes to rest."""
+    control = HermiteIntervals(20.0, 4, free_start=True)
+    parameters = np.random.default_rng(3).normal(size=control.size)
+    times = np.array([20.0 - 1e-7, 20.0 + 1e-7])
+    rows = control.basis(times, left=np.array([True, False]))
+    for row in rows:
+        before, after = row @ parameters
+        assert abs(after - before) < 1e-5
+    late = [row @ parameters for row in control.basis(np.array([300.0]))]
+    assert abs(late[1][0]) < 1e-12 and abs(late[2][0]) < 1e-12
+    grid = np.linspace(21.0, 40.0, 4001)
+    angle, rate, acceleration = (row @ parameters for row in control.basis(grid))
+    np.testing.assert_allclose(np.gradient(angle, grid)[2:-2], rate[2:-2], atol=1e-5)
+    np.testing.assert_allclose(np.gradient(rate, grid)[2:-2], acceleration[2:-2], atol=1e-5)
+
+
+def test_plant_has_no_kick_when_solves_fail_past_the_horizon(models_dir, monkeypatch):
+    """Every solve after t = 4 s fails: the plan in force runs past its 10 s horizon, and the
+    applied winch rate stays continuous (no jump one horizon after the last success)."""
+    original = controller_module.RecedingHorizon.make_step
+
+    def failing_after(self, now, estimate, angle, rate):
+        solve = original(self, now, estimate, angle, rate)
+        if now < 4.0:
+            return solve
+        return controller_module.Solve(solve.parameters, "failed (test)", False, 1, 0.0)
+
+    monkeypatch.setattr(controller_module.RecedingHorizon, "make_step", failing_after)
+    scene = load_scene(models_dir / "small_tow.toml", {"top.heave": {"amplitude": 0.3}})
+    result = mpc(scene, MpcSettings(horizon=10.0), quiet=True)
+    assert "the plant failed" not in result.status, result.status
+    assert len(result.failures) == round(40.0 - 4.0)
+    rate = np.gradient(result.winch_angle, result.time)
+    jumps = np.abs(np.diff(rate))
+    before = jumps[result.time[1:] < 13.0].max()  # while the plans were fresh
+    assert jumps[result.time[1:] >= 13.0].max() < 3 * before  # no kick at t = 14 s
+
+
+def test_soft_clearance_rows_keep_the_closed_loop_qp_feasible(models_dir):
+    """c_min = delta (the floor 1 mm above the start) and a winch that can barely accelerate:
+    the hard QP has no solution, the real-time iteration's soft one has, and its status says by
+    how much it gave way."""
+    tight = {"seabed.minimum_clearance": 5.0, "winch.acceleration_max": 0.004}
+    scene = load_scene(models_dir / "small_tow.toml", tight)
+    settings, _ = resolved(scene, IpoptSettings(intervals=8))
+    problem = ipopt_problem(scene, settings)
+    values, guess = problem.parameter_values(), np.zeros(problem.control.size)
+    hard = GaussNewton(problem, GaussNewtonSettings(max_iter=1, real_time=False)).solve(
+        values, guess
+    )
+    assert not hard.success and "Infeasible" in hard.status, hard.status
+    soft = GaussNewton(problem, GaussNewtonSettings(max_iter=1, real_time=True)).solve(
+        values, guess
+    )
+    assert soft.success and "minimum clearance softened by" in soft.status
+
+
+def test_floating_rope_sunk_by_its_load(models_dir):
+    """HMPE (975 kg/m^3) under a 1 t frame hangs with every bond in tension; without the frame
+    it is refused naming cable.density and the load it needs."""
+    rope = {"cable.density": 975.0, "cable.diameter": 0.04}
+    with pytest.raises(SceneError, match=r"cable.density.*Add a payload of more than"):
+        load_scene(models_dir / "small_tow.toml", rope)
+    frame = {"end.payload": {"mass": 1000.0, "volume": 0.13, "drag_area": 1.0}}
+    frame["numerics.step"] = 0.05
+    scene = load_scene(models_dir / "small_tow.toml", {**rope, **frame})
+    run = simulate(scene, compiled=True)
+    assert np.all(run.end[:, 2] < run.top[:, 2] - 50.0)  # the end hangs well below the top
+    assert np.isfinite(run.omega)  # the run kept its bonds (simulate raises otherwise)
+
+
+@pytest.mark.parametrize(
+    "limits",
+    [
+        {"winch.angle_min": -2e-5, "winch.angle_max": 3e-5},
+        {"winch.rate_max": 2e-6},
+        {"winch.acceleration_max": 5e-9},
+    ],
+)
+def test_narrow_winch_limits_solve(models_dir, limits):
+    """Winch limits narrower than the QP's margins: the (nearly) locked winch is the answer."""
+    scene = load_scene(models_dir / "small_tow.toml", limits)
+    result = optimize(scene, quiet=True)
+    assert result.success, result.status
+    assert "LBA" not in result.status
+
+
+def test_closed_loop_in_a_narrow_winch_range(models_dir):
+    """+-0.3 rad (narrower than twice the 0.5 rad band): the band is derived, the loop runs;
+    a band over half the range is refused before any work, naming it."""
+    narrow = {"winch.angle_min": -0.3, "winch.angle_max": 0.3}
+    scene = load_scene(models_dir / "small_tow.toml", narrow)
+    result = mpc(scene, quiet=True)
+    assert "LBA" not in result.status and "Ill-posed" not in result.status
+    assert result.settings["limiter_band_rad"] == pytest.approx(0.15)
+    with pytest.raises(ValueError, match=r"limiter_band = 100 rad: must be at most half"):
+        mpc(scene, MpcSettings(limiter_band=100.0), quiet=True)
+
+
+@pytest.mark.parametrize(
+    ("make", "match"),
+    [
+        (lambda: IpoptSettings(elements=2.5), r"IpoptSettings.elements = 2.5: must be an integer"),
+        (lambda: IpoptSettings(max_iter=True), r"max_iter = True: must be an integer"),
+        (lambda: IpoptSettings(tolerance=math.nan), r"tolerance = nan: must be finite"),
+        (lambda: IpoptSettings(step=-0.1), r"step = -0.1 s: must be > 0"),
+        (lambda: IpoptSettings(solver="sqp"), r"solver = 'sqp': must be one of"),
+        (lambda: MpcSettings(sample="1"), r"MpcSettings.sample = '1' s: must be a number"),
+        (lambda: MpcSettings(heave_margin=math.inf), r"heave_margin = inf: must be finite"),
+        (lambda: NelderMeadSettings(fatol=math.nan), r"fatol = nan m: must be finite"),
+        (lambda: GaussNewtonSettings(rate_weight=-1.0), r"rate_weight = -1.0 s\^2: must be >="),
+    ],
+)
+def test_settings_are_checked_one_way(make, match):
+    with pytest.raises(ValueError, match=match):
+        make()
+
+
+def test_unknown_ipopt_option_refused_before_the_problem_is_built(small):
+    with pytest.raises(ValueError, match=r"IPOPT refuses them \(No such IPOPT option: colour\)"):
+        check_ipopt_options({"colour": "blue"})
+    settings = IpoptSettings(solver="ipopt", ipopt_options={"max_cpu_time": -3.0})
+    with pytest.raises(ValueError, match=r"ipopt_options"):
+        optimize(small, settings=settings, quiet=True)
