@@ -406,8 +406,11 @@ def fingerprint(scene: Scene, task: str, method: str, settings: Any) -> str:
 
 
 def _check_intervals(scene: Scene, settings: Any, case: int) -> None:
-    """IPOPT's shooting intervals must divide the RK4 steps: checked before any solve."""
-    if not isinstance(settings, IpoptSettings):
+    """IPOPT's shooting intervals must divide the RK4 steps: checked before any solve.
+
+    Intervals left to the optimiser (None) are derived so that they divide them.
+    """
+    if not isinstance(settings, IpoptSettings) or settings.intervals is None:
         return
     step = settings.step or scene.numerics.step
     try:
