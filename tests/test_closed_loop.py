@@ -44,15 +44,15 @@ def closed_loop(short_hill):
         ({"sample": 3.0, "horizon": 30.0}, "sample = 3.0 s must divide numerics.duration"),
         ({"sample": 0.0}, "sample = 0.0 s: must be > 0"),
         ({"sample": 5.02, "horizon": 10.04, "interval": 5.02, "step": 0.02}, "sample = 5.02 s"),
-        ({"interval": 3.0}, "interval = 3.0 s: must be > 0 and divide horizon = 20.0 s"),
+        ({"interval": 3.0}, "interval = 3.0 s: must divide horizon = 20.0 s"),
         ({"solver": "sqp"}, "solver = 'sqp': must be one of gauss-newton, ipopt"),
-        ({"rate_weight": float("nan")}, "rate_weight = nan s.2: must be finite and >= 0"),
+        ({"rate_weight": float("nan")}, "rate_weight = nan s.2: must be finite"),
         ({"elements": 16}, "elements = 16: the reduced model needs 1 .. model.elements = 15"),
-        ({"step": 0.3}, "step = 0.3 s: must be > 0 and divide sample"),
-        ({"heave_margin": 2.0}, "heave_margin = 2.0: must be in [0, 1]"),
+        ({"step": 0.3}, "step = 0.3 s: must divide sample"),
+        ({"heave_margin": 2.0}, "heave_margin = 2.0: must be <= 1"),
         ({"heave_filter": -1.0}, "heave_filter = -1.0 s"),
         ({"references": ("perfect",)}, "references"),
-        ({"max_iter": 0}, "max_iter = 0: must be an integer >= 1"),
+        ({"max_iter": 0}, "max_iter = 0: must be >= 1"),
     ],
 )
 def test_arguments_are_checked_with_their_range(short_hill, change, named):
@@ -155,13 +155,15 @@ def test_free_start_hermite_rates_are_the_derivatives():
     nodes = control.basis(np.arange(5) * 5.0)
     np.testing.assert_allclose(nodes[0] @ parameters, parameters[:5], atol=1e-12)
     np.testing.assert_allclose(nodes[1] @ parameters, parameters[5:], atol=1e-12)
-    # Moved on by one interval, the plan is the same angle; beyond its end it holds at rest.
+    # Moved on by one interval, the plan is the same angle; beyond its end it follows the C2
+    # extension that comes to rest (tests/test_derived_defaults.py).
     moved = control.resampled(parameters, 5.0)
     np.testing.assert_allclose(
         control.basis(t[t <= 15.0])[0] @ moved, control.basis(t[t <= 15.0] + 5.0)[0] @ parameters,
         atol=1e-12,
     )  # fmt: skip
-    assert moved[4] == parameters[4] and moved[-1] == 0.0
+    past = [b @ parameters for b in control.basis(np.array([25.0]))]
+    assert moved[4] == pytest.approx(past[0][0]) and moved[-1] == pytest.approx(past[1][0])
 
 
 def test_settings_are_one_dataclass_for_the_api_and_the_command_line(short_hill):

@@ -20,7 +20,7 @@ from cable_ocp.scene.schema import load_scene
 from cable_ocp.simulation.run import simulate
 
 # small_tow: 100 m cable, n = 4, 40 s; the same model for optimisation and verification.
-SETTINGS = IpoptSettings(step=0.25, intervals=8)
+SETTINGS = IpoptSettings(elements=4, step=0.25, intervals=8)
 
 
 @pytest.fixture(scope="module")
@@ -186,7 +186,7 @@ def test_hermite_basis_interpolates_its_nodes():
 
 # Output modes: small_tow over 20 s at h = 0.5 s, two Hermite intervals (a solve takes about 1 s).
 SHORT = {"numerics.duration": 20.0, "numerics.step": 0.5}
-TINY = IpoptSettings(intervals=2)
+TINY = IpoptSettings(elements=4, step=0.5, intervals=2)  # the scene's own model
 # IPOPT's banner ("This program contains Ipopt") prints once per process at most, so the tests
 # look for the log's header line.
 BANNER = "This is Ipopt version"
@@ -295,4 +295,4 @@ def test_intervals_that_do_not_divide_the_steps_are_refused_before_any_model(
     monkeypatch.setattr(WinchProblem, "from_scene", forbidden)
     scene = load_scene(models_dir / "small_tow.toml")  # 40 s at h = 0.5 s: 80 steps
     with pytest.raises(ValueError, match=r"intervals = 42 must divide the 80 RK4 steps"):
-        optimize(scene, quiet=True)
+        optimize(scene, settings=IpoptSettings(step=0.5, intervals=42), quiet=True)
