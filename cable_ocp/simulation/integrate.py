@@ -282,7 +282,7 @@ def integrate(
             )
             _check_block(model, states[block], norms, all_times[block], step, tolerance)
             largest = max(largest, float(norms.max()))
-            progress.update(all_times[block][-1])
+        progress.update(done * inner * step)  # also within an output of many calls
         # The next call takes about CALL_SECONDS at this one's wall time per step; its size a power
         # of two (or `most`), so that few Functions are built.
         wanted = CALL_SECONDS * size / max(elapsed, 1e-9)
