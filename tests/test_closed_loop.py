@@ -292,7 +292,7 @@ def test_the_plan_holds_the_winch_bounds_between_samples(short_hill):
     result = mpc(scene, quiet=True, references=(), heave_margin=0.0, **SHORT)
     low, high = result.angle_range
     assert result.success, result.status
-    band = MpcSettings().limiter_band
+    band = result.settings["limiter_band_rad"]
     assert result.planned_angle.max() > high - band - 0.05  # it rides the bound
     assert result.planned_angle.max() <= high + BOUND_TOLERANCE
     assert result.planned_angle.min() >= low - BOUND_TOLERANCE
