@@ -86,18 +86,26 @@ def available_memory() -> int:
     return os.sysconf("SC_PAGE_SIZE") * os.sysconf("SC_PHYS_PAGES")
 
 
-def check_grid_size(path: str, nx: int, ny: int) -> None:
+def check_grid_size(path: str, points: int, shape: str) -> None:
     """Refuse a grid whose spline cannot fit in memory, before its data are read.
+
+    Parameters
+    ----------
+    path : str
+    points : int
+        Grid points (or CSV rows).
+    shape : str
+        The grid's size in words, for the message (``"300 x 200"``).
 
     Raises
     ------
     GridError
-        ``nx ny`` points at :data:`GRID_BYTES_PER_POINT` are more than :func:`available_memory`.
+        ``points`` at :data:`GRID_BYTES_PER_POINT` are more than :func:`available_memory`.
     """
-    need, have = nx * ny * GRID_BYTES_PER_POINT, available_memory()
+    need, have = points * GRID_BYTES_PER_POINT, available_memory()
     if need > have:
         raise GridError(
-            f"{path}: a grid of {nx} x {ny} points needs about {need / 1e9:.3g} GB for its "
+            f"{path}: a grid of {shape} points needs about {need / 1e9:.3g} GB for its "
             f"spline ({GRID_BYTES_PER_POINT} bytes a point), more than the "
             f"{have / 1e9:.3g} GB available; crop it to the area the tow covers or coarsen it"
         )
@@ -223,7 +231,8 @@ def _netcdf_field(path: str, data, variable: str):
         raise GridError(
             f"{path}: variable {variable!r} has dimensions {field.dims}; expected ('x', 'y')"
         )
-    check_grid_size(path, field.sizes["x"], field.sizes["y"])
+    nx, ny = field.sizes["x"], field.sizes["y"]
+    check_grid_size(path, nx * ny, f"{nx} x {ny}")
     return field
 
 
@@ -277,7 +286,7 @@ def _csv_rows(path: str) -> np.ndarray:
     if not numbered:
         what = "only a header line" if header else "an empty file"
         raise GridError(f"{path}: no data rows ({what}); expected rows x, y, z (m)")
-    check_grid_size(path, len(numbered), 1)
+    check_grid_size(path, len(numbered), f"{len(numbered)} rows, as many")
     try:
         rows = np.loadtxt([line for _, line in numbered], delimiter=",", ndmin=2)
     except ValueError:
