@@ -319,6 +319,7 @@ class GaussNewton:
         current = self._linearised_start(values, parameters)
         function_time += time.perf_counter() - begun
         history, status, success, iterations = [], "", False, 0
+        refreshed = False  # the Jacobian in use was evaluated at the current point
         if self.log is not None:
             self.log.restart()
         if not current.finite:
@@ -370,6 +371,14 @@ class GaussNewton:
                         accepted = True
                         break
                 fraction /= 2
+            if not accepted and not refreshed:
+                # The Jacobian may be a kept one (or the last solve's): evaluate it here and
+                # try again before giving up (a reach-limited whole-space case stalled so).
+                begun = time.perf_counter()
+                current = self.linearisation(values, parameters)
+                function_time += time.perf_counter() - begun
+                refreshed = True
+                continue
             if not accepted:
                 # Round-off: near the optimum the predicted decrease is below what the
                 # simulation resolves.
@@ -381,6 +390,7 @@ class GaussNewton:
                     + (f" (the end {breach:.3g} m under the minimum clearance)" if breach else "")
                 )
                 break
+            refreshed = False
             begun = time.perf_counter()
             current = self._linearised_after(values, current, candidate, trial, fraction * step)
             function_time += time.perf_counter() - begun
