@@ -37,6 +37,7 @@ from cable_ocp.model import structured
 from cable_ocp.model.cable import CableModel
 from cable_ocp.model.compile import CompileReport
 from cable_ocp.model.layout import INPUT_SIZE
+from cable_ocp.simulation.budget import check_memory, optimisation_memory
 from cable_ocp.simulation.integrate import step_compile_report, step_function
 from cable_ocp.simulation.progress import IterationLog, check_verbosity
 from cable_ocp.simulation.seabed import trapezoid_weights
@@ -239,6 +240,8 @@ def resolved(scene, settings: IpoptSettings, compiled: bool | None = None):
         notes.append(f"reduced model of {elements} elements")
     if settings.step is not None and settings.intervals is not None:
         steps_per_interval(duration, settings.step, settings.intervals)
+    if settings.step is not None:
+        _check_memory(scene, settings, elements, settings.step, settings.intervals)
     open_loop, _ = WinchProblem.open_loop_scene(scene)
     limit, at = defaults.run_limit(open_loop, elements, duration, compiled)
     choice = None
@@ -264,9 +267,22 @@ def resolved(scene, settings: IpoptSettings, compiled: bool | None = None):
         notes.append(choice.describe("at"))
     if settings.intervals is None:
         notes.append(f"{intervals} intervals of {duration / intervals:.3g} s")
+    _check_memory(scene, settings, elements, step, intervals)
     chosen = replace(settings, elements=elements, step=step, intervals=intervals)
     text = "derived settings: " + ", ".join(notes) if notes else ""
     return chosen, text
+
+
+def _check_memory(scene, settings: IpoptSettings, elements: int, step: float, intervals) -> None:
+    """Refuse a transcription whose arrays cannot fit in memory, naming the step."""
+    intervals = intervals or defaults.control_intervals(scene.numerics.duration)
+    size = scene.winch.knots if settings.control == "spline" else 2 * intervals
+    estimate = optimisation_memory(scene, step, elements=elements, parameters=size)
+    check_memory(
+        estimate,
+        f"step = {step:g} s of the optimisation model",
+        "give a larger step, or leave it unset to derive one",
+    )
 
 
 def ipopt_problem(scene, settings: IpoptSettings) -> WinchProblem:
