@@ -161,10 +161,10 @@ BAD = [
     ({"model.elements": math.inf}, r"^model\.elements: expected an integer, got float inf"),
     (
         {"cable.density": 500.0},
-        r"^cable\.density = 500\.0 is out of range: must be > "
-        r"environment\.water_density = 1025\.0 kg/m\^3 when environment\.submerged is true",
+        r"^cable\.density = 500\.0 kg/m\^3 is not denser than environment\.water_density = "
+        r"1025\.0 kg/m\^3: the rope's buoyancy \(606\.1 kg\) must be outweighed",
     ),
-    ({"cable.density": 1025.0}, r"^cable\.density = 1025\.0 is out of range"),
+    ({"cable.density": 1025.0}, r"^cable\.density = 1025\.0 kg/m\^3 is not denser"),
     ({"numerics.step": 1e-300}, r"^numerics\.step = 1e-300 .* >= numerics\.duration / 1e\+08"),
     ({"cable.diameter": 1e200}, r"^cable: cross_section_area overflows \(diameter = 1e\+200 m"),
     ({"cable.youngs_modulus": 1e308}, r"^cable: bending_stiffness overflows"),

@@ -146,7 +146,7 @@ def test_bad_sweep_file_names_the_key(tmp_path, body, message):
         ('scene = "hanging"\ntask = "optimize"\n[optimizer]\nsteps = 1',
          "optimizer.steps: unknown key for method = 'ipopt'"),
         ('scene = "hanging"\ntask = "optimize"\n[optimizer]\nmax_iter = 0',
-         "optimizer: max_iter = 0: must be >= 1"),
+         "optimizer: IpoptSettings.max_iter = 0: must be >= 1"),
         ('scene = "small_tow"\ntask = "optimize"\n[optimizer]\nstep = 0.25\nintervals = 7',
          "optimizer.intervals = 7 (case 0): must divide the 160 RK4 steps"),
         ('scene = "hanging"\n[set]\n"model.elements" = 0',
@@ -416,7 +416,7 @@ def test_sweep_defaults_are_the_methods_table(tmp_path, monkeypatch):
     for method in ("ipopt", "nelder-mead"):
         spec = load_sweep(write(tmp_path, base + f'method = "{method}"\n' + duration))
         assert spec.settings == METHODS[method].default
-        assert spec.settings.elements is not None  # a reduced model, as on the command line
+        assert spec.settings.elements is None  # derived from each case's scene, as optimize()
         options = f'method = "{method}"\n[optimizer]\nelements = 4\n' + duration
         spec = load_sweep(write(tmp_path, base + options))
         assert spec.settings == replace(METHODS[method].default, elements=4)

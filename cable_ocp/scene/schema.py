@@ -787,8 +787,8 @@ class Scene(_Validated):
             if load <= lift:
                 raise SceneError(
                     "cable.density",
-                    f" = {self.cable.density!r} kg/m^3 is lighter than environment.water_density "
-                    f"= {water!r} kg/m^3: the rope's buoyancy ({lift:.4g} kg) must be outweighed "
+                    f" = {self.cable.density!r} kg/m^3 is not denser than "
+                    f"environment.water_density = {water!r} kg/m^3: the rope's buoyancy ({lift:.4g} kg) must be outweighed "
                     f"by the load at its end (end.payload mass less its displaced water, less "
                     f"end.force[2]/g: {load:.4g} kg), or the rope floats. Add a payload of more "
                     f"than {lift - load:.4g} kg, or use a rope denser than water",
