@@ -788,10 +788,11 @@ class Scene(_Validated):
                 raise SceneError(
                     "cable.density",
                     f" = {self.cable.density!r} kg/m^3 is not denser than "
-                    f"environment.water_density = {water!r} kg/m^3: the rope's buoyancy ({lift:.4g} kg) must be outweighed "
-                    f"by the load at its end (end.payload mass less its displaced water, less "
-                    f"end.force[2]/g: {load:.4g} kg), or the rope floats. Add a payload of more "
-                    f"than {lift - load:.4g} kg, or use a rope denser than water",
+                    f"environment.water_density = {water!r} kg/m^3: the rope's buoyancy "
+                    f"({lift:.4g} kg) must be outweighed by the load at its end (end.payload mass "
+                    f"less its displaced water, less end.force[2]/g: {load:.4g} kg), or the rope "
+                    f"floats. Add a payload of more than {lift - load:.4g} kg, or use a rope "
+                    "denser than water",
                 )
         w, top = self.winch, self.top_element_length
         reach = w.top_length_min - w.drum_radius * w.angle_min
