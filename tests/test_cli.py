@@ -63,7 +63,7 @@ BAD_ARGUMENTS = [
     (["simulate", HANGING, "--out", "o", "--set", "cable.length=1e400"],
      "cable.length = inf is out of range: must be finite"),
     (["simulate", HANGING, "--out", "o", "--set", "cable.density=500"],
-     "cable.density = 500.0 kg/m^3 is lighter than environment.water_density = 1025.0 kg/m^3"),
+     "cable.density = 500.0 kg/m^3 is not denser than environment.water_density = 1025.0 kg/m^3"),
     (["simulate", HANGING, "--out", "o", "--set", "model.elements"], "expected KEY=VALUE"),
     (["validate", "--elements", "0"], "argument --elements: 0 is out of range: must be 1 to 1000"),
     (["validate", "--elements", "1e400"], "argument --elements: expected an integer"),
