@@ -87,6 +87,15 @@ def test_an_optimiser_and_a_locked_run_that_both_fail_exit_3_with_the_result(tmp
     assert not OcpResult.load(out).success
 
 
+def test_optimize_refuses_an_end_that_starts_in_the_seabed(tmp_path, capsys, no_optimiser):
+    grid = flat_grid(tmp_path / "shallow.csv", x_max=100.0, depth=98.0)
+    code, _, stderr = run_cli(["optimize", SMALL_TOW, "--set", grid, "--out", tmp_path / "o"],
+                              capsys)  # fmt: skip
+    assert code == 2
+    assert "error: seabed.grid: the end starts 2 m under the seabed" in stderr
+    assert len(stderr.splitlines()) == 1 and not (tmp_path / "o").exists()
+
+
 # --- the optimiser's messages name the options given ---------------------------------------------
 
 

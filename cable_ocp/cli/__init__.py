@@ -172,12 +172,30 @@ def _check_step(scene, step: float | None) -> None:
         ) from None
 
 
+def _check_start(scene) -> None:
+    """Refuse, as ``simulate`` does, an end that starts off the grid or under the seabed.
+
+    Only a bathymetry grid can put the start there; its statics are all it costs, before the
+    optimiser's work (``OffGridError``: exit 2, one line).
+    """
+    if not scene.seabed.absolute:
+        return
+    from cable_ocp.drive.drive import Drive
+    from cable_ocp.model.cable import CableModel
+    from cable_ocp.simulation.seabed import check_start
+    from cable_ocp.simulation.statics import starting_state
+
+    start = starting_state(CableModel.from_scene(scene), Drive.from_scene(scene))
+    check_start(scene.seabed, start[:3])
+
+
 def _optimize(args) -> int:
     from cable_ocp import plots
     from cable_ocp.control.optimization import optimize
 
     scene = load_scene(args.scene, parse_overrides(args.set))
     _check_step(scene, args.step)
+    _check_start(scene)
     output = {"quiet": args.quiet, "verbose": args.verbose}
     if args.method == "ipopt":
         settings = _ipopt_settings(args)
@@ -232,6 +250,7 @@ def _compare(args) -> int:
     scenes = [load_scene(path, overrides) for path in args.scenes]  # all checked before solving
     for scene in scenes:
         _check_step(scene, args.step)
+        _check_start(scene)
     base, simplex = _ipopt_settings(args), _nelder_mead_settings(args)
     output = {"quiet": args.quiet, "verbose": args.verbose}
     rows = []
