@@ -175,7 +175,8 @@ def test_compiled_equilibrium_matches_the_symbolic_one(models_dir, validation):
 
 # ----------------------------------------------------------------------------------------------
 # In a current.
-CURRENTS = [(0.0, v, 0.0) for v in (1.0, 2.0, 5.0, 10.0, 50.0)] + [(5.0, 0.0, 0.0), (3.0, 4.0, 0.0)]
+# Up to the 10 m/s that a scene accepts (the fastest tidal streams).
+CURRENTS = [(0.0, v, 0.0) for v in (1.0, 2.0, 5.0, 10.0)] + [(5.0, 0.0, 0.0), (3.0, 4.0, 0.0)]
 
 
 def in_current(models_dir, current, **overrides):
@@ -267,7 +268,7 @@ def test_equilibrium_in_a_current_is_the_trailing_shape(models_dir, current, val
         ((0.0, 10.0, 0.0), {}),
         ((4.0, 0.0, 0.0), {"end.force": [0.0, 5000.0, -20000.0]}),
         ((0.0, 8.0, 0.0), {"end.force": [0.0, -20000.0, 0.0]}),
-        ((0.0, 20.0, 0.0), {"end.payload.mass": 5000.0, "end.payload.volume": 1.0,
+        ((0.0, 9.0, 0.0), {"end.payload.mass": 5000.0, "end.payload.volume": 1.0,
                             "end.payload.drag_area": 2.0}),
     ],
     ids=["10m/s", "x-current+end-force", "upstream-end-force", "payload"],
