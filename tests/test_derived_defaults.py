@@ -231,3 +231,21 @@ def test_unknown_ipopt_option_refused_before_the_problem_is_built(small):
     settings = IpoptSettings(solver="ipopt", ipopt_options={"max_cpu_time": -3.0})
     with pytest.raises(ValueError, match=r"ipopt_options"):
         optimize(small, settings=settings, quiet=True)
+
+
+def test_the_optimisation_models_runs_may_leave_the_grid(models_dir):
+    """The guess's and the trials' runs are scored with the grid held at its edge (as the
+    transcription's symbolic error is); only the verified profile must stay on it."""
+    from cable_ocp.simulation.seabed import OffGridError, clearance_error
+
+    scene = load_scene(models_dir / "survey.toml", {"numerics.duration": 20.0})
+    settings, _ = resolved(scene, IpoptSettings())
+    problem = ipopt_problem(scene, settings)
+    states = problem.simulate(np.zeros(problem.control.size), compiled=True).copy()
+    states[-5:, 0] = 1e4  # far beyond the grid's x = 300 m
+    with pytest.raises(OffGridError):
+        clearance_error(scene.seabed, states[:, :3])
+    held = problem.clearance(states)
+    edge = states.copy()
+    edge[-5:, 0] = 300.0
+    np.testing.assert_allclose(held, clearance_error(scene.seabed, edge[:, :3]), atol=1e-12)

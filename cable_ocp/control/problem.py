@@ -23,7 +23,12 @@ from cable_ocp.drive.controls import HermiteIntervals, KnotSpline
 from cable_ocp.drive.drive import Drive
 from cable_ocp.model.cable import CableModel
 from cable_ocp.simulation.integrate import integrate, stage_inputs, step_count
-from cable_ocp.simulation.seabed import clearance_error, clearance_reference, rms_objective
+from cable_ocp.simulation.seabed import (
+    bathymetry,
+    clearance_error,
+    clearance_reference,
+    rms_objective,
+)
 from cable_ocp.simulation.statics import starting_state
 
 # Bond residual allowed in the runs of the optimisation model, as a share of its element length
@@ -215,8 +220,18 @@ class WinchProblem:
         return run.states
 
     def clearance(self, states: np.ndarray) -> np.ndarray:
-        """Clearance error e(t) (m) of states of the optimisation model."""
-        return clearance_error(self.scene.seabed, states[:, :3])
+        """Clearance error e(t) (m) of states of the optimisation model.
+
+        Off a bathymetry grid the seabed is held at the grid's edge, as in the transcriptions'
+        symbolic error: the optimisation model's runs (the first guess, a trial) may leave the
+        grid; only the verified profile must stay on it.
+        """
+        positions = np.array(states[:, :3], dtype=float)
+        grid = bathymetry(self.scene.seabed)
+        if grid is not None:
+            positions[:, 0] = np.clip(positions[:, 0], grid.x[0], grid.x[-1])
+            positions[:, 1] = np.clip(positions[:, 1], grid.y[0], grid.y[-1])
+        return clearance_error(self.scene.seabed, positions)
 
     def omega(self, states: np.ndarray) -> float:
         """Omega (eq. 39, m) of states of the optimisation model on the grid."""
