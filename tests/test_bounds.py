@@ -130,7 +130,7 @@ def test_verification_failure_is_a_failed_result(short, monkeypatch):
     monkeypatch.setattr(verification_module, "checked_simulation", broken)
     result = optimize(short, "ipopt", IpoptSettings(intervals=2), quiet=True)
     assert not result.success
-    assert "; verification failed: no trustworthy full-model simulation" in result.status
+    assert "; verification failed: no trustworthy simulation of the full model" in result.status
     assert result.status.startswith("Gauss-Newton converged")
     assert "at h = 0.125 s" in result.status and "bonds tore" in result.status
     assert result.trajectory is None and np.isnan(result.omega)

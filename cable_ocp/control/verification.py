@@ -200,9 +200,11 @@ def verify_profile(
             return Verification(None, reason, trial.numerics.step)
         note = ""
         if drifted:
+            first = trials[0][0]
+            what = "the model-correction run" if first > numerics.step else "the verification run"
             note = (
-                f"verified at h = {trial.numerics.step:g} s, since the run at "
-                f"h = {trials[0][0]:g} s failed ({drifted[0]})"
+                f"{what} at h = {first:g} s failed ({drifted[0]}); it was run at "
+                f"h = {trial.numerics.step:g} s"
             )
         lowest, when, broken = lowest_clearance(scene.seabed, trajectory)
         return Verification(
@@ -217,8 +219,9 @@ def verify_profile(
             trajectory,
         )
     reason = (
-        f"no trustworthy full-model simulation at the scene's step or {STEP_HALVINGS} halvings "
-        f"of it: {'; '.join(drifted)}"
+        f"no trustworthy simulation of the full model (the scene's own, n = "
+        f"{scene.model.elements}) at the scene's step or {STEP_HALVINGS} halvings of it: "
+        f"{'; '.join(drifted)}"
     )
     return Verification(None, reason, numerics.step / 2**STEP_HALVINGS)
 
