@@ -8,8 +8,8 @@ checks the defaults derived from the scene (:mod:`cable_ocp.control.defaults`).
 
 Three fields depend on the scene drawn, as a user would set them after a first look:
 
-- ``numerics.constraint_tolerance``: paper_hill's share of the segment length
-  (:data:`BOND_SHARE`);
+- ``numerics.constraint_tolerance``: paper_hill's 0.1 mm, or its share of the segment length
+  on longer segments (:data:`BOND_SHARE`);
 - ``numerics.step`` of the scene's own model: the largest of :data:`STEP_LADDER` within a
   quarter of the model's RK4 limit along its locked run (a user reads the limit off
   ``cable-ocp study stability``; the benchmark takes it from
@@ -43,9 +43,9 @@ STEP_LADDER = (0.1, 0.05, 0.025, 0.02, 0.01, 0.005, 0.0025, 0.002, 0.001)
 # out the heave) left 1.4e-4 m in their bonds at h = 0.1 s; at 0.05 s they held.
 STEP_SHARE = 0.25
 GRID_MARGIN = 80.0  # m around the locked path
-# The bond tolerance a user gives, as a share of the segment length: paper_hill's 0.1 mm on its
-# 20 m segments (a moving winch needs more than the schema's 1e-6 m, as paper_hill says).
-BOND_SHARE = 1e-4 / 20.0
+# The bond tolerance a user gives: paper_hill's 0.1 mm (a moving winch needs more than the
+# schema's 1e-6 m, as paper_hill says), or its share of the segment length on longer segments.
+BOND_TOLERANCE, BOND_SHARE = 1e-4, 1e-4 / 20.0
 
 
 @dataclass(frozen=True)
@@ -298,7 +298,7 @@ def space_scene(overrides: dict, folder: Path):
     given["seabed.hills"] = []
     given.setdefault("numerics.step", 0.001)  # any valid step: the user's is set below
     scene = load_scene(scene_path("paper_hill"), given)
-    tolerance = float(f"{BOND_SHARE * scene.segment_length:.2g}")
+    tolerance = max(BOND_TOLERANCE, float(f"{BOND_SHARE * scene.segment_length:.2g}"))
     scene = scene.updated(
         {"numerics.step": scene_step(scene), "numerics.constraint_tolerance": tolerance}
     )
