@@ -37,11 +37,13 @@ def _cause(folder: Path, error: RuntimeError) -> str:
     files = sorted(folder.rglob("*.nc"), key=lambda p: p.stat().st_mtime)
     name = files[-1].name if files else "the results"
     limit = _size_limit()
-    if limit is not None and files and files[-1].stat().st_size >= limit:
+    # A write that would cross the limit fails whole, so the file may stop short of it.
+    if limit is not None:
+        size = files[-1].stat().st_size if files else 0
         return (
             f"writing {name}: the file is too large for this process's file-size limit of "
-            f"{limit} bytes (ulimit -f, prlimit --fsize); raise the limit or write less "
-            "(numerics.output_every)"
+            f"{limit} bytes (ulimit -f, prlimit --fsize; it got to {size} bytes); raise the "
+            "limit or write less (numerics.output_every)"
         )
     free = shutil.disk_usage(folder).free
     if free < FULL_DISK:
