@@ -19,7 +19,7 @@ from cable_ocp.cli.files import results_folder
 from cable_ocp.cli.mpc import add_mpc_command
 from cable_ocp.cli.sweep import add_sweep_command
 from cable_ocp.scene.bundled import models_dir
-from cable_ocp.scene.output import check_target, json_text
+from cable_ocp.scene.output import claimed_target, json_text
 from cable_ocp.scene.schema import load_scene
 
 try:
@@ -541,11 +541,10 @@ def main(argv: list[str] | None = None) -> int:
         return exit_.code if isinstance(exit_.code, int) else 0
     prefix = f"cable-ocp {args.command}"
     try:
-        # Before any work, so a bad --out costs nothing; a sweep folder is resumed, and
-        # cable_ocp.sweep checks it as its own.
-        if getattr(args, "out", None) is not None and args.command != "sweep":
-            check_target(args.out)
-        return args.run(args)
+        # Before any work, so a bad or busy --out costs nothing, and held to the last write; a
+        # sweep folder is resumed, and cable_ocp.sweep checks and locks it as its own.
+        with claimed_target(getattr(args, "out", None) if args.command != "sweep" else None):
+            return args.run(args)
     except KeyboardInterrupt:
         print(f"{prefix}: interrupted", file=sys.stderr)
         return 130

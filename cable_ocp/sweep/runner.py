@@ -29,7 +29,6 @@ from cable_ocp.sweep.store import (
     check_folder,
     claim_folder,
     folder_lock,
-    mark_folder,
     read_case,
     remove_scratch,
     save_dataset,
@@ -201,10 +200,9 @@ def run_sweep(
     started = time.perf_counter()
     check_engine(scheduler, workers if processes else None)
     folder = Path(out).expanduser().resolve()
-    check_folder(folder, spec)  # before anything is written
-    mark_folder(folder)
     report = SweepReport(dataset=xr.Dataset(), path=folder / "sweep.nc")
     with folder_lock(folder, f"cable-ocp sweep {spec.path}"):
+        check_folder(folder, spec)  # before anything is written
         claim_folder(folder, spec)
         remove_scratch(folder)
         statuses = case_statuses(folder, spec)

@@ -3,7 +3,7 @@
 Layout of ``DIR``::
 
     DIR/.cable_ocp-results    the marker of a results folder (cable_ocp.scene.output.MARKER)
-    DIR/.sweep.lock           held by the sweep running here; names its owner
+    .DIR.cable_ocp-lock       beside DIR: held by the run writing DIR, names its owner
     DIR/sweep.json            the manifest: sweep file, and each case's overrides and fingerprint
     DIR/sweep.toml            a copy of the sweep file
     DIR/cases/case_00007.nc   case 7, written atomically (temporary file + rename) as it finishes
@@ -28,8 +28,6 @@ from __future__ import annotations
 
 import json
 import os
-import socket
-import time
 from collections.abc import Iterator
 from contextlib import contextmanager
 from dataclasses import asdict
@@ -39,19 +37,15 @@ from typing import Any
 import numpy as np
 import xarray as xr
 
-from cable_ocp.scene.output import MARKER, check_target, file_mode, write_atomic
+from cable_ocp.scene.output import MARKER, FolderInUse, check_target, file_mode, write_atomic
+from cable_ocp.scene.output import folder_lock as output_lock
 from cable_ocp.sweep.execute import SERIES
 from cable_ocp.sweep.spec import Case, SweepSpec
-
-try:
-    import fcntl
-except ModuleNotFoundError:  # Windows: no lock, one sweep per folder is then the user's care
-    fcntl = None
 
 SCALARS = ("omega", "wall_time")
 OPTIMIZE_SCALARS = ("omega_model", "iterations", "evaluations")
 TEXT = ("status", "reason")
-LOCK = ".sweep.lock"
+LOCK = ".sweep.lock"  # the lock inside the folder of cable_ocp up to 0.3: left alone
 # What a sweep writes in its folder: a folder holding anything else is not a sweep's.
 SWEEP_NAMES = {MARKER, LOCK, "sweep.json", "sweep.toml", "cases", "sweep.nc"}
 RECOVER = "rerun the same command with --retry-failed to compute it again"
@@ -270,41 +264,24 @@ def remove_scratch(folder: Path) -> list[Path]:
 
 @contextmanager
 def folder_lock(folder: Path, what: str = "") -> Iterator[None]:
-    """Hold ``folder/.sweep.lock`` for the block; refuse a folder another sweep holds.
+    """Hold the sweep folder's lock for the block; refuse a folder another process holds.
 
-    The lock is the operating system's (``flock``), so it is released when its owner ends, in
-    whatever way; the file names the owner (host, process, start, ``what``) for the message.
+    The one lock of a results folder (:func:`cable_ocp.scene.output.folder_lock`), so a sweep
+    and any other command never write one folder at the same time.
 
     Raises
     ------
     ValueError
         Naming the folder and the owner, if another process holds the lock.
     """
-    folder = Path(folder)
-    folder.mkdir(parents=True, exist_ok=True)
-    path = folder / LOCK
-    handle = os.open(path, os.O_RDWR | os.O_CREAT, file_mode(folder))
     try:
-        os.fchmod(handle, file_mode(folder))
-    except PermissionError:  # another user's lock file: its mode is theirs
-        pass
-    try:
-        if fcntl is not None:
-            try:
-                fcntl.flock(handle, fcntl.LOCK_EX | fcntl.LOCK_NB)
-            except OSError:
-                owner = os.pread(handle, 1000, 0).decode(errors="replace").strip() or "unknown"
-                raise ValueError(
-                    f"--out {folder} is in use by another sweep ({owner}): wait for it to end, "
-                    "or give another --out"
-                ) from None
-        started = time.strftime("%Y-%m-%d %H:%M:%S")
-        owner = f"pid {os.getpid()} on {socket.gethostname()} since {started}"
-        os.ftruncate(handle, 0)
-        os.pwrite(handle, f"{owner}{', ' + what if what else ''}\n".encode(), 0)
-        yield
-    finally:
-        os.close(handle)  # releases the lock
+        with output_lock(folder, what or None, reentrant=False):
+            yield
+    except FolderInUse as error:
+        raise ValueError(
+            f"--out {folder} is in use by another {'sweep' if ' sweep ' in error.holder else 'run'}"
+            f" ({error.holder}): wait for it to end, or give another --out"
+        ) from None
 
 
 def case_statuses(folder: Path, spec: SweepSpec) -> dict[int, str]:
