@@ -29,6 +29,7 @@ from cable_ocp.control.closed_loop.settings import MpcSettings
 from cable_ocp.control.ocp import IpoptSettings
 from cable_ocp.control.optimization import OcpResult
 from cable_ocp.scene import labelled
+from cable_ocp.scene.schema import load_scene
 
 MODELS = Path(__file__).resolve().parent.parent / "models"
 SMALL_TOW = str(MODELS / "small_tow.toml")
@@ -249,6 +250,9 @@ def test_the_iterations_per_solve_follow_the_solver():
         return settings_from(parser.parse_args(["mpc", SMALL_TOW, "--out", "o", *options]))
 
     assert settings() == MpcSettings()
-    assert settings("--solver", "ipopt").max_iter == IpoptSettings().max_iter
+    scene = load_scene(SMALL_TOW)  # unset, it follows the solver when the loop resolves it
+    ipopt = settings("--solver", "ipopt").resolved(scene)[0]
+    assert ipopt.max_iter == IpoptSettings().max_iter
+    assert settings().resolved(scene)[0].max_iter == 1
     assert settings("--solver", "ipopt", "--max-iter", "7").max_iter == 7
     assert settings("--max-iter", "2").max_iter == 2

@@ -101,15 +101,11 @@ def add_mpc_command(subparsers) -> None:
 def settings_from(args: argparse.Namespace) -> MpcSettings:
     """The closed loop's settings from the command line's options.
 
-    ``--max-iter`` follows the solver when it is not given: one Gauss-Newton step (the real-time
-    iteration, ``MpcSettings``' default) or IPOPT's own default (``IpoptSettings.max_iter``),
-    since one IPOPT iteration never converges.
+    ``--max-iter`` follows the solver when it is not given (:meth:`MpcSettings.resolved`): one
+    Gauss-Newton step (the real-time iteration) or IPOPT's own default, since one IPOPT
+    iteration never converges.
     """
-    from cable_ocp.control.ocp import IpoptSettings
-
     max_iter = args.max_iter
-    if max_iter is None:
-        max_iter = IpoptSettings().max_iter if args.solver == "ipopt" else MpcSettings().max_iter
     return MpcSettings(
         horizon=args.horizon,
         sample=args.sample,

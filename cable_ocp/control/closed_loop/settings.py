@@ -7,6 +7,7 @@ from dataclasses import asdict, dataclass, replace
 
 from cable_ocp.control import defaults
 from cable_ocp.control.checks import Rule, check_fields
+from cable_ocp.control.ocp import IpoptSettings
 from cable_ocp.drive.bounds import angle_bounds
 
 REFERENCES = ("locked", "open-loop")
@@ -38,7 +39,7 @@ _RULES = {
     "heave_margin": Rule("number", low=0),
     "limiter_band": Rule("number", above=0, unit="rad", optional=True),
     "rate_weight": Rule("number", low=0, unit="s^2"),
-    "max_iter": Rule("integer", low=1),
+    "max_iter": Rule("integer", low=1, optional=True),
 }
 
 
@@ -94,8 +95,9 @@ class MpcSettings:
         on 1.
     rate_weight : float, s^2
         Weight of the pay-out speed ``(r_D phi')^2`` against ``e^2`` in the objective.
-    max_iter : int
-        Iterations per solve: IPOPT's, or Gauss-Newton steps (1: the real-time iteration).
+    max_iter : int or None
+        Iterations per solve: IPOPT's, or Gauss-Newton steps (None: 1 for Gauss-Newton, the
+        real-time iteration; 300 for IPOPT, so that ``solver="ipopt"`` alone converges).
     references : tuple of str
         Reference runs on the same plant: ``"locked"`` (winch locked), ``"open-loop"`` (the
         open-loop optimum of ``cable_ocp.optimize`` on the scene without its heave, applied as it
@@ -113,7 +115,7 @@ class MpcSettings:
     heave_margin: float = 0.5
     limiter_band: float | None = None
     rate_weight: float = 1e-4
-    max_iter: int = 1
+    max_iter: int | None = None
     references: tuple[str, ...] = ("locked",)
 
     def __post_init__(self):
@@ -193,8 +195,17 @@ class MpcSettings:
             defaults.check_step(
                 step, limit, "step", "leave it unset to derive one, or give a smaller step"
             )
+        max_iter = self.max_iter
+        if max_iter is None:  # one Gauss-Newton step (the real-time iteration), or IPOPT's own
+            max_iter = 1 if self.solver == "gauss-newton" else IpoptSettings().max_iter
         chosen = replace(
-            self, horizon=horizon, sample=sample, interval=interval, step=step, limiter_band=band
+            self,
+            horizon=horizon,
+            sample=sample,
+            interval=interval,
+            step=step,
+            limiter_band=band,
+            max_iter=max_iter,
         )
         chosen.check(scene)
         return chosen, ("derived settings: " + ", ".join(notes)) if notes else ""
