@@ -338,36 +338,86 @@ def write(dataset: xr.Dataset, path: Path) -> Path:
     return path
 
 
+# Deflate, the netCDF4 compression, packs at most about 1032 bytes into one: a file cannot hold
+# more data than that many times its size.
+DEFLATE_RATIO = 1032
+
+
 def read(path: Path, kind: str) -> xr.Dataset:
     """A result's Dataset from ``path``, loaded into memory (the file is closed).
+
+    Before any data is read, the file's declared contents are checked (:func:`_check_declared`):
+    its kind and format, sizes that the file can hold, booleans stored as 0 or 1.
 
     Raises
     ------
     ValueError
-        Naming the file: it is missing, unreadable, not a cable_ocp result of this kind, or
-        written in a newer format than this cable_ocp reads (with the versions).
+        Naming the file: it is missing, unreadable, not a cable_ocp result of this kind, written
+        in a newer format than this cable_ocp reads (with the versions), or declaring more data
+        than it holds, or a field that does not fit.
     """
     path = Path(path)
     try:
+        with xr.open_dataset(path, decode_cf=False) as raw:
+            _check_declared(path, raw, kind)
         with xr.open_dataset(path) as dataset:
             dataset = dataset.load()
     except FileNotFoundError:
         raise ValueError(f"{path}: no such file") from None
+    except _Refused as error:
+        raise ValueError(f"{path}: {error}") from None
     except (OSError, ValueError, KeyError, TypeError, RuntimeError) as error:
         detail = " ".join(str(error).split())[:160]
         raise ValueError(f"{path}: not a readable netCDF file ({detail})") from None
-    found, version = dataset.attrs.get(KIND), dataset.attrs.get(VERSION)
+    return dataset
+
+
+class _Refused(Exception):
+    """A file that is netCDF but not a readable result (the message names the field)."""
+
+
+def _check_declared(path: Path, raw: xr.Dataset, kind: str) -> None:
+    """Check what the file declares, reading no more than its booleans; _Refused if it is bad."""
+    found, version = raw.attrs.get(KIND), raw.attrs.get(VERSION)
     if found is None:
-        raise ValueError(f"{path}: not a cable_ocp result (no attribute {KIND})")
+        raise _Refused(f"not a cable_ocp result (no attribute {KIND})")
     if found != kind:
-        raise ValueError(f"{path}: holds a {found}, not a {kind}")
-    if not isinstance(version, int | np.integer) or version > FORMAT:
-        writer = dataset.attrs.get(WRITER, "unknown")
-        raise ValueError(
-            f"{path}: written in result format {version} by cable_ocp {writer}; cable_ocp "
+        raise _Refused(f"holds a {found}, not a {kind}")
+    if not isinstance(version, int | np.integer) or isinstance(version, bool | np.bool_):
+        raise _Refused(f"{VERSION} = {version!r:.40}: expected an integer (the result format)")
+    if version > FORMAT:
+        writer = raw.attrs.get(WRITER, "unknown")
+        raise _Refused(
+            f"written in result format {version} by cable_ocp {writer}; cable_ocp "
             f"{package_version()} reads formats {FORMATS}: install a newer cable_ocp"
         )
-    return dataset
+    if version != FORMAT:
+        raise _Refused(f"{VERSION} = {version}: not a format of netCDF results (that is {FORMAT})")
+    size = path.stat().st_size
+    declared = 0.0
+    for variable in raw.variables.values():
+        nbytes = float(np.prod(variable.shape, dtype=float)) * variable.dtype.itemsize
+        packed = variable.encoding.get("zlib") or variable.encoding.get("compression")
+        declared += nbytes / DEFLATE_RATIO if packed else nbytes
+    if declared > size:
+        largest = max(raw.variables, key=lambda name: raw.variables[name].size)
+        shape = dict(zip(raw.variables[largest].dims, raw.variables[largest].shape, strict=True))
+        raise _Refused(
+            f"declares more data than its {size} bytes can hold ({largest} over {shape}): "
+            "a damaged or forged file"
+        )
+    booleans = [name for name, variable in raw.variables.items() if variable.dtype == bool]
+    if booleans:  # xarray reads any byte as a bool: the stored bytes, from netCDF4 itself
+        import netCDF4
+
+        with netCDF4.Dataset(path) as stored:
+            for name in booleans:
+                variable = stored[name]
+                variable.set_auto_maskandscale(False)
+                values = np.asarray(variable[...])
+                if not np.isin(values, (0, 1)).all():
+                    shown = values.tolist()
+                    raise _Refused(f"{name} = {shown!r:.40}: expected true or false (0 or 1)")
 
 
 __all__ = [

@@ -195,3 +195,25 @@ def control_parameters(parameters: np.ndarray, control: str) -> np.ndarray:
     if not np.isfinite(parameters).all():
         raise ValueError("parameters: not all finite")
     return parameters
+
+
+def check_run(time: np.ndarray, positions: dict[str, np.ndarray]) -> None:
+    """Check the series of a saved run: its ``time`` (s) and its ``positions`` (m), by name.
+
+    Raises
+    ------
+    ValueError
+        Naming the field: a time that is not finite or not strictly increasing, or a position
+        that is not finite (NaN or infinite).
+    """
+    time = np.asarray(time, dtype=float)
+    if not np.isfinite(time).all():
+        raise ValueError("time: not all finite")
+    steps = np.flatnonzero(np.diff(time) <= 0)
+    if steps.size:
+        k = int(steps[0])
+        after = f"{time[k + 1]:g} s after {time[k]:g} s"
+        raise ValueError(f"time: not strictly increasing ({after} at index {k + 1})")
+    for name, values in positions.items():
+        if not np.isfinite(np.asarray(values, dtype=float)).all():
+            raise ValueError(f"{name}: not all finite (NaN or infinite positions)")

@@ -13,6 +13,7 @@ import xarray as xr
 
 from cable_ocp.model.layout import INPUTS
 from cable_ocp.scene import labelled as results
+from cable_ocp.scene.records import check_run
 from cable_ocp.simulation import labelled
 
 ARRAY_FIELDS = (
@@ -143,7 +144,11 @@ class Trajectory:
 
 
 def _check_shapes(arrays: dict[str, np.ndarray]) -> None:
-    """Raise ValueError unless the arrays of a trajectory have matching shapes."""
+    """Raise ValueError unless the arrays of a trajectory have matching shapes.
+
+    Its time must be strictly increasing, and its states and joints finite
+    (:func:`cable_ocp.scene.records.check_run`).
+    """
     count = arrays["time"].shape[0] if arrays["time"].ndim == 1 else -1
     ndim = {"states": 2, "inputs": 2, "joints": 3, "tensions": 2}
     for name in ARRAY_FIELDS:
@@ -155,6 +160,7 @@ def _check_shapes(arrays: dict[str, np.ndarray]) -> None:
     joints, tensions = arrays["joints"].shape, arrays["tensions"].shape
     if joints[1] != 3 or joints[2] != tensions[1] + 1:
         raise ValueError(f"joints of shape {joints} do not fit tensions of shape {tensions}")
+    check_run(arrays["time"], {name: arrays[name] for name in ("states", "joints")})
 
 
 def _meta_from_json(meta, state_size: int) -> dict:

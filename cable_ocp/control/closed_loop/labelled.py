@@ -17,6 +17,7 @@ import numpy as np
 import xarray as xr
 
 from cable_ocp.scene import labelled
+from cable_ocp.scene.records import check_run
 
 KIND = "MpcResult"
 FILE = "mpc.nc"
@@ -61,7 +62,15 @@ def load(cls, folder: Path):
         return _load_format_1(cls, folder)
     dataset = labelled.read(netcdf, KIND)
     try:
-        return cls(**labelled.from_dataset(cls, dataset))
+        values = labelled.from_dataset(cls, dataset)
+        for name in (*SERIES, "end", "top"):
+            if np.shape(values[name])[:1] != np.shape(values["time"]):
+                raise ValueError(
+                    f"{name} of shape {np.shape(values[name])} does not fit time "
+                    f"{np.shape(values['time'])}"
+                )
+        check_run(values["time"], {"end": values["end"], "top": values["top"]})
+        return cls(**values)
     except (ValueError, KeyError, TypeError) as error:
         raise ValueError(
             f"{netcdf}: not a readable closed-loop result ({type(error).__name__}: {error})"
