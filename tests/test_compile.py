@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import os
 from pathlib import Path
 
 import numpy as np
@@ -356,3 +357,27 @@ def test_a_failed_background_compile_is_reported_by_the_foreground(tmp_path, mon
     with pytest.warns(RuntimeWarning, match="broken: no code today"):
         functions, report = compile_module.compiled_from(*arguments)
     assert functions[0] is tiny and report.library is None
+
+
+def test_an_empty_cache_variable_is_the_default_cache_not_the_working_folder(monkeypatch):
+    monkeypatch.setenv("CABLE_OCP_CACHE", "")
+    assert compile_module.cache_dir() == Path.home() / ".cache" / "cable_ocp"
+
+
+def test_the_scratch_of_a_killed_compile_is_removed_by_the_next(tmp_path, monkeypatch):
+    import socket
+    import subprocess
+    import sys
+
+    monkeypatch.setenv("CABLE_OCP_CACHE", str(tmp_path))
+    dead = subprocess.run([sys.executable, "-c", "import os; print(os.getpid())"],
+                          capture_output=True, text=True, check=True).stdout.strip()  # fmt: skip
+    host = socket.gethostname().replace("-", "_")
+    killed = tmp_path / f"{compile_module.SCRATCH_PREFIX}{host}-{dead}-abcd1234"
+    live = tmp_path / f"{compile_module.SCRATCH_PREFIX}{host}-{os.getpid()}-live0000"
+    for folder in (killed, live):
+        folder.mkdir()
+        (folder / "tiny.c").write_text("half")
+    _, report = compile_module.compiled(tiny_function(), "tiny scratch")
+    assert report.library is not None and not killed.exists() and live.is_dir()
+    assert not [p for p in tmp_path.iterdir() if p.name.startswith(".build-") and p != live]

@@ -121,3 +121,12 @@ def test_json_text_is_strict_json_with_null_for_nan():
                       "d": np.array([np.nan, 3.0]), "e": "x"})  # fmt: skip
     assert json.loads(text) == {"a": None, "b": [1.0, None], "c": 2.5, "d": [None, 3.0], "e": "x"}
     assert "NaN" not in text and "Infinity" not in text
+
+
+def test_a_symlink_loop_or_a_name_too_long_is_refused_before_any_work(tmp_path):
+    (tmp_path / "loop").symlink_to(tmp_path / "loop")
+    with pytest.raises(OutputError, match="loop"):
+        check_target(tmp_path / "loop" / "res")
+    with pytest.raises(OutputError, match="its name is too long"):
+        check_target(tmp_path / ("r" * 240))  # fits alone, not with the scratch folder's tag
+    assert _listing(tmp_path) == ["loop"]

@@ -23,6 +23,7 @@ import json
 import os
 import platform
 import shutil
+import socket
 import subprocess
 import tempfile
 import time
@@ -67,8 +68,38 @@ def _processor() -> str:
 
 
 def cache_dir() -> Path:
-    """Folder of compiled libraries: ``$CABLE_OCP_CACHE`` or ``~/.cache/cable_ocp``."""
-    return Path(os.environ.get("CABLE_OCP_CACHE", Path.home() / ".cache" / "cable_ocp"))
+    """Folder of compiled libraries: ``$CABLE_OCP_CACHE`` or ``~/.cache/cable_ocp``.
+
+    An empty ``$CABLE_OCP_CACHE`` counts as unset (not as the working directory).
+    """
+    given = os.environ.get("CABLE_OCP_CACHE", "").strip()
+    return Path(given).expanduser() if given else Path.home() / ".cache" / "cable_ocp"
+
+
+# Scratch folders of compiles: ".build-HOST-PID-XXXXXXXX" in the cache, so that the next compile
+# can remove those whose process is dead (a compile that was killed).
+SCRATCH_PREFIX = ".build-"
+
+
+def _scratch_folder(cache: Path) -> Path:
+    """A new scratch folder in ``cache``, named by this process; dead compiles' are removed."""
+    host = socket.gethostname().replace("-", "_")
+    for stale in cache.glob(f"{SCRATCH_PREFIX}{host}-*"):
+        pid = stale.name.split("-")[2]
+        if pid.isdigit() and not _alive(int(pid)) and stale.is_dir() and not stale.is_symlink():
+            shutil.rmtree(stale, ignore_errors=True)
+    return Path(tempfile.mkdtemp(dir=cache, prefix=f"{SCRATCH_PREFIX}{host}-{os.getpid()}-"))
+
+
+def _alive(pid: int) -> bool:
+    """Whether the process ``pid`` of this host runs (another user's counts as running)."""
+    try:
+        os.kill(pid, 0)
+    except ProcessLookupError:
+        return False
+    except OSError:
+        return True
+    return True
 
 
 def find_compiler() -> str | None:
@@ -200,7 +231,7 @@ def _generate(
     Raises OSError when the cache cannot be written.
     """
     library.parent.mkdir(parents=True, exist_ok=True)
-    scratch = Path(tempfile.mkdtemp(dir=library.parent))
+    scratch = _scratch_folder(library.parent)
     try:
         source = scratch / f"{functions[0].name()}.c"
         generator = ca.CodeGenerator(source.name, {"with_header": False})
