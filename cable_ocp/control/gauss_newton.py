@@ -58,6 +58,10 @@ QP_ITERATIONS = 20_000
 # slack (m) above which a solve's status says it was used.
 SOFT_PRICE = 1e3
 SOFT_REPORTED = 1e-6
+# Iterations stop as converged once Omega^2 changes by less than this share over this many
+# accepted steps (IPOPT's acceptable_obj_change_tol and acceptable_iter of the open loop's
+# options): a reach-limited whole-space case crawled along its bounds for 300 iterations.
+STALL_CHANGE, STALL_ITERATIONS = 1e-3, 5
 # A step is accepted once it achieves this fraction of the decrease the QP predicted (Armijo).
 ARMIJO = 1e-4
 BACKTRACKS = 12
@@ -397,6 +401,15 @@ class GaussNewton:
             parameters, cost = trial, trial_cost
             history.append(cost)
             self._report(history, parameters, lower, upper)
+            if _stalled(history) and trial_breach <= BREACH_TOLERANCE:
+                status, success = (
+                    (
+                        f"converged: Omega^2 changed by less than {STALL_CHANGE:.1%} over "
+                        f"{STALL_ITERATIONS} iterations"
+                    ),
+                    True,
+                )
+                break
         else:
             if current.finite and not status:
                 status = f"stopped at max_iter = {settings.max_iter}"
@@ -465,6 +478,13 @@ class GaussNewton:
             return
         excess = self.problem.bounds.excess(parameters, lower, upper)
         self.log.line(len(history) - 1, float(np.sqrt(max(history[-1], 0.0))), excess)
+
+
+def _stalled(history: list[float]) -> bool:
+    """Whether Omega^2 fell by less than :data:`STALL_CHANGE` over :data:`STALL_ITERATIONS`."""
+    if len(history) <= STALL_ITERATIONS:
+        return False
+    return history[-1 - STALL_ITERATIONS] - history[-1] <= STALL_CHANGE * history[-1]
 
 
 def _with_slack(hessian, gradient, matrix, bound_rows: int, lbx, ubx):
