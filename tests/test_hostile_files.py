@@ -96,3 +96,11 @@ def test_a_run_whose_time_repeats_or_whose_joints_are_infinite_is_refused(
     _edit(path, spoil)
     with pytest.raises(ValueError, match=rf"t\.nc: not a readable trajectory .*{message}"):
         Trajectory.load(tmp_path / "t")
+
+
+def test_a_trajectory_variable_over_other_dimensions_is_named(tmp_path):
+    data = _trajectory().to_xarray()
+    data["top_position"] = (("time", "axis"), np.zeros((data.sizes["time"], 4)))
+    data.to_netcdf(tmp_path / "t.nc")
+    with pytest.raises(ValueError, match=r"t\.nc: not a readable trajectory .*top_position over"):
+        Trajectory.load(tmp_path / "t")

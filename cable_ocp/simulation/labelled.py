@@ -104,6 +104,30 @@ def to_xarray(trajectory) -> xr.Dataset:
     return dataset
 
 
+def _dims(name: str) -> tuple[str, ...]:
+    """The dimensions a state, input, joint or tension variable lies over (in any order)."""
+    if name in STATE_VARIABLES:
+        return ("time", "element", STATE_VARIABLES[name][1])
+    if name in INPUT_VARIABLES:
+        return ("time", "component") if isinstance(INPUT_VARIABLES[name][0], slice) else ("time",)
+    return {"joint_position": ("time", "joint", "component"), "tension": ("time", "element")}[name]
+
+
+def _check_dims(dataset: xr.Dataset) -> None:
+    """ValueError naming the variable unless each lies over its dimensions, of fitting sizes."""
+    for name in (*STATE_VARIABLES, *INPUT_VARIABLES, "joint_position", "tension"):
+        if set(dataset[name].dims) != set(_dims(name)):
+            raise ValueError(f"{name} over {dataset[name].dims}: expected {_dims(name)}")
+    sizes = dataset.sizes
+    if sizes["component"] != len(COMPONENT):
+        raise ValueError(f"component of size {sizes['component']}: expected {len(COMPONENT)}")
+    if sizes["angle"] not in (2, 3) or sizes["joint"] != sizes["element"] + 1:
+        raise ValueError(
+            f"angle of size {sizes['angle']} (expected 2 or 3) and joint of size "
+            f"{sizes['joint']} (expected element + 1 = {sizes['element'] + 1})"
+        )
+
+
 def from_dataset(dataset: xr.Dataset, cls: type | None = None) -> dict:
     """The fields of a Trajectory (class ``cls``, by default ``Trajectory``) from its Dataset.
 
@@ -124,6 +148,7 @@ def from_dataset(dataset: xr.Dataset, cls: type | None = None) -> dict:
             raise ValueError(f"missing field(s) {name}")
         check_field(name, dataset[name].values, np.ndarray)
     time = values["time"]
+    _check_dims(dataset)
     elements, angles = dataset.sizes["element"], dataset.sizes["angle"]
     dofs = 3 + angles
     blocks = np.empty((time.size, 2, elements, dofs))
