@@ -1,0 +1,203 @@
+"""Sphinx directives of the cable_ocp site: tables generated from the code, never typed twice.
+
+``scene-schema``
+    One table per scene section (``cable``, ``environment``, ...), each field with its type,
+    default, unit, allowed range and meaning, read from the field declarations of
+    :mod:`cable_ocp.scene.schema` when the site is built.
+``cli-help``
+    The ``--help`` text of ``cable-ocp`` and of each of its commands, from
+    :func:`cable_ocp.cli.build_parser`.
+"""
+
+from __future__ import annotations
+
+import argparse
+import math
+import re
+from dataclasses import MISSING, fields
+from pathlib import Path
+
+from docutils import nodes
+from docutils.statemachine import StringList
+from sphinx.util.docutils import SphinxDirective
+
+CACHE = Path(__file__).resolve().parent.parent / "_build" / ".jupyter_cache"
+NUMERIC = ("float", "int", "vec3")
+# Numbers without a unit: counts, seeds, ratios. A field whose unit is empty must be listed here.
+DIMENSIONLESS = "1"
+
+
+def schema_sections():
+    """``[(path, dataclass)]`` of every scene section, depth first from :class:`Scene`."""
+    from cable_ocp.scene.schema import Scene
+
+    found, todo = [], [("", Scene)]
+    while todo:
+        path, cls = todo.pop(0)
+        found.append((path, cls))
+        for f in fields(cls):
+            spec = f.metadata.get("spec")
+            if spec is not None and spec.kind in ("section", "tuple") and spec.item is not None:
+                child = f"{path}.{f.name}" if path else f.name
+                todo.append((child + ("[]" if spec.kind == "tuple" else ""), spec.item))
+    return found
+
+
+def _default(f) -> str:
+    if f.default is not MISSING:
+        value = f.default
+    elif f.default_factory is not MISSING:
+        return "(table)"
+    else:
+        return "required"
+    if value is None:
+        return "None"
+    if isinstance(value, float) and math.isfinite(value):
+        return f"{value:g}"
+    return repr(value) if isinstance(value, str) else str(value)
+
+
+def field_rows(cls) -> list[dict[str, str]]:
+    """One row per declared field of the scene dataclass ``cls``: name, kind, default, unit, range."""
+    rows = []
+    for f in fields(cls):
+        spec = f.metadata.get("spec")
+        if spec is None:
+            continue
+        kind = spec.item.__name__ if spec.item is not None else spec.kind
+        if spec.kind == "choice":
+            allowed = " | ".join(repr(c) for c in spec.choices)
+        elif spec.kind in NUMERIC:
+            allowed = spec.rule().replace(f" ({spec.unit})", "") or "any finite"
+        elif spec.kind == "bool":
+            allowed = "true | false"
+        elif spec.kind == "section":
+            allowed = "table"
+        elif spec.kind == "tuple":
+            allowed = "array of tables"
+        else:
+            allowed = "text" if spec.kind == "str" else "file path"
+        if spec.optional:
+            allowed += " (optional)"
+        unit = spec.unit or (DIMENSIONLESS if spec.kind in NUMERIC else "—")
+        rows.append({"field": f.name, "kind": kind, "default": _default(f), "unit": unit,
+                     "range": allowed, "meaning": spec.doc})  # fmt: skip
+    return rows
+
+
+def _cell(text: str) -> str:
+    return text.replace("|", "\\|").replace("\n", " ") or " "
+
+
+class SceneSchema(SphinxDirective):
+    """``scene-schema``: the tables of every scene section with units and ranges."""
+
+    def run(self):
+        lines = []
+        for path, cls in schema_sections():
+            title = f"`[{path}]`" if path else "top level"
+            lines += [f"**{title}** — {cls.__name__}: {(cls.__doc__ or '').splitlines()[0]}", ""]
+            lines += ["| field | type | default | unit | range | meaning |",
+                      "|---|---|---|---|---|---|"]  # fmt: skip
+            for row in field_rows(cls):
+                cells = (f"`{row['field']}`", row["kind"], f"`{row['default']}`", row["unit"],
+                         row["range"], row["meaning"])  # fmt: skip
+                lines.append("| " + " | ".join(_cell(c) for c in cells) + " |")
+            lines.append("")
+        container = nodes.section() if False else nodes.container()
+        self.state.nested_parse(StringList(lines, source="cable_ocp.scene.schema"), 0, container)
+        return container.children
+
+
+def _subcommands(parser: argparse.ArgumentParser):
+    for action in parser._actions:
+        if isinstance(action, argparse._SubParsersAction):
+            return dict(action.choices)
+    return {}
+
+
+class CliHelp(SphinxDirective):
+    """``cli-help``: ``cable-ocp --help`` and ``cable-ocp COMMAND --help``, as printed."""
+
+    def run(self):
+        import os
+
+        from cable_ocp.cli import build_parser
+
+        os.environ["COLUMNS"] = "100"
+        parser = build_parser()
+        out = []
+        for name, sub in [("cable-ocp", parser), *_subcommands(parser).items()]:
+            title = name if name == "cable-ocp" else f"cable-ocp {name}"
+            section = nodes.rubric(text=title)
+            block = nodes.literal_block(text=sub.format_help())
+            block["language"] = "text"
+            out += [section, block]
+        return out
+
+
+class FrontDoor(SphinxDirective):
+    """``front-door``: an autosummary of ``cable_ocp.__all__``, each name where it is defined."""
+
+    def run(self):
+        import cable_ocp
+
+        import inspect
+
+        lines, data = [".. autosummary::", "   :nosignatures:", ""], []
+        for name in cable_ocp.__all__:
+            source = cable_ocp._SOURCES[name]
+            value = getattr(cable_ocp, name)
+            if not (inspect.ismodule(value) or inspect.isclass(value) or callable(value)):
+                data.append(f"``{name}`` = ``{value!r}`` (:mod:`{source}`)")
+                continue
+            target = source if source == f"cable_ocp.{name}" else f"{source}.{name}"
+            lines.append(f"   ~{target}")
+        lines += ["", "Data: " + "; ".join(data) + "."] if data else []
+        container = nodes.container()
+        self.state.nested_parse(StringList(lines, source="cable_ocp.__all__"), 0, container)
+        return container.children
+
+
+# |v|, |phi'|: absolute values in plain-text docstrings, not reStructuredText substitutions.
+BARS = re.compile(r"(?<![\\|\w])\|(?=[^\s|])([^|`\n]{1,40}?)(?<=[^\s|\\])\|(?![|\w])")
+
+
+def escape_bars(app, what, name, obj, options, lines):
+    """Escape the bars of absolute values (``|v|``) outside tables, for docutils."""
+    for k, line in enumerate(lines):
+        if not line.lstrip().startswith(("|", "+")):
+            lines[k] = BARS.sub(r"\\|\1\\|", line)
+
+
+def lenient_in_docstrings(app, domain, node) -> bool | None:
+    """Count, not warn about, an unresolved reference written in a docstring.
+
+    The pages written for the site (the guide, the front door) are checked strictly
+    (``nitpicky``); the docstrings' own ``:data:`` and ``:class:`` references to names without a
+    page of their own are listed at the end of the build instead (``unresolved_in_docstrings``).
+    """
+    if not str(node.get("refdoc", "")).startswith("api/generated/"):
+        return None
+    app.env.cable_ocp_unresolved = getattr(app.env, "cable_ocp_unresolved", 0) + 1
+    return True
+
+
+def report_unresolved(app, exception) -> None:
+    """Say how many docstring references did not resolve (none of them fails the build)."""
+    count = getattr(app.env, "cable_ocp_unresolved", 0)
+    if exception is None and count:
+        from sphinx.util import logging
+
+        logging.getLogger(__name__).info(f"unresolved_in_docstrings: {count} references")
+
+
+def setup(app):
+    """Register the directives and the docstring filter."""
+    app.connect("warn-missing-reference", lenient_in_docstrings)
+    app.connect("build-finished", report_unresolved)
+    app.add_directive("scene-schema", SceneSchema)
+    app.add_directive("front-door", FrontDoor)
+    app.connect("autodoc-process-docstring", escape_bars)
+    app.add_directive("cli-help", CliHelp)
+    return {"parallel_read_safe": True, "parallel_write_safe": True}
