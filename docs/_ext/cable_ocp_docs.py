@@ -58,7 +58,7 @@ def _default(f) -> str:
 
 
 def field_rows(cls) -> list[dict[str, str]]:
-    """One row per declared field of the scene dataclass ``cls``: name, kind, default, unit, range."""
+    """One row per declared field of the scene dataclass ``cls``: name, kind, default, unit..."""
     rows = []
     for f in fields(cls):
         spec = f.metadata.get("spec")
@@ -93,6 +93,7 @@ class SceneSchema(SphinxDirective):
     """``scene-schema``: the tables of every scene section with units and ranges."""
 
     def run(self):
+        """The tables, parsed as MyST Markdown."""
         lines = []
         for path, cls in schema_sections():
             title = f"`[{path}]`" if path else "top level"
@@ -104,7 +105,7 @@ class SceneSchema(SphinxDirective):
                          row["range"], row["meaning"])  # fmt: skip
                 lines.append("| " + " | ".join(_cell(c) for c in cells) + " |")
             lines.append("")
-        container = nodes.section() if False else nodes.container()
+        container = nodes.container()
         self.state.nested_parse(StringList(lines, source="cable_ocp.scene.schema"), 0, container)
         return container.children
 
@@ -120,6 +121,7 @@ class CliHelp(SphinxDirective):
     """``cli-help``: ``cable-ocp --help`` and ``cable-ocp COMMAND --help``, as printed."""
 
     def run(self):
+        """A rubric and a literal block per command."""
         import os
 
         from cable_ocp.cli import build_parser
@@ -140,9 +142,10 @@ class FrontDoor(SphinxDirective):
     """``front-door``: an autosummary of ``cable_ocp.__all__``, each name where it is defined."""
 
     def run(self):
-        import cable_ocp
-
+        """The autosummary of the callables and classes, then the data in a line."""
         import inspect
+
+        import cable_ocp
 
         lines, data = [".. autosummary::", "   :nosignatures:", ""], []
         for name in cable_ocp.__all__:
