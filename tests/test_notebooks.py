@@ -1,13 +1,16 @@
 """Execute the notebooks: a broken example fails the suite, so does one that shows no figure."""
 
+import copy
 import re
+import sys
 from pathlib import Path
 
 import nbformat
 import pytest
 from nbclient import NotebookClient
 
-NOTEBOOKS = sorted((Path(__file__).resolve().parent.parent / "notebooks").glob("*.ipynb"))
+ROOT = Path(__file__).resolve().parent.parent
+NOTEBOOKS = sorted((ROOT / "notebooks").glob("*.ipynb"))
 # Code that draws or displays a figure: pyplot, cable_ocp.plots, an image file shown by IPython.
 PLOTTING = re.compile(r"\bplt\.\w+\(|\bplots\.\w+\(|\bImage\(")
 
@@ -21,7 +24,8 @@ def test_notebook_runs_and_shows_its_figures(path, monkeypatch):
     monkeypatch.setenv("CABLE_OCP_QUICK", "1")
     # As in a user's Jupyter: the kernel picks the inline backend only if no backend is forced.
     monkeypatch.delenv("MPLBACKEND", raising=False)
-    notebook = nbformat.read(path, as_version=4)
+    source = nbformat.read(path, as_version=4)
+    notebook = copy.deepcopy(source)
     NotebookClient(notebook, timeout=600, kernel_name="python3").execute(cwd=str(path.parent))
 
     code = [(i, cell) for i, cell in enumerate(notebook.cells) if cell.cell_type == "code"]
@@ -32,6 +36,39 @@ def test_notebook_runs_and_shows_its_figures(path, monkeypatch):
     for i, cell in code:  # an animation is shown as the GIF it wrote
         if "plots.animate(" in cell.source:
             assert any("image/gif" in out.get("data", {}) for out in cell.outputs), (path.name, i)
+    cache_for_the_site(path, source, notebook)
+
+
+def cache_for_the_site(path: Path, source, executed) -> None:
+    """Keep this run's outputs in the site's notebook cache, so the docs build reuses them.
+
+    myst-nb matches a notebook by its code cells (source and metadata) and kernelspec; the
+    outputs are put on the unexecuted cells, so the key is the file's own.
+    """
+    try:
+        from jupyter_cache import get_cache
+        from jupyter_cache.base import CacheBundleIn
+    except ImportError:  # the docs extra is not installed: no site to build
+        return
+    sys.path.insert(0, str(ROOT / "docs" / "_ext"))
+    try:
+        from cable_ocp_docs import CACHE
+    finally:
+        sys.path.remove(str(ROOT / "docs" / "_ext"))
+    cached = copy.deepcopy(source)
+    for cell, run in zip(cached.cells, executed.cells, strict=True):
+        if cell.cell_type == "code":
+            cell.outputs, cell.execution_count = run.outputs, run.execution_count
+    cached.metadata = copy.deepcopy(executed.metadata)  # language_info, widgets' state
+    cached.metadata.pop("kernelspec", None)
+    if "kernelspec" in source.metadata:
+        cached.metadata["kernelspec"] = source.metadata["kernelspec"]
+    uri = str(ROOT / "docs" / "gallery" / path.name)
+    get_cache(str(CACHE)).cache_notebook_bundle(
+        CacheBundleIn(cached, uri, data={"source": "tests/test_notebooks.py"}),
+        check_validity=False,
+        overwrite=True,
+    )
 
 
 def test_the_image_check_catches_a_notebook_that_shows_nothing(tmp_path, monkeypatch):

@@ -19,12 +19,23 @@ from pathlib import Path
 
 from docutils import nodes
 from docutils.statemachine import StringList
+from sphinx.util import logging
 from sphinx.util.docutils import SphinxDirective
+
+logger = logging.getLogger(__name__)
 
 CACHE = Path(__file__).resolve().parent.parent / "_build" / ".jupyter_cache"
 NUMERIC = ("float", "int", "vec3")
-# Numbers without a unit: counts, seeds, ratios. A field whose unit is empty must be listed here.
-DIMENSIONLESS = "1"
+# The numbers of a scene that have no unit (coefficients, counts, a seed, a ratio), by field path.
+# A number declared without a unit that is not listed here fails the build (and tests/test_site.py):
+# give it its unit in cable_ocp/scene/schema.py, or list it here if it has none.
+DIMENSIONLESS = frozenset({
+    "hydrodynamics.drag_normal", "hydrodynamics.drag_axial", "hydrodynamics.added_mass_normal",
+    "hydrodynamics.added_mass_axial", "hydrodynamics.quadrature_points", "model.elements",
+    "winch.knots", "numerics.output_every", "end.payload.drag", "end.payload.added_mass",
+    "top.heave.sea_state.peak_enhancement", "top.heave.sea_state.components",
+    "top.heave.sea_state.seed",
+})  # fmt: skip
 
 
 def schema_sections():
@@ -57,8 +68,12 @@ def _default(f) -> str:
     return repr(value) if isinstance(value, str) else str(value)
 
 
-def field_rows(cls) -> list[dict[str, str]]:
-    """One row per declared field of the scene dataclass ``cls``: name, kind, default, unit..."""
+def field_rows(cls, path: str = "") -> list[dict[str, str]]:
+    """One row per declared field of the scene dataclass ``cls`` at ``path``.
+
+    Each row has the field's name, kind, default, unit and range; ``missing`` names what the
+    declaration lacks (a number without a unit, not listed in ``DIMENSIONLESS``).
+    """
     rows = []
     for f in fields(cls):
         spec = f.metadata.get("spec")
@@ -79,9 +94,20 @@ def field_rows(cls) -> list[dict[str, str]]:
             allowed = "text" if spec.kind == "str" else "file path"
         if spec.optional:
             allowed += " (optional)"
-        unit = spec.unit or (DIMENSIONLESS if spec.kind in NUMERIC else "—")
-        rows.append({"field": f.name, "kind": kind, "default": _default(f), "unit": unit,
-                     "range": allowed, "meaning": spec.doc})  # fmt: skip
+        dotted = f"{path.replace('[]', '')}.{f.name}".lstrip(".")
+        missing = ""
+        if spec.kind not in NUMERIC:
+            unit = "—"
+        elif spec.unit:
+            unit = spec.unit
+        else:
+            unit = "1"
+            missing = "" if dotted in DIMENSIONLESS else "a unit"
+        if not spec.doc:
+            missing = " and ".join(filter(None, [missing, "a meaning"]))
+        rows.append({"field": f.name, "path": dotted, "kind": kind, "default": _default(f),
+                     "unit": unit, "range": allowed, "meaning": spec.doc,
+                     "missing": missing})  # fmt: skip
     return rows
 
 
@@ -100,7 +126,10 @@ class SceneSchema(SphinxDirective):
             lines += [f"**{title}** — {cls.__name__}: {(cls.__doc__ or '').splitlines()[0]}", ""]
             lines += ["| field | type | default | unit | range | meaning |",
                       "|---|---|---|---|---|---|"]  # fmt: skip
-            for row in field_rows(cls):
+            for row in field_rows(cls, path):
+                if row["missing"]:
+                    text = f"scene field {row['path']} declares no {row['missing']} (schema.py)"
+                    logger.warning(text, location=self.get_location())
                 cells = (f"`{row['field']}`", row["kind"], f"`{row['default']}`", row["unit"],
                          row["range"], row["meaning"])  # fmt: skip
                 lines.append("| " + " | ".join(_cell(c) for c in cells) + " |")
@@ -190,9 +219,7 @@ def report_unresolved(app, exception) -> None:
     """Say how many docstring references did not resolve (none of them fails the build)."""
     count = getattr(app.env, "cable_ocp_unresolved", 0)
     if exception is None and count:
-        from sphinx.util import logging
-
-        logging.getLogger(__name__).info(f"unresolved_in_docstrings: {count} references")
+        logger.info(f"unresolved_in_docstrings: {count} references")
 
 
 def setup(app):
