@@ -27,6 +27,7 @@ COPIES = 2  # a run's kept outputs are held about twice while they become a Data
 RK4_STAGE_TIMES = 3  # the control is evaluated at t, t + h/2 and t + h of every step
 RK4_STAGES = 4  # stage Jacobians per step
 WINCH_INPUTS = 3  # top-element length, its rate and its acceleration
+TOUCHED = 8  # parameters whose basis covers one step, at most (4 of a Hermite control), and a spare
 # Share of the available memory a run may plan to use: the rest is for the model, CasADi's
 # Functions, the interpreter and what else runs on the machine.
 USABLE_SHARE = 0.8
@@ -147,8 +148,9 @@ def optimisation_memory(
         # basis(): the (3, 3K, size) array and its three parts; the winch map stacked from them.
         ("control basis", FLOAT * stage_times * size * (2 * 3 + 3)),
         ("stage Jacobians", FLOAT * steps * RK4_STAGES * (nx + WINCH_INPUTS) * nx),
-        # propagate_sensitivities(): the sensitivities (K + 1, size, nx) and the forced (K, 4, ...)
-        ("sensitivities", FLOAT * (steps + 1) * size * nx * (1 + RK4_STAGES)),
+        # propagate_sensitivities(): the kept sensitivities (K + 1, size, 3) twice (ranked and
+        # in order), the forcing of the rows each step touches (K, 4, a few, nx).
+        ("sensitivities", FLOAT * (steps + 1) * (2 * size * 3 + RK4_STAGES * TOUCHED * nx)),
     )
     return MemoryEstimate(steps, steps + 1, parts)
 
