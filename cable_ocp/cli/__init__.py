@@ -14,7 +14,7 @@ import math
 import sys
 from pathlib import Path
 
-from cable_ocp.cli.arguments import integer, positive
+from cable_ocp.cli.arguments import OUT_HELP, DefaultsShown, integer, positive
 from cable_ocp.cli.files import results_folder
 from cable_ocp.cli.mpc import add_mpc_command
 from cable_ocp.cli.sweep import add_sweep_command
@@ -311,7 +311,11 @@ def _add_optimiser_options(parser) -> None:
     parser.add_argument(
         "--step", type=positive, help="RK4 step of the optimisation [s] (default: optimize()'s)"
     )
-    parser.add_argument("--intervals", type=integer(1, 100_000), help="shooting intervals")
+    parser.add_argument(
+        "--intervals",
+        type=integer(1, 100_000),
+        help="shooting intervals (default: optimize()'s, about 5 s each)",
+    )
     parser.add_argument(
         "--solver",
         choices=["gauss-newton", "ipopt"],
@@ -323,7 +327,12 @@ def _add_optimiser_options(parser) -> None:
         choices=["single", "multiple"],
         help="IPOPT: only the winch parameters as variables (single) or the interval states too",
     )
-    parser.add_argument("--control", choices=["hermite", "spline"])
+    parser.add_argument(
+        "--control",
+        choices=["hermite", "spline"],
+        help="the winch's parametrisation for --method ipopt: hermite (cubic Hermite intervals, "
+        "the default) or spline (the paper's knots, winch.knots)",
+    )
     parser.add_argument(
         "--hessian",
         choices=["limited-memory", "exact"],
@@ -331,7 +340,13 @@ def _add_optimiser_options(parser) -> None:
     )
     parser.add_argument("--max-iter", type=integer(1, 10**6), help="IPOPT iterations")
     parser.add_argument("--max-evaluations", type=integer(1, 10**8), help="Nelder-Mead runs")
-    parser.add_argument("--set", action="append", default=[], metavar="KEY=VALUE")
+    parser.add_argument(
+        "--set",
+        action="append",
+        default=[],
+        metavar="KEY=VALUE",
+        help="override a scene field, e.g. --set model.elements=30 (repeatable)",
+    )
     talk = parser.add_mutually_exclusive_group()
     talk.add_argument("--quiet", action="store_true", help="print nothing while solving")
     talk.add_argument("--verbose", action="store_true",
@@ -346,13 +361,14 @@ def _validate(args) -> int:
     from cable_ocp.studies.validation import catenary_check
 
     scene = load_scene(args.scene or models_dir() / "catenary.toml")
-    print("catenary (paper 4.1): max relative errors eq. 35-36, in %")
-    print(f"{'n':>5}{'eps_x':>10}{'eps_z':>10}{'inextensible':>14}{'top tension':>13}")
+    print("catenary (paper 4.1): largest relative errors against the analytic catenary, in %")
+    print(f"{'n':>5}{'eps_x [%]':>12}{'eps_z [%]':>12}{'inextensible [%]':>18}"
+          f"{'top tension [%]':>17}")  # fmt: skip
     checks = [catenary_check(scene, n) for n in args.elements]
-    for c in checks:
+    for c in sorted(checks, key=lambda check: check.elements):
         print(
-            f"{c.elements:>5}{100 * c.max_error_x:>10.4f}{100 * c.max_error_z:>10.4f}"
-            f"{100 * c.max_error_inextensible:>14.5f}{100 * c.top_tension_error:>13.2e}"
+            f"{c.elements:>5}{100 * c.max_error_x:>12.4f}{100 * c.max_error_z:>12.4f}"
+            f"{100 * c.max_error_inextensible:>18.5f}{100 * c.top_tension_error:>17.2e}"
         )
     if args.out:
         check = checks[0]
@@ -362,7 +378,8 @@ def _validate(args) -> int:
                                  float(np.hypot(*e.force[:2])), e.force[2],
                                  c.youngs_modulus * c.cross_section_area)  # fmt: skip
         with results_folder(args.out) as folder:
-            plots.catenary_comparison(check.joints, np.vstack([x, z]), folder / "catenary.png")
+            plots.catenary_comparison(check.joints, np.vstack([x, z]), folder / "catenary.png",
+                                      scene.name, check.elements)  # fmt: skip
         print(f"figure written to {Path(args.out).resolve() / 'catenary.png'}")
     return 0
 
@@ -435,22 +452,24 @@ def _study(args) -> int:
     return 0
 
 
-OUT_HELP = (
-    "results folder, written atomically: a new or empty folder, or a previous results folder "
-    "(marked by .cable_ocp-results), which is replaced"
-)
-
-
 ANIMATE_HELP = "also write animation.gif: the cable, the end's path and the seabed over time"
 
 
 def build_parser() -> argparse.ArgumentParser:
     """The argument parser of ``cable-ocp``."""
-    parser = argparse.ArgumentParser(prog="cable-ocp", description=__doc__)
+    # The module docstring is reStructuredText; the terminal gets it without the markup.
+    parser = argparse.ArgumentParser(
+        prog="cable-ocp",
+        description=__doc__.replace("``", ""),
+        formatter_class=argparse.RawDescriptionHelpFormatter,
+    )
     commands = parser.add_subparsers(dest="command", required=True)
+    shown = {"formatter_class": DefaultsShown}  # every option's default in its help
 
-    sim = commands.add_parser("simulate", help="simulate a scene and write results and figures")
-    sim.add_argument("scene", type=Path)
+    sim = commands.add_parser(
+        "simulate", **shown, help="simulate a scene and write results and figures"
+    )
+    sim.add_argument("scene", type=Path, help="the scene file (TOML)")
     sim.add_argument("--out", type=Path, required=True, help=OUT_HELP)
     sim.add_argument("--knots", type=_knots,
                      help="winch knot angles phi_1..phi_p in rad, comma-separated (write "
@@ -463,15 +482,22 @@ def build_parser() -> argparse.ArgumentParser:
     sim.add_argument("--animate", action="store_true", help=ANIMATE_HELP)
     sim.set_defaults(run=_simulate)
 
-    val = commands.add_parser("validate", help="statics check against the analytic catenary")
+    val = commands.add_parser(
+        "validate", **shown, help="statics check against the analytic catenary"
+    )
     val.add_argument("scene", type=Path, nargs="?", help="default: the bundled catenary.toml")
-    val.add_argument("--elements", type=integer(1, 1000), nargs="+", default=[15, 5, 30, 60])
+    val.add_argument("--elements", type=integer(1, 1000), nargs="+", default=[15, 5, 30, 60],
+                     help="element counts n to check, listed in ascending order; the figure "
+                     "shows the first given")  # fmt: skip
     val.add_argument("--out", type=Path, help="folder for the comparison figure; " + OUT_HELP)
     val.set_defaults(run=_validate)
 
-    opt = commands.add_parser("optimize", help="optimise the winch angle of a scene")
-    opt.add_argument("scene", type=Path)
-    opt.add_argument("--method", choices=["ipopt", "nelder-mead"], default="ipopt")
+    opt = commands.add_parser("optimize", **shown, help="optimise the winch angle of a scene")
+    opt.add_argument("scene", type=Path, help="the scene file (TOML)")
+    opt.add_argument("--method", choices=["ipopt", "nelder-mead"], default="ipopt",
+                     help="ipopt: direct shooting on the winch parameters, solved by --solver "
+                     "(Gauss-Newton SQP or IPOPT) and refined by model correction; nelder-mead: "
+                     "the paper's simplex search on winch.knots")  # fmt: skip
     opt.add_argument("--out", type=Path, required=True, help=OUT_HELP)
     opt.add_argument("--refinements", type=integer(0, 100), default=3,
                      help="model-correction solves")  # fmt: skip
@@ -479,8 +505,8 @@ def build_parser() -> argparse.ArgumentParser:
     opt.add_argument("--animate", action="store_true", help=ANIMATE_HELP)
     opt.set_defaults(run=_optimize)
 
-    cmp = commands.add_parser("compare", help="IPOPT against Nelder-Mead in one table")
-    cmp.add_argument("scenes", type=Path, nargs="+")
+    cmp = commands.add_parser("compare", **shown, help="IPOPT against Nelder-Mead in one table")
+    cmp.add_argument("scenes", type=Path, nargs="+", help="scene files (TOML)")
     cmp.add_argument("--out", type=Path, required=True, help=OUT_HELP)
     _add_optimiser_options(cmp)
     cmp.set_defaults(run=_compare)
@@ -489,25 +515,30 @@ def build_parser() -> argparse.ArgumentParser:
 
     study = commands.add_parser(
         "study",
+        **shown,
         help="convergence, validation, speed-accuracy and stability studies",
         description="step, elements, end-force: studies of SCENE. speed-accuracy: error vs CPU "
         "time on paper_flat and end_force, and the OCP's Omega vs wall time. stability: largest "
         "stable step vs n, Baumgarte gains, Nelder-Mead vs IPOPT as the knots grow.",
     )
     study.add_argument(
-        "name", choices=["step", "elements", "end-force", "speed-accuracy", "stability"]
+        "name",
+        choices=["step", "elements", "end-force", "speed-accuracy", "stability"],
+        help="the study (see above)",
     )
-    study.add_argument("scene", type=Path, nargs="?")
+    study.add_argument("scene", type=Path, nargs="?",
+                       help="the scene file of step, elements and end-force")  # fmt: skip
     study.add_argument("--out", type=Path, required=True, help=OUT_HELP)
-    study.add_argument("--set", action="append", default=[], metavar="KEY=VALUE")
-    study.add_argument("--quiet", action="store_true")
+    study.add_argument("--set", action="append", default=[], metavar="KEY=VALUE",
+                       help="override a field of SCENE, e.g. --set numerics.step=0.02")  # fmt: skip
+    study.add_argument("--quiet", action="store_true", help="no progress bars")
     study.add_argument("--compiled", action="store_true", help="end-force: model compiled to C")
     study.add_argument(
         "--quick", action="store_true", help="speed-accuracy, stability: a small version"
     )
     study.set_defaults(run=_study)
 
-    bench = commands.add_parser("bench", help="speed benchmarks against baselines")
+    bench = commands.add_parser("bench", **shown, help="speed benchmarks against baselines")
     bench.add_argument(
         "--quick", action="store_true", help="scene steps only, short MoorDyn runs, small OCP"
     )

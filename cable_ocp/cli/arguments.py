@@ -1,10 +1,18 @@
-"""Argparse types of the command line: each refuses a value out of its range in one line."""
+"""Argparse types of the command line, each refusing a value out of its range in one line.
+
+``DefaultsShown`` is the commands' help formatter.
+"""
 
 from __future__ import annotations
 
 import argparse
 import math
 from collections.abc import Callable
+
+OUT_HELP = (
+    "results folder, written atomically: a new or empty folder, or a previous results folder "
+    "(marked by .cable_ocp-results), which is replaced"
+)
 
 
 def integer(low: int, high: int) -> Callable[[str], int]:
@@ -51,3 +59,22 @@ def fraction(text: str) -> float:
     if not 0 <= value <= 1:
         raise argparse.ArgumentTypeError(f"{text!r:.40} is out of range: must be 0 to 1")
     return value
+
+
+class DefaultsShown(argparse.RawDescriptionHelpFormatter):
+    """Help that ends each option with its default, unless the help already says it.
+
+    Flags (``store_true``) and options without a fixed default (None: it follows from the scene,
+    as the help says) show none.
+    """
+
+    def _get_help_string(self, action: argparse.Action) -> str:
+        text = action.help or ""
+        default = action.default
+        if (
+            "default" in text
+            or default in (None, False, [], argparse.SUPPRESS)
+            or not action.option_strings
+        ):
+            return text
+        return f"{text} (default: %(default)s)"

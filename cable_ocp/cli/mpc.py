@@ -6,7 +6,7 @@ import argparse
 import sys
 from pathlib import Path
 
-from cable_ocp.cli.arguments import fraction, integer, positive, weight
+from cable_ocp.cli.arguments import OUT_HELP, DefaultsShown, fraction, integer, positive, weight
 from cable_ocp.control.closed_loop.settings import SOLVERS, MpcSettings
 
 
@@ -14,23 +14,35 @@ def add_mpc_command(subparsers) -> None:
     """Add the ``mpc`` command to the ``cable-ocp`` sub-command parsers."""
     parser = subparsers.add_parser(
         "mpc",
+        formatter_class=DefaultsShown,
         help="closed-loop winch control: a receding-horizon OCP driving the scene's model",
         description="Closed-loop winch control of SCENE: every --sample seconds a receding-"
         "horizon OCP on a reduced model is solved from the measured state; the scene's own model "
         "(with its heave, e.g. --set top.heave.amplitude=1 --set top.heave.period=8) is the "
         "plant. Writes mpc.nc (the run, netCDF), summary.json and figures to --out.",
     )
-    parser.add_argument("scene", type=Path)
-    parser.add_argument("--out", type=Path, required=True, help="results folder (atomic)")
+    parser.add_argument("scene", type=Path, help="the scene file (TOML)")
+    parser.add_argument("--out", type=Path, required=True, help=OUT_HELP)
     defaults = MpcSettings()
     parser.add_argument(
-        "--horizon", type=positive, default=defaults.horizon, help="prediction horizon [s]"
+        "--horizon",
+        type=positive,
+        default=defaults.horizon,
+        help="prediction horizon [s] (default: about 20 s, a multiple of --interval within the "
+        "scene's duration)",
     )
     parser.add_argument(
-        "--sample", type=positive, default=defaults.sample, help="time between solves [s]"
+        "--sample",
+        type=positive,
+        default=defaults.sample,
+        help="time between solves [s] (default: the duration's whole fraction nearest 1 s that "
+        "the plant's steps divide)",
     )
     parser.add_argument(
-        "--interval", type=positive, default=defaults.interval, help="interval of the plan [s]"
+        "--interval",
+        type=positive,
+        default=defaults.interval,
+        help="interval of the plan [s] (default: the multiple of --sample nearest 5 s)",
     )
     parser.add_argument(
         "--elements",
@@ -39,7 +51,11 @@ def add_mpc_command(subparsers) -> None:
         help="elements of the reduced model",
     )
     parser.add_argument(
-        "--step", type=positive, default=defaults.step, help="RK4 step of the reduced model [s]"
+        "--step",
+        type=positive,
+        default=defaults.step,
+        help="RK4 step of the reduced model [s] (default: the largest whole fraction of --sample "
+        "within 0.7 of the reduced model's RK4 limit along the locked run, at most 1 s)",
     )
     parser.add_argument(
         "--solver",
@@ -68,7 +84,8 @@ def add_mpc_command(subparsers) -> None:
         "--limiter-band",
         type=positive,
         default=defaults.limiter_band,
-        help="width of the plant's soft limiter at each end of the winch range [rad]",
+        help="width of the plant's soft limiter at each end of the winch range [rad] (default: "
+        "0.5 rad, or a quarter of a narrower range)",
     )
     parser.add_argument(
         "--rate-weight",
@@ -136,9 +153,9 @@ def run_mpc_command(args: argparse.Namespace) -> int:
     result = mpc(scene, settings_from(args), quiet=args.quiet)
     with results_folder(args.out) as folder:
         result.save(folder)
-        plots.clearance(result, path=folder / "clearance.png")
-        plots.solve_times(result, path=folder / "solve_times.png")
-        plots.winch_angle(result, path=folder / "winch_angle.png")
+        plots.clearance(result, folder / "clearance.png", scene.name)
+        plots.solve_times(result, folder / "solve_times.png", scene.name)
+        plots.winch_angle(result, folder / "winch_angle.png", scene.name)
         (folder / "summary.json").write_text(json_text(result.summary()))
     summary = {k: v for k, v in result.summary().items() if k != "failures"}
     print(json_text(summary))

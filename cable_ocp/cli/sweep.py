@@ -11,6 +11,8 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
+from cable_ocp.cli.arguments import DefaultsShown
+
 if TYPE_CHECKING:
     from cable_ocp.sweep.runner import SweepReport
 
@@ -24,6 +26,7 @@ def add_sweep_command(commands) -> argparse.ArgumentParser:
     """Add ``sweep`` to the subparsers of ``cable-ocp`` (its ``run`` is `run_sweep_command`)."""
     sweep = commands.add_parser(
         "sweep",
+        formatter_class=DefaultsShown,
         help="many simulations or OCPs of one scene on Dask, one xarray Dataset out",
         description="Run the cases of SWEEP (a grid or sample of scene overrides, see "
         "models/sweeps/) on a Dask LocalCluster or an existing scheduler. Every finished case "

@@ -16,6 +16,7 @@ Who closes a figure:
 
 from __future__ import annotations
 
+import math
 from collections.abc import Sequence
 from pathlib import Path
 
@@ -41,10 +42,47 @@ def finish_figure(fig: Figure, path: str | Path | None) -> Figure:
     return fig
 
 
+def significant(value: float, digits: int = 3) -> str:
+    """``value`` with ``digits`` significant figures, for legends and titles.
+
+    Fixed point from 1e-3 to 1e5 (``4.71``, ``0.0234``), else a power of ten (``1.30e-4``): a
+    small Omega is never shown as ``0.000``.
+    """
+    value = float(value)
+    if not math.isfinite(value) or value == 0:
+        return f"{value:g}"
+    exponent = math.floor(math.log10(abs(value)))
+    if -3 <= exponent < 5:
+        return f"{value:.{max(digits - 1 - exponent, 0)}f}"
+    mantissa, power = f"{value:.{digits - 1}e}".split("e")
+    return f"{mantissa}e{int(power)}"
+
+
+def run_label(trajectory: Trajectory) -> str:
+    """What a run did with its winch: ``winch locked`` or ``winch profile``."""
+    angle = np.asarray(trajectory.winch_angle)
+    return "winch locked" if angle.size == 0 or np.ptp(angle) == 0 else "winch profile"
+
+
+def run_title(what: str, scenes: Sequence[str], runs: Sequence[str]) -> str:
+    """A figure's title: what it shows, the scene (or scenes) and the run (or runs) it shows."""
+    scene = ", ".join(dict.fromkeys(scenes))
+    return f"{what}\nscene {scene}: {' vs '.join(dict.fromkeys(runs))}"
+
+
 def _labelled(trajectories, labels):
     trajectories = [trajectories] if isinstance(trajectories, Trajectory) else list(trajectories)
-    labels = list(labels) if labels else [t.scene_name for t in trajectories]
+    if labels:
+        labels = list(labels)
+    elif len({t.scene_name for t in trajectories}) > 1:
+        labels = [f"{t.scene_name}, {run_label(t)}" for t in trajectories]
+    else:
+        labels = [run_label(t) for t in trajectories]
     return list(zip(trajectories, labels, strict=True))
+
+
+def _title(ax, what: str, pairs) -> None:
+    ax.set_title(run_title(what, [t.scene_name for t, _ in pairs], [label for _, label in pairs]))
 
 
 def end_trajectory(
@@ -53,13 +91,16 @@ def end_trajectory(
     path: str | Path | None = None,
 ) -> Figure:
     """End E in the xy, xz and yz planes (the paper's Fig. 14), with the top path in xy."""
-    fig, axes = plt.subplots(1, 3, figsize=(14, 4.2))
-    for traj, label in _labelled(trajectories, labels):
+    fig, axes = plt.subplots(1, 3, figsize=(14, 4.6))
+    pairs = _labelled(trajectories, labels)
+    for traj, label in pairs:
         end = traj.end
         axes[0].plot(end[:, 0], end[:, 1], label=f"{label}: end E")
         axes[1].plot(end[:, 0], end[:, 2], label=label)
         axes[2].plot(end[:, 1], end[:, 2], label=label)
     axes[0].plot(traj.top[:, 0], traj.top[:, 1], "k--", lw=0.8, label="top (vessel)")
+    fig.suptitle(run_title("end E (the paper's Fig. 14)", [t.scene_name for t, _ in pairs],
+                           [label for _, label in pairs]).replace("\n", ", "))  # fmt: skip
     for ax, (a, b) in zip(axes, [("x", "y"), ("x", "z"), ("y", "z")], strict=True):
         ax.set_xlabel(f"{a} [m]")
         ax.set_ylabel(f"{b} [m]")
@@ -82,20 +123,22 @@ def clearance(
 
     ``minimum_clearance`` (m, ``seabed.minimum_clearance``) draws the hard minimum c_min too.
     """
-    fig, ax = plt.subplots(figsize=(9, 4))
-    for traj, label in _labelled(trajectories, labels):
+    fig, ax = plt.subplots(figsize=(9, 4.4))
+    pairs = _labelled(trajectories, labels)
+    for traj, label in pairs:
         ax.plot(
             traj.time,
             clearance_depth + traj.clearance_error,
-            label=f"{label} (Omega = {traj.omega:.3f} m)",
+            label=f"{label} (Omega = {significant(traj.omega)} m)",
         )
     ax.axhline(
-        clearance_depth, color="k", ls="--", lw=0.8, label=f"target delta = {clearance_depth} m"
+        clearance_depth, color="k", ls="--", lw=0.8, label=f"target delta = {clearance_depth:g} m"
     )
     if minimum_clearance is not None:
         ax.axhline(
-            minimum_clearance, color="r", lw=1.2, label=f"minimum c_min = {minimum_clearance} m"
+            minimum_clearance, color="r", lw=1.2, label=f"minimum c_min = {minimum_clearance:g} m"
         )
+    _title(ax, "height of the end E above the seabed (eq. 39)", pairs)
     ax.set_ylabel("end height above the seabed [m]")
     ax.set_xlabel("t [s]")
     ax.grid(alpha=0.3)
@@ -108,11 +151,13 @@ def cable_shapes(
     times: Sequence[float] | None = None,
     seabed: Seabed | None = None,
     path: str | Path | None = None,
+    label: str | None = None,
 ) -> Figure:
     """Cable shapes in the xz plane at chosen times, with the seabed under the end (Fig. 18).
 
     ``seabed`` is the scene's ``[seabed]`` section (default: flat, delta = 5 m under the start);
-    a grid's seabed is drawn where the grid reaches.
+    a grid's seabed is drawn where the grid reaches. ``label`` names the run in the title
+    (default: ``run_label``).
     """
     seabed = Seabed() if seabed is None else seabed
     reference = clearance_reference(seabed, trajectory.end[0])
@@ -138,7 +183,8 @@ def cable_shapes(
     )
     ax.set_xlabel("x [m]")
     ax.set_ylabel("z [m]")
-    ax.set_title("cable shapes (markers ▼: seabed under the end)")
+    _title(ax, "cable shapes in the xz plane (markers ▼: the seabed under the end)",
+           [(trajectory, label or run_label(trajectory))])  # fmt: skip
     ax.grid(alpha=0.3)
     ax.legend(fontsize=8, ncol=2)
     return finish_figure(fig, path)
@@ -150,13 +196,20 @@ def winch_angle(
     bounds: tuple[float, float] | None = None,
     path: str | Path | None = None,
 ) -> Figure:
-    """Winch angle versus time (the paper's Fig. 17), with the angle bounds."""
-    fig, ax = plt.subplots(figsize=(9, 4))
-    for traj, label in _labelled(trajectories, labels):
+    """Winch angle versus time (the paper's Fig. 17), with the angle bounds (dotted).
+
+    ``bounds`` is ``(winch.angle_min, winch.angle_max)``, rad.
+    """
+    fig, ax = plt.subplots(figsize=(9, 4.4))
+    pairs = _labelled(trajectories, labels)
+    for traj, label in pairs:
         ax.plot(traj.time, traj.winch_angle, label=label)
     if bounds is not None:
-        for b in bounds:
-            ax.axhline(b, color="k", ls=":", lw=0.8)
+        low, high = bounds
+        text = f"winch bounds phi_min = {low:g} rad, phi_max = {high:g} rad"
+        for k, b in enumerate(bounds):
+            ax.axhline(b, color="k", ls=":", lw=0.8, label=text if k == 0 else None)
+    _title(ax, "winch angle (the paper's Fig. 17)", pairs)
     ax.set_xlabel("t [s]")
     ax.set_ylabel("winch angle phi [rad]")
     ax.grid(alpha=0.3)
@@ -165,7 +218,11 @@ def winch_angle(
 
 
 def catenary_comparison(
-    model_points: np.ndarray, analytic_points: np.ndarray, path: str | Path | None = None
+    model_points: np.ndarray,
+    analytic_points: np.ndarray,
+    path: str | Path | None = None,
+    scene_name: str = "catenary",
+    elements: int | None = None,
 ) -> Figure:
     """Model joints against the analytic catenary (the paper's Fig. 7b).
 
@@ -175,13 +232,23 @@ def catenary_comparison(
         x and z of the model's joints.
     analytic_points : array (2, m), m
         x and z along the analytic catenary.
+    path : path-like, optional
+        Where to save the figure (then closed).
+    scene_name : str
+        The scene, named in the title.
+    elements : int, optional
+        The model's n, named in the title and the legend (default: from the joints, k - 2).
     """
-    fig, ax = plt.subplots(figsize=(6, 5))
+    n = len(np.asarray(model_points)[0]) - 2 if elements is None else elements
+    fig, ax = plt.subplots(figsize=(6, 6.2))
     ax.plot(*analytic_points, "k-", label="analytic elastic catenary (eq. 34)")
-    ax.plot(*model_points, "o", ms=4, label="rfe model joints")
+    ax.plot(*model_points, "o", ms=4, label=f"rfe model joints, n = {n}")
     ax.set_xlabel("x [m]")
     ax.set_ylabel("z [m]")
     ax.set_aspect("equal")
     ax.grid(alpha=0.3)
-    ax.legend()
+    ax.set_title(run_title("statics against the analytic catenary", [scene_name],
+                           [f"static equilibrium, n = {n}"]))  # fmt: skip
+    # Below the axes: inside, the legend covered the curve's top and the z tick labels.
+    ax.legend(loc="upper center", bbox_to_anchor=(0.5, -0.1), ncol=1, fontsize=9, frameon=False)
     return finish_figure(fig, path)

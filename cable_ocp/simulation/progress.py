@@ -2,20 +2,26 @@
 
 from __future__ import annotations
 
+import math
 import sys
 import time
 
 from tqdm.auto import tqdm
 
+# Whole units only: a simulation counts simulated seconds, and "183.6/210" read as a fraction.
 BAR_FORMAT = (
-    "{desc}: {percentage:3.0f}%|{bar}| {n:.4g}/{total:.4g} [{elapsed}<{remaining}{postfix}]"
+    "{desc}: {percentage:3.0f}%|{bar}| {n_fmt}/{total_fmt} [{elapsed}<{remaining}{postfix}]"
 )
+IN_NOTEBOOK = tqdm.__module__ == "tqdm.notebook"  # tqdm.auto chose Jupyter's widget
 
 
 class Progress:
     """Report the progress of ``total`` units of work with ``tqdm.auto``, or nothing when ``quiet``.
 
-    In a terminal a bar on stderr; in Jupyter a widget. Simulations, Nelder-Mead, the closed loop
+    In Jupyter a widget; in a terminal a bar on stderr that counts whole units (of ``total``,
+    rounded up) and is cleared when it closes, so that it leaves nothing among the lines printed
+    after it; lines printed while it runs (:class:`IterationLog`) go above it. Where stderr is not
+    a terminal (a log file, a pipe) there is no bar. Simulations, Nelder-Mead, the closed loop
     and sweeps show their progress through it.
 
     Parameters
@@ -30,22 +36,49 @@ class Progress:
     def __init__(self, label: str, total: float, quiet: bool = False):
         self.total = float(total)
         self.bar = None
-        if not quiet:
-            self.bar = tqdm(total=self.total, desc=label, file=sys.stderr, bar_format=BAR_FORMAT,
-                            dynamic_ncols=True, leave=True)  # fmt: skip
+        if not quiet and (IN_NOTEBOOK or _terminal(sys.stderr)):
+            self.bar = tqdm(
+                total=_whole(self.total),
+                desc=label,
+                file=sys.stderr,
+                bar_format=BAR_FORMAT,
+                dynamic_ncols=True,
+                leave=IN_NOTEBOOK,
+            )
 
     def update(self, done: float, note: str = "") -> None:
-        """Move the bar to ``done`` units, with a ``note`` after it."""
+        """Move the bar to ``done`` units (whole units done), with a ``note`` after it."""
         if self.bar is None:
             return
         if note:
             self.bar.set_postfix_str(note, refresh=False)
-        self.bar.update(min(max(float(done), 0.0), self.total) - self.bar.n)
+        done = min(max(float(done), 0.0), self.total)
+        count = self.bar.total if done >= self.total else min(int(done), self.bar.total)
+        if count != self.bar.n:
+            self.bar.update(count - self.bar.n)
 
     def close(self) -> None:
-        """Finish the bar (drawn once more at its last value)."""
+        """Finish the bar: cleared in a terminal, kept at its last value in Jupyter."""
         if self.bar is not None:
             self.bar.close()
+
+
+def _whole(total: float) -> int:
+    """The bar's total in whole units: ``total`` rounded up, at least 1."""
+    return max(1, math.ceil(total - 1e-9)) if math.isfinite(total) else 1
+
+
+def _terminal(stream) -> bool:
+    try:
+        return bool(stream.isatty())
+    except (AttributeError, ValueError):  # no isatty, or a closed stream
+        return False
+
+
+def write_line(text: str) -> None:
+    """Write a line to stderr above any running bar (which is redrawn below it)."""
+    tqdm.write(text, file=sys.stderr)
+    sys.stderr.flush()
 
 
 def check_verbosity(quiet: bool, verbose: bool) -> None:
@@ -79,8 +112,7 @@ class IterationLog:
             return
         run = f" solve {self.runs}" if self.runs > 1 else ""
         elapsed = time.perf_counter() - self.start
-        sys.stderr.write(
+        write_line(
             f"{self.label}{run} iter {iteration:4d}  Omega = {omega:.3e} m  "
-            f"violation = {violation:.1e}  {elapsed:7.1f} s\n"
+            f"violation = {violation:.1e}  {elapsed:7.1f} s"
         )
-        sys.stderr.flush()

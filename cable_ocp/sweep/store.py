@@ -45,7 +45,7 @@ from cable_ocp.sweep.spec import Case, SweepSpec
 SCALARS = ("omega", "wall_time")
 OPTIMIZE_SCALARS = ("omega_model", "iterations", "evaluations")
 TEXT = ("status", "reason")
-LOCK = ".sweep.lock"  # the lock inside the folder of cable_ocp up to 0.3: left alone
+LOCK = ".sweep.lock"  # the lock inside the folder of cable_ocp up to 0.3: removed when free
 # What a sweep writes in its folder: a folder holding anything else is not a sweep's.
 SWEEP_NAMES = {MARKER, LOCK, "sweep.json", "sweep.toml", "cases", "sweep.nc"}
 RECOVER = "rerun the same command with --retry-failed to compute it again"
@@ -276,12 +276,38 @@ def folder_lock(folder: Path, what: str = "") -> Iterator[None]:
     """
     try:
         with output_lock(folder, what or None, reentrant=False):
+            _remove_old_lock(Path(folder))
             yield
     except FolderInUse as error:
         raise ValueError(
             f"--out {folder} is in use by another {'sweep' if ' sweep ' in error.holder else 'run'}"
             f" ({error.holder}): wait for it to end, or give another --out"
         ) from None
+
+
+def _remove_old_lock(folder: Path) -> None:
+    """Remove the ``.sweep.lock`` that cable_ocp up to 0.3 left in a sweep folder.
+
+    Those versions held it by ``flock`` while they ran; a lock that a live sweep of theirs holds
+    is left to it, a free one (its sweep finished) is removed.
+    """
+    try:
+        import fcntl
+    except ModuleNotFoundError:  # Windows: those versions took no lock there either
+        return
+    path = folder / LOCK
+    try:
+        handle = os.open(path, os.O_RDONLY | getattr(os, "O_NOFOLLOW", 0))
+    except OSError:  # none (the usual case), or not ours to open
+        return
+    try:
+        fcntl.flock(handle, fcntl.LOCK_EX | fcntl.LOCK_NB)
+    except OSError:  # held by a running sweep of an older cable_ocp
+        return
+    else:
+        path.unlink(missing_ok=True)
+    finally:
+        os.close(handle)
 
 
 def case_statuses(folder: Path, spec: SweepSpec) -> dict[int, str]:

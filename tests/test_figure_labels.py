@@ -1,0 +1,269 @@
+"""Figures and messages read right: titles name the scene and the run, numbers have significant
+digits, axes have units, the validate table is in order with units; progress counts whole steps
+and keeps out of other output; a finished sweep leaves no lock (issue 28)."""
+
+from __future__ import annotations
+
+import dataclasses
+import fcntl
+import io
+import re
+
+import matplotlib
+
+matplotlib.use("Agg")
+import matplotlib.pyplot as plt  # noqa: E402
+import numpy as np  # noqa: E402
+import pytest  # noqa: E402
+
+import cable_ocp as co  # noqa: E402
+from cable_ocp import cli, plots  # noqa: E402
+from cable_ocp.plots import closed_loop  # noqa: E402
+from cable_ocp.simulation import progress  # noqa: E402
+
+UNIT = re.compile(r"\[[^\]]+\]")  # "x [m]", "t [s]", "winch angle phi [rad]"
+
+
+@pytest.fixture(scope="module")
+def runs(models_dir):
+    """A short locked run renamed paper_hill with the optimum's Omega, and a moving-winch twin."""
+    scene = co.load_scene(models_dir / "hanging.toml",
+                          {"numerics.duration": 4.0, "model.elements": 5})  # fmt: skip
+    locked = dataclasses.replace(co.simulate(scene, quiet=True), scene_name="paper_hill",
+                                 omega=4.2762)  # fmt: skip
+    moving = dataclasses.replace(locked, omega=1.302e-4,
+                                 winch_angle=0.5 * np.sin(locked.time))  # fmt: skip
+    return locked, moving
+
+
+def legend_texts(ax) -> list[str]:
+    legend = ax.get_legend()
+    return [] if legend is None else [t.get_text() for t in legend.get_texts()]
+
+
+def assert_units(ax):
+    for label in (ax.get_xlabel(), ax.get_ylabel()):
+        assert UNIT.search(label), f"axis label without a unit: {label!r}"
+
+
+@pytest.mark.parametrize(
+    ("value", "text"),
+    [(1.302e-4, "1.30e-4"), (4.2762, "4.28"), (0.0234, "0.0234"), (12.0, "12.0"), (0.0, "0"),
+     (-7.3e-6, "-7.30e-6"), (123456.0, "1.23e5"), (float("nan"), "nan")],
+)  # fmt: skip
+def test_numbers_have_three_significant_digits(value, text):
+    assert plots.significant(value) == text
+
+
+def test_the_clearance_legend_shows_a_small_omega_in_significant_digits(runs):
+    fig = plots.clearance(runs, 5.0, ["locked winch", "optimised (ipopt)"])
+    ax = fig.axes[0]
+    texts = legend_texts(ax)
+    assert "optimised (ipopt) (Omega = 1.30e-4 m)" in texts, texts
+    assert "locked winch (Omega = 4.28 m)" in texts
+    assert not any("0.000 m" in t for t in texts)
+    assert "paper_hill" in ax.get_title() and "locked winch vs optimised (ipopt)" in ax.get_title()
+    assert_units(ax)
+    plt.close(fig)
+
+
+def test_the_winch_angle_names_scene_run_and_its_dotted_bounds(runs):
+    fig = plots.winch_angle(runs, ["locked winch", "optimised (ipopt)"], (-16.0, 24.0))
+    ax = fig.axes[0]
+    title = ax.get_title()
+    assert "winch angle" in title and "paper_hill" in title and "optimised (ipopt)" in title
+    texts = legend_texts(ax)
+    assert "winch bounds phi_min = -16 rad, phi_max = 24 rad" in texts, texts
+    dotted = [line for line in ax.get_lines() if line.get_linestyle() == ":"]
+    assert len(dotted) == 2 and dotted[0].get_label().startswith("winch bounds")
+    assert_units(ax)
+    plt.close(fig)
+
+
+def test_a_simulation_figure_without_labels_names_its_run(runs):
+    locked, moving = runs
+    fig = plots.winch_angle(locked, bounds=(-1.0, 1.0))
+    assert fig.axes[0].get_title().endswith("scene paper_hill: winch locked")
+    plt.close(fig)
+    fig = plots.clearance(moving)
+    assert fig.axes[0].get_title().endswith("scene paper_hill: winch profile")
+    plt.close(fig)
+
+
+def test_the_end_trajectory_and_the_cable_shapes_name_the_scene(runs):
+    fig = plots.end_trajectory(runs, ["locked winch", "optimised (ipopt)"])
+    assert "paper_hill" in fig.get_suptitle() and "optimised (ipopt)" in fig.get_suptitle()
+    for ax in fig.axes:
+        assert_units(ax)
+    plt.close(fig)
+    fig = plots.cable_shapes(runs[1], label="optimised (ipopt)")
+    title = fig.axes[0].get_title()
+    assert "paper_hill" in title and "optimised (ipopt)" in title
+    assert_units(fig.axes[0])
+    plt.close(fig)
+
+
+def test_the_catenary_legend_covers_neither_the_curve_nor_a_tick_label():
+    s = np.linspace(0, 1, 50)
+    analytic = np.vstack([140 * s**1.3, 265 * s])
+    fig = plots.catenary_comparison(analytic[:, ::3], analytic, scene_name="catenary", elements=15)
+    ax = fig.axes[0]
+    fig.canvas.draw()
+    renderer = fig.canvas.get_renderer()
+    legend = ax.get_legend().get_window_extent(renderer)
+    assert not legend.overlaps(ax.get_window_extent(renderer))  # below the axes
+    (x0, x1), (y0, y1) = sorted(ax.get_xlim()), sorted(ax.get_ylim())
+    shown = [t for t in ax.get_xticklabels() if x0 <= t.get_position()[0] <= x1]
+    shown += [t for t in ax.get_yticklabels() if y0 <= t.get_position()[1] <= y1]
+    assert len(shown) > 4
+    for tick in shown:
+        assert not legend.overlaps(tick.get_window_extent(renderer)), tick.get_text()
+    figure = fig.bbox
+    for text in ax.get_legend().get_texts():  # "rfe model joints, n = 15" not clipped
+        box = text.get_window_extent(renderer)
+        assert figure.x0 <= box.x0 and box.x1 <= figure.x1 and figure.y0 <= box.y0, text
+    assert "rfe model joints, n = 15" in legend_texts(ax)
+    assert "scene catenary" in ax.get_title() and "n = 15" in ax.get_title()
+    assert_units(ax)
+    plt.close(fig)
+
+
+def mpc_result(omega: float = 0.0234) -> co.MpcResult:
+    t = np.linspace(0, 20, 41)
+    samples = np.arange(0, 20, 1.0)
+    return co.MpcResult(
+        time=t, winch_angle=np.sin(t), planned_angle=np.sin(t), end=np.zeros((t.size, 3)),
+        top=np.zeros((t.size, 3)), clearance_error=1e-3 * np.sin(t), omega=omega,
+        sample_times=samples, solve_times=np.full(samples.size, 5.6e-3),
+        iterations=np.ones(samples.size, dtype=int), statuses=["ok"] * samples.size,
+        failures=[], success=True, limited_steps=0, angle_range=(-16.0, 24.0),
+        real_time_factor=157.3, worst_solve_time=7.7e-3, wall_time=1.0, build_time=0.5,
+        settings={"solver": "gauss-newton", "sample_s": 1.0},
+        references={"locked": 4.0 * np.sin(t)}, reference_omegas={"locked": 4.3312},
+    )  # fmt: skip
+
+
+def test_the_closed_loop_figures_name_scene_and_run():
+    result = mpc_result(1.302e-4)
+    fig = closed_loop.clearance(result, scene_name="paper_hill")
+    title = fig.axes[0].get_title()
+    assert "paper_hill" in title and "closed loop (gauss-newton)" in title and "locked" in title
+    assert "closed loop (gauss-newton) (Omega = 1.30e-4 m)" in legend_texts(fig.axes[0])
+    assert "locked (Omega = 4.33 m)" in legend_texts(fig.axes[0])
+    plt.close(fig)
+    fig = closed_loop.winch_angle(result, scene_name="paper_hill")
+    assert "paper_hill" in fig.axes[0].get_title()
+    assert any(t.startswith("winch range phi_min") for t in legend_texts(fig.axes[0]))
+    assert_units(fig.axes[0])
+    plt.close(fig)
+    fig = closed_loop.solve_times(result, scene_name="paper_hill")
+    title = fig.axes[0].get_title()
+    assert "paper_hill" in title and "median 5.60 ms" in title and "factor 157" in title
+    for ax in fig.axes:
+        assert UNIT.search(ax.get_ylabel()), ax.get_ylabel()
+    plt.close(fig)
+
+
+def test_the_validate_table_is_in_ascending_n_with_units(capsys):
+    assert cli.main(["validate", "--elements", "15", "5", "8"]) == 0
+    out = capsys.readouterr().out.splitlines()
+    header = next(line for line in out if line.lstrip().startswith("n "))
+    for column in ("eps_x [%]", "eps_z [%]", "inextensible [%]", "top tension [%]"):
+        assert column in header
+    rows = [int(line.split()[0]) for line in out if re.match(r"\s+\d+\s", line)]
+    assert rows == [5, 8, 15]
+
+
+def test_the_top_level_help_has_no_restructuredtext_markup(capsys):
+    assert cli.main(["--help"]) == 0
+    assert "``" not in capsys.readouterr().out
+
+
+@pytest.mark.parametrize("command", ["simulate", "validate", "optimize", "compare", "mpc",
+                                     "sweep", "study", "bench"])  # fmt: skip
+def test_every_option_has_help_and_a_fixed_default_is_shown(command, capsys):
+    parser = cli.build_parser()
+    sub = next(a for a in parser._actions if a.dest == "command").choices[command]
+    for action in sub._actions:
+        assert action.help, f"{command} {action.option_strings or action.dest}: no help"
+    text = sub.format_help()
+    for action in sub._actions:
+        if action.option_strings and action.default not in (None, False, [], "==SUPPRESS=="):
+            name = action.option_strings[-1]
+            shown = re.search(re.escape(name) + r".*?default", text, re.S)
+            assert shown, f"{command} {name}: default {action.default!r} not in the help"
+
+
+class Terminal(io.StringIO):
+    def isatty(self) -> bool:
+        return True
+
+
+def test_progress_counts_whole_steps_and_clears_itself(monkeypatch):
+    stream = Terminal()
+    monkeypatch.setattr("sys.stderr", stream)
+    bar = progress.Progress("simulate", 210.0)
+    bar.update(183.6)
+    assert bar.bar.n == 183 and isinstance(bar.bar.n, int) and bar.bar.total == 210
+    bar.bar.refresh()
+    assert "183/210" in stream.getvalue() and "183.6" not in stream.getvalue()
+    progress.IterationLog("ipopt").line(3, 1.3e-4, 1e-9)  # written above the bar
+    bar.update(210.0)
+    assert bar.bar.n == 210
+    bar.close()
+    written = stream.getvalue()
+    assert re.search(r"\r +\ripopt iter    3 .*\n", written)  # the bar cleared, the line, \n
+    assert re.search(r"\r +\r$", written)  # and the bar cleared when it closes
+
+
+def test_progress_of_a_fraction_of_a_unit_still_counts_whole_units(monkeypatch):
+    monkeypatch.setattr("sys.stderr", Terminal())
+    bar = progress.Progress("simulate", 0.5)
+    bar.update(0.25)
+    assert (bar.bar.n, bar.bar.total) == (0, 1)
+    bar.update(0.5)
+    assert bar.bar.n == 1
+    bar.close()
+
+
+def test_no_bar_in_a_log_file(monkeypatch):
+    stream = io.StringIO()  # not a terminal: a log
+    monkeypatch.setattr("sys.stderr", stream)
+    bar = progress.Progress("simulate", 210.0)
+    bar.update(100.0)
+    bar.close()
+    assert bar.bar is None and stream.getvalue() == ""
+
+
+def test_a_finished_sweep_leaves_no_lock(tmp_path):
+    from test_sweep import GRID, write
+
+    from cable_ocp.sweep import load_sweep, run_sweep
+
+    out = tmp_path / "out"
+    out.mkdir()
+    (out / ".sweep.lock").write_text("pid 1 on an old host\n")  # left by cable_ocp <= 0.3
+    report = run_sweep(load_sweep(write(tmp_path, GRID)), out, workers=1, quiet=True,
+                       processes=False)  # fmt: skip
+    assert report is not None
+    names = sorted(p.name for p in out.iterdir())
+    assert ".sweep.lock" not in names and not any("lock" in n for n in names), names
+    assert not any("lock" in p.name for p in tmp_path.iterdir())  # nor one beside the folder
+
+
+def test_an_old_sweeps_lock_that_is_held_is_left_to_it(tmp_path):
+    from cable_ocp.sweep.store import LOCK, folder_lock
+
+    folder = tmp_path / "out"
+    folder.mkdir()
+    held = open(folder / LOCK, "w")  # noqa: SIM115 (held across the block)
+    fcntl.flock(held, fcntl.LOCK_EX | fcntl.LOCK_NB)  # a running sweep of cable_ocp <= 0.3
+    try:
+        with folder_lock(folder):
+            pass
+        assert (folder / LOCK).exists()
+    finally:
+        held.close()
+    with folder_lock(folder):
+        pass
+    assert not (folder / LOCK).exists()
