@@ -415,7 +415,7 @@ def _bench_mpc(models: Path, quick: bool = False) -> None:
 
     results = bench_mpc.report(models, quick=quick)
     path = Path("mpc_solve_times.png")
-    solve_time_comparison(results, path=path)
+    solve_time_comparison(results, path=path, scene_name="paper_hill")  # bench_mpc's scene
     print(f"figure written to {path.resolve()}")
 
 

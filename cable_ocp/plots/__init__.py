@@ -64,25 +64,34 @@ def run_label(trajectory: Trajectory) -> str:
     return "winch locked" if angle.size == 0 or np.ptp(angle) == 0 else "winch profile"
 
 
-def run_title(what: str, scenes: Sequence[str], runs: Sequence[str]) -> str:
-    """A figure's title: what it shows, the scene (or scenes) and the run (or runs) it shows."""
-    scene = ", ".join(dict.fromkeys(scenes))
-    return f"{what}\nscene {scene}: {' vs '.join(dict.fromkeys(runs))}"
+def run_title(what: str, scenes: Sequence[str | None], runs: Sequence[str]) -> str:
+    """A figure's title: what it shows, the scene (or scenes) and the run (or runs) it shows.
+
+    A scene of None (a result that does not know its scene, and was not told) is left out.
+    """
+    scene = ", ".join(dict.fromkeys(s for s in scenes if s))
+    run = " vs ".join(dict.fromkeys(runs))
+    return f"{what}\nscene {scene}: {run}" if scene else f"{what}\n{run}"
 
 
 def _labelled(trajectories, labels):
     trajectories = [trajectories] if isinstance(trajectories, Trajectory) else list(trajectories)
     if labels:
         labels = list(labels)
-    elif len({t.scene_name for t in trajectories}) > 1:
-        labels = [f"{t.scene_name}, {run_label(t)}" for t in trajectories]
+    elif len({_scene(t) for t in trajectories}) > 1:
+        labels = [f"{_scene(t)}, {run_label(t)}" for t in trajectories]
     else:
         labels = [run_label(t) for t in trajectories]
     return list(zip(trajectories, labels, strict=True))
 
 
+def _scene(run) -> str | None:
+    """The scene of a run: a Trajectory's name; None for a run that does not know it."""
+    return getattr(run, "scene_name", None)
+
+
 def _title(ax, what: str, pairs) -> None:
-    ax.set_title(run_title(what, [t.scene_name for t, _ in pairs], [label for _, label in pairs]))
+    ax.set_title(run_title(what, [_scene(t) for t, _ in pairs], [label for _, label in pairs]))
 
 
 def end_trajectory(
@@ -99,7 +108,7 @@ def end_trajectory(
         axes[1].plot(end[:, 0], end[:, 2], label=label)
         axes[2].plot(end[:, 1], end[:, 2], label=label)
     axes[0].plot(traj.top[:, 0], traj.top[:, 1], "k--", lw=0.8, label="top (vessel)")
-    fig.suptitle(run_title("end E (the paper's Fig. 14)", [t.scene_name for t, _ in pairs],
+    fig.suptitle(run_title("end E (the paper's Fig. 14)", [_scene(t) for t, _ in pairs],
                            [label for _, label in pairs]).replace("\n", ", "))  # fmt: skip
     for ax, (a, b) in zip(axes, [("x", "y"), ("x", "z"), ("y", "z")], strict=True):
         ax.set_xlabel(f"{a} [m]")

@@ -21,12 +21,13 @@ def _run(result: MpcResult) -> str:
 
 
 def clearance(
-    result: MpcResult, path: str | Path | None = None, scene_name: str = "scene"
+    result: MpcResult, path: str | Path | None = None, scene_name: str | None = None
 ) -> Figure:
     """Clearance error e(t) (eq. 39) of the closed loop against the reference runs.
 
     The upper panel shows every run; the lower one zooms on the runs within 10 times the closed
-    loop's largest error (the locked winch is metres off). ``scene_name`` is named in the title.
+    loop's largest error (the locked winch is metres off). ``scene_name`` is named in the title
+    (an :class:`MpcResult` does not know its scene); so in every figure of this module.
     """
     fig, axes = plt.subplots(2, 1, figsize=(10, 6.8), sharex=True)
     runs = [(f"{_run(result)} (Omega = {significant(result.omega)} m)", result.clearance_error)]
@@ -63,7 +64,7 @@ def _failed(result: MpcResult) -> np.ndarray:
 
 
 def solve_times(
-    result: MpcResult, path: str | Path | None = None, scene_name: str = "scene"
+    result: MpcResult, path: str | Path | None = None, scene_name: str | None = None
 ) -> Figure:
     """Wall time and iterations of each solve, against the sample time (real time)."""
     fig, ax = plt.subplots(figsize=(10, 4.2))
@@ -81,7 +82,7 @@ def solve_times(
     ax.set_xlabel("t [s]")
     ax.set_ylabel("wall time [ms]")
     ax.set_title(
-        f"solve time per sample, scene {scene_name}: {_run(result)}\nmedian "
+        f"{run_title('solve time per sample', [scene_name], [_run(result)])}, median "
         f"{significant(1e3 * np.median(result.solve_times))} ms, worst "
         f"{significant(1e3 * result.worst_solve_time)} ms, real-time factor "
         f"{significant(result.real_time_factor)}"
@@ -96,7 +97,7 @@ def solve_times(
 
 
 def solve_time_comparison(
-    results: dict[str, MpcResult], path: str | Path | None = None, scene_name: str = "scene"
+    results: dict[str, MpcResult], path: str | Path | None = None, scene_name: str | None = None
 ) -> Figure:
     """Solve time per sample of several closed loops on one log axis (the MPC benchmark)."""
     fig, ax = plt.subplots(figsize=(10, 4))
@@ -115,7 +116,7 @@ def solve_time_comparison(
 
 
 def winch_angle(
-    result: MpcResult, path: str | Path | None = None, scene_name: str = "scene"
+    result: MpcResult, path: str | Path | None = None, scene_name: str | None = None
 ) -> Figure:
     """Winch angle applied (with the heave feedback) and planned, with the bounds (dotted)."""
     fig, ax = plt.subplots(figsize=(10, 4.2))

@@ -12,7 +12,8 @@ from tqdm.auto import tqdm
 BAR_FORMAT = (
     "{desc}: {percentage:3.0f}%|{bar}| {n_fmt}/{total_fmt} [{elapsed}<{remaining}{postfix}]"
 )
-IN_NOTEBOOK = tqdm.__module__ == "tqdm.notebook"  # tqdm.auto chose Jupyter's widget
+# tqdm.auto chose Jupyter's widget: its bar class derives from tqdm.notebook's.
+IN_NOTEBOOK = any(cls.__module__ == "tqdm.notebook" for cls in tqdm.__mro__)
 
 
 class Progress:
