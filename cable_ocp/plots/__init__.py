@@ -141,11 +141,11 @@ def clearance(
             label=f"{label} (Omega = {significant(traj.omega)} m)",
         )
     ax.axhline(
-        clearance_depth, color="k", ls="--", lw=0.8, label=f"target delta = {clearance_depth:g} m"
+        clearance_depth, color="k", ls="--", lw=0.8, label=f"target delta = {clearance_depth} m"
     )
     if minimum_clearance is not None:
         ax.axhline(
-            minimum_clearance, color="r", lw=1.2, label=f"minimum c_min = {minimum_clearance:g} m"
+            minimum_clearance, color="r", lw=1.2, label=f"minimum c_min = {minimum_clearance} m"
         )
     _title(ax, "height of the end E above the seabed (eq. 39)", pairs)
     ax.set_ylabel("end height above the seabed [m]")
