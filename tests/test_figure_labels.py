@@ -226,13 +226,20 @@ def test_progress_of_a_fraction_of_a_unit_still_counts_whole_units(monkeypatch):
     bar.close()
 
 
-def test_no_bar_in_a_log_file(monkeypatch):
+def test_a_log_gets_one_line_and_no_bar(monkeypatch):
     stream = io.StringIO()  # not a terminal: a log
     monkeypatch.setattr("sys.stderr", stream)
     bar = progress.Progress("simulate", 210.0)
-    bar.update(100.0)
+    bar.update(100.4)
+    progress.IterationLog("ipopt").line(3, 1.3e-4, 1e-9)
+    bar.update(183.6)
+    assert bar.bar is None
     bar.close()
-    assert bar.bar is None and stream.getvalue() == ""
+    bar.close()  # once
+    lines = stream.getvalue().splitlines(keepends=True)
+    assert len(lines) == 2 and all(line.endswith("\n") for line in lines)
+    assert lines[0].startswith("ipopt iter    3") and "\r" not in stream.getvalue()
+    assert lines[1].startswith("simulate:  87% 183/210 [")
 
 
 def test_a_finished_sweep_leaves_no_lock(tmp_path):

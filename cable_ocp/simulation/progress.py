@@ -19,11 +19,12 @@ IN_NOTEBOOK = any(cls.__module__ == "tqdm.notebook" for cls in tqdm.__mro__)
 class Progress:
     """Report the progress of ``total`` units of work with ``tqdm.auto``, or nothing when ``quiet``.
 
-    In Jupyter a widget; in a terminal a bar on stderr that counts whole units (of ``total``,
-    rounded up) and is cleared when it closes, so that it leaves nothing among the lines printed
-    after it; lines printed while it runs (:class:`IterationLog`) go above it. Where stderr is not
-    a terminal (a log file, a pipe) there is no bar. Simulations, Nelder-Mead, the closed loop
-    and sweeps show their progress through it.
+    Counts are whole units (of ``total``, rounded up). In Jupyter a widget; in a terminal a bar on
+    stderr, cleared when it closes so that it leaves nothing among the lines printed after it,
+    with the lines printed while it runs (:class:`IterationLog`) above it. Where stderr is not a
+    terminal (a log file, a pipe) there is no bar: one line on stderr when it closes, so a log
+    reads line by line. Simulations, Nelder-Mead, the closed loop and sweeps show their progress
+    through it.
 
     Parameters
     ----------
@@ -35,9 +36,11 @@ class Progress:
     """
 
     def __init__(self, label: str, total: float, quiet: bool = False):
-        self.total = float(total)
+        self.total, self.label = float(total), label
         self.bar = None
-        if not quiet and (IN_NOTEBOOK or _terminal(sys.stderr)):
+        self.count, self.note, self.start = 0, "", time.perf_counter()
+        self.log = not quiet and not (IN_NOTEBOOK or _terminal(sys.stderr))
+        if not quiet and not self.log:
             self.bar = tqdm(
                 total=_whole(self.total),
                 desc=label,
@@ -49,19 +52,28 @@ class Progress:
 
     def update(self, done: float, note: str = "") -> None:
         """Move the bar to ``done`` units (whole units done), with a ``note`` after it."""
+        done = min(max(float(done), 0.0), self.total)
+        whole = _whole(self.total)
+        self.count = whole if done >= self.total else min(int(done), whole)
+        self.note = note or self.note
         if self.bar is None:
             return
         if note:
             self.bar.set_postfix_str(note, refresh=False)
-        done = min(max(float(done), 0.0), self.total)
-        count = self.bar.total if done >= self.total else min(int(done), self.bar.total)
-        if count != self.bar.n:
-            self.bar.update(count - self.bar.n)
+        if self.count != self.bar.n:
+            self.bar.update(self.count - self.bar.n)
 
     def close(self) -> None:
-        """Finish the bar: cleared in a terminal, kept at its last value in Jupyter."""
+        """Finish: the bar cleared in a terminal, kept in Jupyter; a log gets its one line."""
         if self.bar is not None:
             self.bar.close()
+        elif self.log:
+            whole = _whole(self.total)
+            elapsed = tqdm.format_interval(time.perf_counter() - self.start)
+            note = f", {self.note}" if self.note else ""
+            write_line(f"{self.label}: {100 * self.count / whole:3.0f}% {self.count}/{whole} "
+                       f"[{elapsed}{note}]")  # fmt: skip
+            self.log = False
 
 
 def _whole(total: float) -> int:
