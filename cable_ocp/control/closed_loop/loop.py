@@ -236,6 +236,7 @@ def mpc(scene, settings: MpcSettings | None = None, quiet: bool = False, **field
         failures=failures,
         success=not failures and plant_failure is None and too_low is None,
         limited_steps=limited,
+        projected_samples=plant.projections,
         angle_range=(low, high),
         real_time_factor=duration / wall_time,
         worst_solve_time=float(np.max(solve_times)),

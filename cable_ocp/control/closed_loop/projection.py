@@ -44,6 +44,14 @@ def axis(psi: np.ndarray, theta: np.ndarray) -> np.ndarray:
     return np.array([np.cos(theta) * np.cos(psi), np.sin(theta), np.cos(theta) * np.sin(psi)])
 
 
+def axis_derivatives(psi, theta) -> tuple[np.ndarray, np.ndarray]:
+    """``de/dpsi`` and ``de/dtheta`` of :func:`axis` (each (3, ...))."""
+    zero = np.zeros_like(np.asarray(psi, float))
+    d_psi = np.array([-np.cos(theta) * np.sin(psi), zero, np.cos(theta) * np.cos(psi)])
+    d_theta = np.array([-np.sin(theta) * np.cos(psi), np.cos(theta), -np.sin(theta) * np.sin(psi)])
+    return d_psi, d_theta
+
+
 def chain_state(
     model: CableModel,
     top: np.ndarray,
@@ -85,10 +93,7 @@ def chain_state(
     for i in reversed(range(count)):
         e = directions[i] / np.linalg.norm(directions[i])
         psi, theta = np.arctan2(e[2], e[0]), np.arcsin(np.clip(e[1], -1.0, 1.0))
-        d_psi = np.array([-np.cos(theta) * np.sin(psi), 0.0, np.cos(theta) * np.cos(psi)])
-        d_theta = np.array(
-            [-np.sin(theta) * np.cos(psi), np.cos(theta), -np.sin(theta) * np.sin(psi)]
-        )
+        d_psi, d_theta = axis_derivatives(psi, theta)
         e_rate = direction_rates[i] - np.dot(direction_rates[i], e) * e
         psi_rate = np.dot(e_rate, d_psi) / np.cos(theta) ** 2
         theta_rate = np.dot(e_rate, d_theta)
@@ -163,3 +168,36 @@ def project_state(
         (upper_rates - rates) / chord_lengths,
     )
     return ProjectedState(state=state, end_offset=joints[0] - state[:3])
+
+
+def onto_bonds(
+    model: CableModel,
+    x: np.ndarray,
+    top: np.ndarray,
+    top_velocity: np.ndarray,
+    top_length: float,
+    top_length_rate: float,
+) -> np.ndarray:
+    """A 5-DOF state moved onto its bonds: each element keeps its direction and turning rate.
+
+    The joints and their velocities are chained down again from the top point
+    (:func:`chain_state`), so the bond residual becomes zero at position and velocity level;
+    each joint moves by at most the sum of the residuals above it.
+
+    Parameters
+    ----------
+    model : CableModel
+    x : array (state_size,)
+    top, top_velocity : array (3,), m, m/s
+        The top point ``A_{n+1}`` and its velocity.
+    top_length, top_length_rate : float, m, m/s
+        ``l_n`` and its rate.
+    """
+    q, qd = model.coordinates(np.asarray(x, float))
+    psi, theta = np.array([qi[3] for qi in q]), np.array([qi[4] for qi in q])
+    psi_rate, theta_rate = np.array([v[3] for v in qd]), np.array([v[4] for v in qd])
+    d_psi, d_theta = axis_derivatives(psi, theta)
+    rates = (psi_rate * d_psi + theta_rate * d_theta).T
+    return chain_state(
+        model, top, top_velocity, top_length, top_length_rate, axis(psi, theta).T, rates
+    )

@@ -46,6 +46,9 @@ class MpcResult:
         Plant steps at which the soft limiter changed the commanded angle (within
         ``MpcSettings.limiter_band`` of a
         bound, :mod:`.plant`).
+    projected_samples : int
+        Samples that started from a plant state moved back onto its bonds, its residual having
+        crept above half of ``numerics.constraint_tolerance`` (:meth:`.plant.Plant.onto_bonds`).
     angle_range : (float, float), rad
         The winch range the applied angle is held in.
     real_time_factor : float
@@ -89,6 +92,7 @@ class MpcResult:
     wall_time: float
     build_time: float
     settings: dict
+    projected_samples: int = 0
     references: dict[str, np.ndarray] = field(default_factory=dict)
     reference_omegas: dict[str, float] = field(default_factory=dict)
     status: str = ""
@@ -109,6 +113,7 @@ class MpcResult:
             "wall_time_s": self.wall_time,
             "build_time_s": self.build_time,
             "limited_steps": self.limited_steps,
+            "projected_samples": self.projected_samples,
             "angle_range_rad": list(self.angle_range),
             "applied_angle_range_rad": [
                 float(self.winch_angle.min()),
