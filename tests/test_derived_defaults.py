@@ -45,14 +45,42 @@ def test_any_duration_optimises_by_default(models_dir):
     assert result.success, result.status
     assert "derived settings" in result.notes and "intervals" in result.notes
     nodes = HermiteIntervals(37.0, int(result.parameters.size / 2)).breakpoints
-    counts = nodes / scene.numerics.step  # the nodes fall on the scene's step ends
+    counts = nodes / result.verified_step  # the nodes fall on the full model's step ends
     np.testing.assert_allclose(counts, np.round(counts), atol=1e-9)
+    # 148 steps of 0.25 s divide into 4 intervals, not about 7: the full model's step fits them.
+    assert result.parameters.size == 2 * 7 and result.verified_step < scene.numerics.step
 
 
 def test_intervals_nearest_the_wanted_count_divide_the_steps():
     """4200 steps (paper_hill) keep 42 intervals; 2747 = 41 x 67 steps take 67 for 55."""
     assert defaults.intervals_for(210.0, 0.05, 42) == 42
     assert defaults.intervals_for(137.35, 0.05, 55) == 67
+
+
+def test_a_duration_no_grid_of_5_s_fits_shortens_the_full_models_step(models_dir):
+    """T = 67 s at h = 0.1 s: the 670 steps divide into 10 or 67 intervals, not about 13.
+
+    The grid is then 13 intervals of 5.15 s, and the full model runs at 5.15 s / 52, so that
+    every node is on a step end (checked on the verified run's own step). Where a grid fits
+    (paper_hill's 4200 steps into 42), the scene is the one given.
+    """
+    assert defaults.control_grid(210.0, 0.05) == 42
+    paper = load_scene(models_dir / "paper_hill.toml")
+    assert defaults.on_nodes(paper, 42) == (paper, "")
+    scene = load_scene(
+        models_dir / "small_tow.toml", {"numerics.duration": 67.0, "numerics.step": 0.1}
+    )
+    assert defaults.control_grid(67.0, 0.1) == 13
+    fitted, note = defaults.on_nodes(scene, 13)
+    assert fitted.numerics.step == pytest.approx(67.0 / 13 / 52, rel=1e-12)
+    assert "13 control nodes" in note and "instead of the scene's 0.1 s" in note
+    result = optimize(scene, quiet=True)
+    assert result.success, result.status
+    assert result.parameters.size == 2 * 13
+    assert "instead of the scene's 0.1 s" in result.notes
+    nodes = HermiteIntervals(67.0, 13).breakpoints / result.verified_step
+    np.testing.assert_allclose(nodes, np.round(nodes), atol=1e-9)
+    assert result.verified_step <= 0.1
 
 
 def test_reduced_step_follows_the_limit_along_the_run(models_dir):

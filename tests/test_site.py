@@ -23,6 +23,8 @@ import pytest
 
 import cable_ocp
 
+pytest.importorskip("sphinx", reason="the site needs the docs extra (pip install -e '.[docs]')")
+
 ROOT = Path(__file__).resolve().parent.parent
 DOCS = ROOT / "docs"
 sys.path.insert(0, str(DOCS / "_ext"))

@@ -8,6 +8,9 @@ step and sample) are derived from that scene here, and every result says how
 - **Control grid** from the duration: intervals of about :data:`CONTROL_INTERVAL` seconds
   (42 on the paper's 210 s), the count nearest ``T / 5 s`` that divides the scene's RK4 steps,
   so that the nodes (where the Hermite acceleration jumps) fall on step ends of every model.
+  Where no such count is within :data:`GRID_SLACK` of ``T / 5 s`` (T = 449 s at h = 0.05 s:
+  20 or 449 intervals), the count is ``T / 5 s`` and the full model's runs take the largest
+  step up to the scene's that puts the nodes on step ends (:func:`on_nodes`).
 - **Reduced model's step** from its RK4 limit along the run it will make: the locked winch's run
   of the reduced model, linearised at :data:`~cable_ocp.simulation.stability.LIMIT_PROBES`
   states (drag stiffens the model as it moves through the water, so the limit at rest says too
@@ -39,6 +42,11 @@ CONTROL_INTERVAL = 5.0
 # 7.4e-6, 7.3e-6 m for 39, 105, 222 s of IPOPT: README, "speed against accuracy"), and no element
 # longer than this (m), so that a long rope keeps its shape.
 REDUCED_ELEMENTS = 3
+# Share by which the control grid may stray from intervals of CONTROL_INTERVAL to fit the
+# scene's steps; beyond it the full model's step is shortened instead (20 intervals of 22.4 s
+# on a 449 s whole-space case left Omega 1.43 m, 10 % over its reach floor; 90 intervals on the
+# same scene at T = 450 s, 1.34 m).
+GRID_SLACK = 0.2
 REDUCED_ELEMENT_LENGTH = 150.0
 # s: the reduced model's step is never coarser than this, the step that served the paper's rope
 # (its limit along the run is 1.02 s at n = 3), whatever a stiff-free scene would allow.
@@ -79,6 +87,42 @@ def reduced_elements(scene) -> int:
 def control_intervals(duration: float) -> int:
     """Hermite intervals of about :data:`CONTROL_INTERVAL` over ``duration`` (s)."""
     return max(1, round(duration / CONTROL_INTERVAL))
+
+
+def control_grid(duration: float, scene_step: float) -> int:
+    """Hermite intervals of a duration (s) whose RK4 steps are ``scene_step`` (s) long.
+
+    The count nearest ``duration / CONTROL_INTERVAL`` that divides the steps, if it is within
+    :data:`GRID_SLACK` of it; that count itself otherwise (:func:`on_nodes` then fits the step).
+    """
+    wanted = control_intervals(duration)
+    fitting = intervals_for(duration, scene_step, wanted)
+    return fitting if abs(fitting - wanted) <= GRID_SLACK * wanted else wanted
+
+
+def on_nodes(scene, intervals: int):
+    """The scene with its step shortened so that ``intervals`` nodes fall on step ends.
+
+    The full model's runs (the verification, the model correction) then take the largest
+    whole fraction of an interval up to ``numerics.step``, so that the Hermite acceleration
+    jumps only on step ends (inside a step it kicks the bonds).
+
+    Returns
+    -------
+    (Scene, str)
+        The scene (the same one when its steps already fit) and a phrase that says what changed
+        (empty when nothing did).
+    """
+    numerics = scene.numerics
+    if step_count(numerics.duration, numerics.step) % intervals == 0:
+        return scene, ""
+    width = numerics.duration / intervals
+    step = width / math.ceil(width / numerics.step * (1 - 1e-12))
+    note = (
+        f"the full model's runs at h = {step:.6g} s instead of the scene's {numerics.step:g} s, "
+        f"so that the {intervals} control nodes ({width:.4g} s apart) fall on step ends"
+    )
+    return scene.updated({"numerics.step": step}), note
 
 
 def run_limit(scene, elements: int, duration: float, compiled: bool = True) -> tuple[float, float]:

@@ -197,6 +197,21 @@ def make_control(scene, settings: IpoptSettings) -> KnotSpline | HermiteInterval
     return HermiteIntervals(duration, settings.control_intervals or settings.intervals)
 
 
+def full_model_scene(scene, settings):
+    """The scene that the full model's runs take under resolved settings, and what changed.
+
+    Its step is shortened where the Hermite nodes would fall inside the scene's steps
+    (:func:`cable_ocp.control.defaults.on_nodes`); a spline (C2) needs no such fit.
+
+    Returns
+    -------
+    (Scene, str)
+    """
+    if settings.control == "spline":
+        return scene, ""
+    return defaults.on_nodes(scene, settings.control_intervals or settings.intervals)
+
+
 def steps_per_interval(duration: float, step: float, intervals: int) -> int:
     """RK4 steps in each shooting interval; ``intervals`` must divide the steps of the run."""
     total_steps = round(duration / step)
@@ -258,10 +273,10 @@ def resolved(scene, settings: IpoptSettings, compiled: bool | None = None):
     else:
         # Nodes on the scene's step ends too: the Hermite acceleration jumps there, and a jump
         # inside an RK4 step of the verifying model costs its bonds (1e-4 m, not converging
-        # with h, on a whole-space case with nodes 5.04 s apart at h = 0.1 s).
-        intervals = settings.intervals or defaults.intervals_for(
-            duration, scene.numerics.step, defaults.control_intervals(duration)
-        )
+        # with h, on a whole-space case with nodes 5.04 s apart at h = 0.1 s). Where no grid
+        # of about 5 s fits the scene's steps, the full model's step is shortened to fit it
+        # (full_model_scene).
+        intervals = settings.intervals or defaults.control_grid(duration, scene.numerics.step)
         step = defaults.step_within(limit, duration / intervals, defaults.STEP_CAP)
         choice = defaults.StepChoice(step, limit, at)
         notes.append(choice.describe("at"))

@@ -26,7 +26,13 @@ from cable_ocp.control.nelder_mead import (
     resolved_nelder_mead,
     solve_nelder_mead,
 )
-from cable_ocp.control.ocp import IpoptSettings, ShootingProblem, ipopt_problem, resolved
+from cable_ocp.control.ocp import (
+    IpoptSettings,
+    ShootingProblem,
+    full_model_scene,
+    ipopt_problem,
+    resolved,
+)
 from cable_ocp.control.problem import SolverOutcome, WinchProblem
 from cable_ocp.control.verification import Verification, correction_step
 from cable_ocp.scene import labelled as results
@@ -560,6 +566,9 @@ def optimize(
     model = "the optimisation model"
     try:
         settings, derived = chosen.resolve(scene, settings)
+        if isinstance(settings, IpoptSettings):
+            scene, fitted = full_model_scene(scene, settings)
+            derived = "; ".join(text for text in (derived, fitted) if text)
         model = (
             f"the optimisation model ({settings.elements} elements at h = {settings.step:.4g} s"
             f"{'; ' + derived if derived else ''})"
