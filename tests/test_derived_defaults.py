@@ -277,3 +277,41 @@ def test_the_optimisation_models_runs_may_leave_the_grid(models_dir):
     edge = states.copy()
     edge[-5:, 0] = 300.0
     np.testing.assert_allclose(held, clearance_error(scene.seabed, edge[:, :3]), atol=1e-12)
+
+
+def test_a_closed_loop_qp_that_the_heave_room_makes_infeasible_is_solved_on_the_winch_range(
+    models_dir,
+):
+    """The winch 1.5 rad under its upper bound, paying out at 0.5 rad/s, and a room of 3 rad for
+    the heave feedback: no plan gets under the narrowed bound within the 1 s sample (at
+    0.65 rad/s^2 it still turns 0.18 rad further up), while one stops within the winch's own
+    range (0.5^2 / (2 a) = 0.19 rad < 1.5 rad). The solve is made on that range and says so
+    (seed 2, case 7 of the whole-space benchmark failed 35 solves so)."""
+    from cable_ocp.control.closed_loop.controller import WIDENED, Estimate, RecedingHorizon
+    from cable_ocp.control.closed_loop.estimator import Estimator
+    from cable_ocp.control.closed_loop.plant import Plant
+    from cable_ocp.control.gauss_newton import DAQP_INFEASIBLE
+    from cable_ocp.drive.bounds import angle_bounds
+
+    limits = {"winch.rate_max": 1.0, "winch.acceleration_max": 0.65}
+    scene = load_scene(models_dir / "small_tow.toml", limits)
+    settings, _ = MpcSettings().resolved(scene)
+    controller = RecedingHorizon(scene, settings)
+    low, high = angle_bounds(scene)
+    plant = Plant(scene, (low, high), settings.limiter_band)
+    hold = lambda t, left=None: tuple(np.zeros((3, np.size(t))))  # noqa: E731
+    x = plant.initial_state(plant.apply(hold, np.zeros(1)))
+    u = plant.inputs(plant.apply(hold, np.zeros(1)), np.zeros(1))[:, 0]
+    estimator = Estimator(settings, plant.model, controller.model, scene.winch.drum_radius, u[2])
+    estimator.reference = 5.0
+    angle, rate = high - 1.5, 0.5
+    estimate = estimator.make_step(0.0, x, u, angle, rate)
+    roomy = Estimate(estimate.state, estimate.forecast, estimate.end_offset, 5.0, 3.0)
+    narrowed = controller.problem.bounds.narrowed(roomy.margin, settings.sample)
+    values = controller.parameter_values(0.0, roomy)
+    guess = np.zeros(controller.control.size)
+    fixed = {controller._start_angle: angle, controller._start_rate: rate}
+    direct = controller.solver.solve(values, guess, fixed, *narrowed)
+    assert not direct.success and DAQP_INFEASIBLE in direct.status, direct.status
+    solve = controller.make_step(0.0, roomy, angle, rate)
+    assert solve.success and WIDENED in solve.status, solve.status

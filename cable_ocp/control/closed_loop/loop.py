@@ -16,7 +16,7 @@ from types import SimpleNamespace
 
 import numpy as np
 
-from cable_ocp.control.closed_loop.controller import RecedingHorizon
+from cable_ocp.control.closed_loop.controller import WIDENED, RecedingHorizon
 from cable_ocp.control.closed_loop.estimator import Estimator
 from cable_ocp.control.closed_loop.forecast import BlendedHeight
 from cable_ocp.control.closed_loop.plant import Plant
@@ -219,6 +219,9 @@ def mpc(scene, settings: MpcSettings | None = None, quiet: bool = False, **field
     ref_errors, ref_failures = _references(scene, plant, settings.references, time_grid)
     # lowest_clearance reads a run's time and end, as a Trajectory has them.
     _, _, too_low = lowest_clearance(scene.seabed, SimpleNamespace(time=time_grid, end=end))
+    widened = sum(WIDENED in text for text in statuses)
+    if widened:
+        ref_failures = [f"{widened} solves {WIDENED}", *ref_failures]
     status = _status(samples, failures, plant_failure, too_low, ref_failures)
     return MpcResult(
         time=time_grid,
@@ -262,9 +265,12 @@ def _status(
     failures: list[str],
     plant_failure: str | None,
     too_low: str | None,
-    references: list[str],
+    notes: list[str],
 ) -> str:
-    """One line on how the loop went: plant, minimum clearance, solves, reference runs."""
+    """One line on how the loop went: plant, minimum clearance, solves, then ``notes``.
+
+    The notes: solves on the winch's own range, reference runs left out.
+    """
     parts = [reason for reason in (plant_failure, too_low) if reason]
     parts.append(
         f"{len(failures)} of {samples} solves failed (the plant kept the previous plan): "
@@ -273,7 +279,7 @@ def _status(
         if failures
         else "every solve succeeded"
     )
-    return "; ".join(parts + references)
+    return "; ".join(parts + notes)
 
 
 def _run_open(plant: Plant, angle, time_grid: np.ndarray) -> np.ndarray:
