@@ -180,7 +180,7 @@ def test_the_top_level_help_has_no_restructuredtext_markup(capsys):
 
 
 @pytest.mark.parametrize("command", ["simulate", "validate", "optimize", "compare", "mpc",
-                                     "sweep", "study", "bench"])  # fmt: skip
+                                     "sweep", "study", "bench", "scenes", "schema"])  # fmt: skip
 def test_every_option_has_help_and_a_fixed_default_is_shown(command, capsys):
     parser = cli.build_parser()
     sub = next(a for a in parser._actions if a.dest == "command").choices[command]

@@ -1,4 +1,6 @@
-"""The command line: ``cable-ocp simulate|optimize|compare|mpc|sweep|validate|study|bench``.
+"""The command line: ``cable-ocp simulate|optimize|compare|mpc|sweep|validate|study|bench|...``.
+
+``cable-ocp scenes`` lists the bundled scenes, ``cable-ocp schema [KEY]`` the fields of a scene.
 
 Every expected failure is one line ``cable-ocp COMMAND: error: ...`` on stderr and a non-zero exit
 code: 2 for bad input (arguments, scene and sweep files, a results folder that must not be
@@ -11,14 +13,16 @@ from __future__ import annotations
 
 import argparse
 import math
+import os
 import sys
 from pathlib import Path
 
-from cable_ocp.cli.arguments import OUT_HELP, DefaultsShown, integer, positive
+from cable_ocp.cli.arguments import OUT_HELP, SCENE_HELP, DefaultsShown, integer, positive
 from cable_ocp.cli.files import results_folder
 from cable_ocp.cli.mpc import add_mpc_command
+from cable_ocp.cli.reference import add_reference_commands
 from cable_ocp.cli.sweep import add_sweep_command
-from cable_ocp.scene.bundled import models_dir
+from cable_ocp.scene.bundled import models_dir, scene_argument
 from cable_ocp.scene.output import claimed_target, json_text
 from cable_ocp.scene.schema import load_scene
 
@@ -469,7 +473,7 @@ def build_parser() -> argparse.ArgumentParser:
     sim = commands.add_parser(
         "simulate", **shown, help="simulate a scene and write results and figures"
     )
-    sim.add_argument("scene", type=Path, help="the scene file (TOML)")
+    sim.add_argument("scene", type=scene_argument, help=SCENE_HELP)
     sim.add_argument("--out", type=Path, required=True, help=OUT_HELP)
     sim.add_argument("--knots", type=_knots,
                      help="winch knot angles phi_1..phi_p in rad, comma-separated (write "
@@ -485,7 +489,8 @@ def build_parser() -> argparse.ArgumentParser:
     val = commands.add_parser(
         "validate", **shown, help="statics check against the analytic catenary"
     )
-    val.add_argument("scene", type=Path, nargs="?", help="default: the bundled catenary.toml")
+    val.add_argument("scene", type=scene_argument, nargs="?",
+                     help=SCENE_HELP + "; default: catenary")  # fmt: skip
     val.add_argument("--elements", type=integer(1, 1000), nargs="+", default=[15, 5, 30, 60],
                      help="element counts n to check, listed in ascending order; the figure "
                      "shows the first given")  # fmt: skip
@@ -493,7 +498,7 @@ def build_parser() -> argparse.ArgumentParser:
     val.set_defaults(run=_validate)
 
     opt = commands.add_parser("optimize", **shown, help="optimise the winch angle of a scene")
-    opt.add_argument("scene", type=Path, help="the scene file (TOML)")
+    opt.add_argument("scene", type=scene_argument, help=SCENE_HELP)
     opt.add_argument("--method", choices=["ipopt", "nelder-mead"], default="ipopt",
                      help="ipopt: direct shooting on the winch parameters, solved by --solver "
                      "(Gauss-Newton SQP or IPOPT) and refined by model correction; nelder-mead: "
@@ -506,12 +511,14 @@ def build_parser() -> argparse.ArgumentParser:
     opt.set_defaults(run=_optimize)
 
     cmp = commands.add_parser("compare", **shown, help="IPOPT against Nelder-Mead in one table")
-    cmp.add_argument("scenes", type=Path, nargs="+", help="scene files (TOML)")
+    cmp.add_argument("scenes", type=scene_argument, nargs="+",
+                     help="scene files (TOML) or bundled scenes' names")  # fmt: skip
     cmp.add_argument("--out", type=Path, required=True, help=OUT_HELP)
     _add_optimiser_options(cmp)
     cmp.set_defaults(run=_compare)
     add_mpc_command(commands)
     add_sweep_command(commands)
+    add_reference_commands(commands)
 
     study = commands.add_parser(
         "study",
@@ -526,8 +533,9 @@ def build_parser() -> argparse.ArgumentParser:
         choices=["step", "elements", "end-force", "speed-accuracy", "stability"],
         help="the study (see above)",
     )
-    study.add_argument("scene", type=Path, nargs="?",
-                       help="the scene file of step, elements and end-force")  # fmt: skip
+    study.add_argument("scene", type=scene_argument, nargs="?",
+                       help="the scene of step, elements and end-force: a TOML file or a "
+                       "bundled scene's name")  # fmt: skip
     study.add_argument("--out", type=Path, required=True, help=OUT_HELP)
     study.add_argument("--set", action="append", default=[], metavar="KEY=VALUE",
                        help="override a field of SCENE, e.g. --set numerics.step=0.02")  # fmt: skip
@@ -582,6 +590,9 @@ def main(argv: list[str] | None = None) -> int:
     except (ValueError, OverflowError, RuntimeError) as error:  # SceneError, UnicodeDecodeError
         print(f"{prefix}: error: {_one_line(error)}", file=sys.stderr)
         return 2
+    except BrokenPipeError:  # the output's reader closed it (| head): stop without a word
+        os.dup2(os.open(os.devnull, os.O_WRONLY), sys.stdout.fileno())
+        return 141
     except OSError as error:
         print(f"{prefix}: error: {_one_line(error)}", file=sys.stderr)
         return 1

@@ -14,6 +14,8 @@ OUT_HELP = (
     "(marked by .cable_ocp-results), which is replaced"
 )
 
+SCENE_HELP = "the scene: a TOML file, or a bundled scene's name (cable-ocp scenes lists them)"
+
 
 def integer(low: int, high: int) -> Callable[[str], int]:
     """An argparse type: an integer from ``low`` to ``high``."""

@@ -6,8 +6,17 @@ import argparse
 import sys
 from pathlib import Path
 
-from cable_ocp.cli.arguments import OUT_HELP, DefaultsShown, fraction, integer, positive, weight
+from cable_ocp.cli.arguments import (
+    OUT_HELP,
+    SCENE_HELP,
+    DefaultsShown,
+    fraction,
+    integer,
+    positive,
+    weight,
+)
 from cable_ocp.control.closed_loop.settings import SOLVERS, MpcSettings
+from cable_ocp.scene.bundled import scene_argument
 
 
 def add_mpc_command(subparsers) -> None:
@@ -21,7 +30,7 @@ def add_mpc_command(subparsers) -> None:
         "(with its heave, e.g. --set top.heave.amplitude=1 --set top.heave.period=8) is the "
         "plant. Writes mpc.nc (the run, netCDF), summary.json and figures to --out.",
     )
-    parser.add_argument("scene", type=Path, help="the scene file (TOML)")
+    parser.add_argument("scene", type=scene_argument, help=SCENE_HELP)
     parser.add_argument("--out", type=Path, required=True, help=OUT_HELP)
     defaults = MpcSettings()
     parser.add_argument(

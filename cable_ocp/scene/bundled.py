@@ -48,3 +48,28 @@ def scene_path(name: str) -> Path:
             f"scene name {name!r} is not a bundled scene; choose one of: {', '.join(scene_names())}"
         )
     return path
+
+
+def scene_summary(name: str) -> str:
+    """What the bundled scene ``name`` is: its file's first comment line, without the name.
+
+    ``"paper_hill"`` gives ``"option B of the paper (sections 5-6): as paper_flat, ..."``; a file
+    that opens otherwise gives ``""``.
+    """
+    first = scene_path(name).read_text(encoding="utf-8").partition("\n")[0]
+    if not first.startswith("#"):
+        return ""
+    return first.lstrip("# ").split(" — ", 1)[-1].strip()
+
+
+def scene_argument(text: str) -> Path:
+    """A scene given on the command line: a file's path, or a bundled scene's name.
+
+    An existing file wins; otherwise a bundled scene of that name (``paper_hill`` or
+    ``paper_hill.toml``); otherwise the path as given, which loading then reports as missing.
+    """
+    path = Path(text)
+    if path.exists() or path.parent != Path("."):
+        return path
+    name = text.removesuffix(".toml")
+    return scene_path(name) if name in scene_names() else path

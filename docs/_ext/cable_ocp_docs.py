@@ -3,7 +3,8 @@
 ``scene-schema``
     One table per scene section (``cable``, ``environment``, ...), each field with its type,
     default, unit, allowed range and meaning, read from the field declarations of
-    :mod:`cable_ocp.scene.schema` when the site is built.
+    :mod:`cable_ocp.scene.schema` when the site is built (:mod:`cable_ocp.scene.fields`, as
+    ``cable-ocp schema`` prints them).
 ``cli-help``
     The ``--help`` text of ``cable-ocp`` and of each of its commands, from
     :func:`cable_ocp.cli.build_parser`.
@@ -12,9 +13,7 @@
 from __future__ import annotations
 
 import argparse
-import math
 import re
-from dataclasses import MISSING, fields
 from pathlib import Path
 
 from docutils import nodes
@@ -22,93 +21,11 @@ from docutils.statemachine import StringList
 from sphinx.util import logging
 from sphinx.util.docutils import SphinxDirective
 
+from cable_ocp.scene.fields import field_rows, schema_sections
+
 logger = logging.getLogger(__name__)
 
 CACHE = Path(__file__).resolve().parent.parent / "_build" / ".jupyter_cache"
-NUMERIC = ("float", "int", "vec3")
-# The numbers of a scene that have no unit (coefficients, counts, a seed, a ratio), by field path.
-# A number declared without a unit that is not listed here fails the build (and tests/test_site.py):
-# give it its unit in cable_ocp/scene/schema.py, or list it here if it has none.
-DIMENSIONLESS = frozenset({
-    "hydrodynamics.drag_normal", "hydrodynamics.drag_axial", "hydrodynamics.added_mass_normal",
-    "hydrodynamics.added_mass_axial", "hydrodynamics.quadrature_points", "model.elements",
-    "winch.knots", "numerics.output_every", "end.payload.drag", "end.payload.added_mass",
-    "top.heave.sea_state.peak_enhancement", "top.heave.sea_state.components",
-    "top.heave.sea_state.seed",
-})  # fmt: skip
-
-
-def schema_sections():
-    """``[(path, dataclass)]`` of every scene section, depth first from :class:`Scene`."""
-    from cable_ocp.scene.schema import Scene
-
-    found, todo = [], [("", Scene)]
-    while todo:
-        path, cls = todo.pop(0)
-        found.append((path, cls))
-        for f in fields(cls):
-            spec = f.metadata.get("spec")
-            if spec is not None and spec.kind in ("section", "tuple") and spec.item is not None:
-                child = f"{path}.{f.name}" if path else f.name
-                todo.append((child + ("[]" if spec.kind == "tuple" else ""), spec.item))
-    return found
-
-
-def _default(f) -> str:
-    if f.default is not MISSING:
-        value = f.default
-    elif f.default_factory is not MISSING:
-        return "(table)"
-    else:
-        return "required"
-    if value is None:
-        return "None"
-    if isinstance(value, float) and math.isfinite(value):
-        return f"{value:g}"
-    return repr(value) if isinstance(value, str) else str(value)
-
-
-def field_rows(cls, path: str = "") -> list[dict[str, str]]:
-    """One row per declared field of the scene dataclass ``cls`` at ``path``.
-
-    Each row has the field's name, kind, default, unit and range; ``missing`` names what the
-    declaration lacks (a number without a unit, not listed in ``DIMENSIONLESS``).
-    """
-    rows = []
-    for f in fields(cls):
-        spec = f.metadata.get("spec")
-        if spec is None:
-            continue
-        kind = spec.item.__name__ if spec.item is not None else spec.kind
-        if spec.kind == "choice":
-            allowed = " | ".join(repr(c) for c in spec.choices)
-        elif spec.kind in NUMERIC:
-            allowed = spec.rule().replace(f" ({spec.unit})", "") or "any finite"
-        elif spec.kind == "bool":
-            allowed = "true | false"
-        elif spec.kind == "section":
-            allowed = "table"
-        elif spec.kind == "tuple":
-            allowed = "array of tables"
-        else:
-            allowed = "text" if spec.kind == "str" else "file path"
-        if spec.optional:
-            allowed += " (optional)"
-        dotted = f"{path.replace('[]', '')}.{f.name}".lstrip(".")
-        missing = ""
-        if spec.kind not in NUMERIC:
-            unit = "—"
-        elif spec.unit:
-            unit = spec.unit
-        else:
-            unit = "1"
-            missing = "" if dotted in DIMENSIONLESS else "a unit"
-        if not spec.doc:
-            missing = " and ".join(filter(None, [missing, "a meaning"]))
-        rows.append({"field": f.name, "path": dotted, "kind": kind, "default": _default(f),
-                     "unit": unit, "range": allowed, "meaning": spec.doc,
-                     "missing": missing})  # fmt: skip
-    return rows
 
 
 def _cell(text: str) -> str:
