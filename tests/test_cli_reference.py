@@ -101,3 +101,36 @@ def test_a_missing_scene_is_refused_in_one_line(tmp_path, capsys):
 def test_the_help_says_a_name_is_taken(command, capsys):
     assert cli.main([command, "--help"]) == 0
     assert "bundled scene's name" in " ".join(capsys.readouterr().out.split())
+
+
+def test_optimize_writes_its_summary_and_the_winch_table(tmp_path, capsys):
+    """summary.json holds the result's figures; winch.csv the verified profile, whose line out
+    and pay-out rate are the drum's r_D phi and r_D phi' (checked against the result's own
+    trajectory, and the rate against a finite difference of the angle)."""
+    import json
+
+    import numpy as np
+
+    from cable_ocp.control.optimization import OcpResult
+
+    out = tmp_path / "o"
+    assert cli.main(["optimize", "small_tow", "--out", str(out), "--quiet"]) == 0, (
+        capsys.readouterr().err
+    )
+    summary = json.loads((out / "summary.json").read_text())
+    result = OcpResult.load(out)
+    assert summary["scene"] == "small_tow" and summary["success"] is True
+    assert summary["omega_m"] == pytest.approx(result.omega, rel=1e-12)
+    assert summary["locked_omega_m"] > 10 * summary["omega_m"]
+    table = np.genfromtxt(out / "winch.csv", delimiter=",", names=True)
+    scene = load_scene(scene_path("small_tow"))
+    radius = scene.winch.drum_radius
+    np.testing.assert_allclose(table["time_s"], result.trajectory.time, atol=1e-9)
+    np.testing.assert_allclose(table["winch_angle_rad"], result.trajectory.winch_angle, atol=1e-8)
+    np.testing.assert_allclose(
+        table["line_out_m"], scene.cable.length + radius * table["winch_angle_rad"], atol=1e-6
+    )
+    np.testing.assert_allclose(table["payout_rate_m_s"], radius * table["winch_rate_rad_s"])
+    slope = np.gradient(table["winch_angle_rad"], table["time_s"])
+    scale = np.max(np.abs(table["winch_rate_rad_s"]))
+    assert np.max(np.abs(slope - table["winch_rate_rad_s"])) < 0.05 * scale

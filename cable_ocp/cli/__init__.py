@@ -18,6 +18,7 @@ import sys
 from pathlib import Path
 
 from cable_ocp.cli.arguments import OUT_HELP, SCENE_HELP, DefaultsShown, integer, positive
+from cable_ocp.cli.exports import winch_csv
 from cable_ocp.cli.files import results_folder
 from cable_ocp.cli.mpc import add_mpc_command
 from cable_ocp.cli.reference import add_reference_commands
@@ -210,8 +211,13 @@ def _optimize(args) -> int:
     seabed, bounds = scene.seabed, (scene.winch.angle_min, scene.winch.angle_max)
     runs = [("locked winch", locked), (f"optimised ({result.method})", result.trajectory)]
     runs = [(label, run) for label, run in runs if run is not None]
+    summary = {"scene": scene.name, **result.summary(),
+               "locked_omega_m": locked.omega if locked is not None else float("nan")}  # fmt: skip
     with results_folder(args.out) as folder:
         result.save(folder)
+        (folder / "summary.json").write_text(json_text(summary))
+        if result.trajectory is not None:
+            (folder / "winch.csv").write_text(winch_csv(result.trajectory, scene))
         if runs:
             labels, pair = [label for label, _ in runs], [run for _, run in runs]
             plots.end_trajectory(pair, labels, path=folder / "end_trajectory.png")

@@ -138,6 +138,31 @@ class OcpResult:
     minimum_clearance: float = float("nan")
     minimum_clearance_time: float = float("nan")
 
+    def summary(self) -> dict:
+        """The scalar figures of the result (json-ready; units in the keys, as ``MpcResult``'s)."""
+        return {
+            "method": self.method,
+            "control": self.control,
+            "success": self.success,
+            "status": self.status,
+            "omega_m": self.omega,
+            "omega_model_m": self.omega_model,
+            "iterations": self.iterations,
+            "evaluations": self.evaluations,
+            "wall_time_s": self.wall_time,
+            "build_time_s": self.build_time,
+            "solve_time_s": self.solve_time,
+            "verification_time_s": self.verification_time,
+            "refinements_omega_m": list(self.refinements),
+            "bound_time_s": self.bound_time,
+            "bond_residual_m": self.bond_residual,
+            "verified_step_s": self.verified_step,
+            "minimum_clearance_m": self.minimum_clearance,
+            "minimum_clearance_time_s": self.minimum_clearance_time,
+            "heave_feedforward": self.heave_feedforward,
+            "notes": self.notes,
+        }
+
     def to_xarray(self) -> xr.Dataset:
         """The result as an ``xarray.Dataset``, its verified trajectory over ``time`` included.
 
