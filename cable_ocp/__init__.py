@@ -22,6 +22,7 @@ if TYPE_CHECKING:  # what __getattr__ imports, for type checkers and the import 
     from cable_ocp.control.nelder_mead import NelderMeadSettings
     from cable_ocp.control.ocp import IpoptSettings
     from cable_ocp.control.optimization import OcpResult, optimize
+    from cable_ocp.control.results import load_result
     from cable_ocp.drive.drive import Drive
     from cable_ocp.model.cable import INPUT_NAMES, CableModel
     from cable_ocp.scene.schema import Scene, load_scene
@@ -50,6 +51,7 @@ _SOURCES = {
     "catenary_shape": "cable_ocp.studies.catenary",
     "equilibrium": "cable_ocp.simulation.statics",
     "integrate": "cable_ocp.simulation.integrate",
+    "load_result": "cable_ocp.control.results",
     "load_scene": "cable_ocp.scene.schema",
     "mpc": "cable_ocp.control.closed_loop.loop",
     "optimize": "cable_ocp.control.optimization",
@@ -75,6 +77,7 @@ __all__ = [
     "catenary_shape",
     "equilibrium",
     "integrate",
+    "load_result",
     "load_scene",
     "mpc",
     "optimize",

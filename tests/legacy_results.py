@@ -46,8 +46,11 @@ def write_ocp_result(result, folder: Path) -> None:
     folder.mkdir(parents=True, exist_ok=True)
     if result.trajectory is not None:
         write_trajectory(result.trajectory, folder / "trajectory")
-    meta = {k: _json_value(v) for k, v in asdict(result).items()
-            if k not in ("parameters", "trajectory")}  # fmt: skip
+    meta = {
+        k: _json_value(v)
+        for k, v in asdict(result).items()
+        if k not in ("parameters", "trajectory", "scene_record")
+    }  # fmt: skip (not in 0.1)
     (folder / "result.json").write_text(json.dumps(meta, indent=1, allow_nan=False))
     np.savez(folder / "result.npz", parameters=result.parameters)
 

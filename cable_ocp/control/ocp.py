@@ -37,6 +37,7 @@ from cable_ocp.model import structured
 from cable_ocp.model.cable import CableModel
 from cable_ocp.model.compile import CompileReport
 from cable_ocp.model.layout import INPUT_SIZE
+from cable_ocp.scene.records import control_size
 from cable_ocp.simulation.budget import check_memory, optimisation_memory
 from cable_ocp.simulation.integrate import step_compile_report, step_function
 from cable_ocp.simulation.progress import IterationLog, check_verbosity
@@ -195,6 +196,14 @@ def make_control(scene, settings: IpoptSettings) -> KnotSpline | HermiteInterval
     if settings.control == "spline":
         return KnotSpline(duration, scene.winch.knots)
     return HermiteIntervals(duration, settings.control_intervals or settings.intervals)
+
+
+def control_of(label: str, duration: float) -> KnotSpline | HermiteIntervals:
+    """The control a result names (``"hermite(84)"``, ``"spline(14)"``) over ``duration`` (s)."""
+    size = control_size(label)
+    if label.startswith("spline"):
+        return KnotSpline(duration, size)
+    return HermiteIntervals(duration, size // 2)
 
 
 def full_model_scene(scene, settings):

@@ -29,13 +29,16 @@ from cable_ocp.control.nelder_mead import (
 from cable_ocp.control.ocp import (
     IpoptSettings,
     ShootingProblem,
+    control_of,
     full_model_scene,
     ipopt_problem,
     resolved,
 )
 from cable_ocp.control.problem import SolverOutcome, WinchProblem
 from cable_ocp.control.verification import Verification, correction_step
+from cable_ocp.drive.drive import Drive
 from cable_ocp.scene import labelled as results
+from cable_ocp.scene.schema import scene_of
 from cable_ocp.simulation.progress import IterationLog, check_verbosity
 from cable_ocp.simulation.trajectory import Trajectory
 
@@ -110,6 +113,11 @@ class OcpResult:
         ``seabed.minimum_clearance`` (by more than 1 mm) is not a success.
     minimum_clearance_time : float, s
         When the verified run reached it.
+    scene_record : dict
+        The scene the profile was verified on, as :meth:`~cable_ocp.scene.schema.Scene.to_dict`
+        gives it: the user's with its overrides, and with what the verification changed (the
+        heave compensation of a feedforward, a step that puts the control's nodes on step ends;
+        ``notes`` says which). :attr:`scene` rebuilds it; empty in files written before it.
     """
 
     method: str
@@ -137,6 +145,41 @@ class OcpResult:
     notes: str = ""
     minimum_clearance: float = float("nan")
     minimum_clearance_time: float = float("nan")
+    scene_record: dict = field(default_factory=dict)
+
+    @property
+    def scene(self):
+        """The scene the profile was verified on (a validated ``Scene``; see ``scene_record``)."""
+        name = self.trajectory.scene_name if self.trajectory is not None else "scene"
+        return scene_of(self.scene_record, name)
+
+    def winch_profile(self, scene=None):
+        """The optimised winch angle as ``t -> (phi, phi', phi'')`` (rad, rad/s, rad/s^2).
+
+        Parameters
+        ----------
+        scene : Scene, optional
+            The scene to drive (default: :attr:`scene`). Where the profile rides on a heave
+            feedforward (``heave_feedforward``) and this scene does not compensate its heave,
+            the feedforward (eq. 38) is added, so that ``simulate(scene, winch=result)`` drives
+            the winch as the verification did on either scene.
+        """
+        scene = scene if scene is not None else self.scene
+        control = control_of(self.control, scene.numerics.duration)
+        profile = control.angle_function(self.parameters)
+        if self.heave_feedforward and not scene.top.heave_compensated:
+            compensated = scene.updated({"top.heave.compensation": True})
+            return Drive.from_scene(compensated, profile).winch_angle
+        return profile
+
+    def winch_angle(self, t) -> np.ndarray:
+        """The drum's angle (rad) at the times ``t`` (s) on :attr:`scene`.
+
+        As the verified run turned it: the heave's pay-out included where it rode on one.
+        """
+        scene = self.scene
+        drive = Drive.from_scene(scene, self.winch_profile(scene))
+        return drive.winch_angle(np.atleast_1d(np.asarray(t, dtype=float)))[0]
 
     def summary(self) -> dict:
         """The scalar figures of the result (json-ready; units in the keys, as ``MpcResult``'s)."""
@@ -238,7 +281,7 @@ class OcpResult:
 # Fields of OcpResult that results written before them lack (their defaults are used).
 _OPTIONAL_FIELDS = {
     "compile_time", "verification_time", "bound_time", "bond_residual", "verified_step",
-    "heave_feedforward", "notes", "minimum_clearance", "minimum_clearance_time",
+    "heave_feedforward", "notes", "minimum_clearance", "minimum_clearance_time", "scene_record",
 }  # fmt: skip
 
 
@@ -603,7 +646,8 @@ def optimize(
     except RuntimeError as error:  # SimulationError, EquilibriumError, CasADi's errors
         return failed_result(method, settings, error, time.perf_counter() - started, model)
     notes = "; ".join(text for text in (result.notes, derived) if text)
-    return replace(result, notes=notes)
+    ran = result.trajectory.scene_record if result.trajectory is not None else scene.to_dict()
+    return replace(result, notes=notes, scene_record=ran)
 
 
 def failed_result(

@@ -890,6 +890,23 @@ def scene_from_dict(
     return _build(Scene, data, "", Path(base_dir) if base_dir is not None else None)
 
 
+def scene_of(record: Mapping[str, Any], name: str = "scene") -> Scene:
+    """The scene a result kept as its ``scene_record`` (:meth:`Scene.to_dict`), validated again.
+
+    Raises
+    ------
+    ValueError
+        If the record is empty (the result was written before scenes were kept), or a
+        :class:`SceneError` naming the field that no longer validates.
+    """
+    if not record:
+        raise ValueError(
+            f"this result of scene {name!r} holds no scene (written before results kept "
+            "theirs): load the scene file instead"
+        )
+    return scene_from_dict(record, name)
+
+
 def load_scene(path: str | os.PathLike, overrides: Mapping[str, Any] | None = None) -> Scene:
     """Load and validate a TOML scene file.
 

@@ -38,12 +38,16 @@ def winch_function(scene, winch: WinchSpec) -> winch_angles.WinchAngleFunction:
 
     Parameters
     ----------
-    winch : None, array or callable
+    winch : None, array, callable or a result
         None: locked. An array of ``scene.winch.knots`` values: the cubic spline through them
-        (rad, ``phi(0) = 0``). A callable ``t -> (phi, phi', phi'')``: used as it is.
+        (rad, ``phi(0) = 0``). A callable ``t -> (phi, phi', phi'')``: used as it is. A result
+        of ``optimize`` (anything with a ``winch_profile(scene)`` method): its optimised profile
+        on this scene, the heave feedforward included where it rode on one (a replay).
     """
     if winch is None:
         return winch_angles.locked
+    if hasattr(winch, "winch_profile"):
+        return winch.winch_profile(scene)
     if callable(winch):
         return winch
     try:
@@ -198,7 +202,7 @@ def checked_simulation(
     Parameters
     ----------
     scene : Scene
-    winch : None, array or callable
+    winch : None, array, callable or an ``optimize`` result
         See :func:`winch_function`; locked by default.
     model : CableModel, optional
         A model built for the scene (built here if not given); it may have another number of
@@ -265,6 +269,7 @@ def checked_simulation(
         clearance_error=error,
         omega=rms_objective(run.time, error),
         scene_name=scene.name,
+        scene_record=scene.to_dict(),
         state_names=model.state_names,
     )
     return trajectory, run.bond_residual

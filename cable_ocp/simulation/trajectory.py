@@ -5,7 +5,7 @@ from __future__ import annotations
 import json
 import zipfile
 import zlib
-from dataclasses import dataclass, fields
+from dataclasses import dataclass, field, fields
 from pathlib import Path
 
 import numpy as np
@@ -14,6 +14,7 @@ import xarray as xr
 from cable_ocp.model.layout import INPUTS
 from cable_ocp.scene import labelled as results
 from cable_ocp.scene.records import check_run
+from cable_ocp.scene.schema import scene_of
 from cable_ocp.simulation import labelled
 
 ARRAY_FIELDS = (
@@ -43,6 +44,9 @@ class Trajectory:
         ``Omega`` of eq. 39.
     scene_name : str
     state_names : list of str
+    scene_record : dict
+        The scene that ran, as :meth:`~cable_ocp.scene.schema.Scene.to_dict` gives it (its
+        overrides applied); empty in files written before it was kept. :attr:`scene` rebuilds it.
     """
 
     time: np.ndarray
@@ -55,6 +59,18 @@ class Trajectory:
     omega: float
     scene_name: str
     state_names: list[str]
+    scene_record: dict = field(default_factory=dict)
+
+    @property
+    def scene(self):
+        """The scene that ran (a validated ``Scene``), rebuilt from :attr:`scene_record`.
+
+        Raises
+        ------
+        ValueError
+            If the run holds no scene (a file written before scenes were kept).
+        """
+        return scene_of(self.scene_record, self.scene_name)
 
     @property
     def end(self) -> np.ndarray:

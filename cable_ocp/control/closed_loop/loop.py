@@ -254,6 +254,7 @@ def mpc(scene, settings: MpcSettings | None = None, quiet: bool = False, **field
         references=ref_errors,
         reference_omegas={k: rms_objective(time_grid, v) for k, v in ref_errors.items()},
         status=status,
+        scene_record=scene.to_dict(),
     )
 
 

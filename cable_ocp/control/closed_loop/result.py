@@ -10,6 +10,7 @@ import xarray as xr
 
 from cable_ocp.control.closed_loop import labelled
 from cable_ocp.scene import labelled as results
+from cable_ocp.scene.schema import scene_of
 
 
 @dataclass(frozen=True, eq=False)
@@ -70,6 +71,10 @@ class MpcResult:
     status : str
         How the loop went: the plant's failure (when and why; the arrays then end there), the
         failed solves, reference runs left out.
+    scene_record : dict
+        The plant's scene, as :meth:`~cable_ocp.scene.schema.Scene.to_dict` gives it (its
+        overrides, a heave set by ``--set`` say, applied); :attr:`scene` rebuilds it. Empty in
+        files written before it was kept.
     """
 
     time: np.ndarray
@@ -96,6 +101,12 @@ class MpcResult:
     references: dict[str, np.ndarray] = field(default_factory=dict)
     reference_omegas: dict[str, float] = field(default_factory=dict)
     status: str = ""
+    scene_record: dict = field(default_factory=dict)
+
+    @property
+    def scene(self):
+        """The plant's scene (a validated ``Scene``; see ``scene_record``)."""
+        return scene_of(self.scene_record, self.scene_record.get("name", "scene"))
 
     def summary(self) -> dict:
         """The scalar figures of the run (json-ready)."""

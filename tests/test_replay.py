@@ -1,0 +1,113 @@
+"""A result reproduces its run from its file: the scene it ran is kept in it, and an optimum is
+replayed by ``simulate(scene, winch=result)``. The reference is the saved run itself: a replay
+that drives the model otherwise (a node off its step, a feedforward left out) differs from it by
+far more than the 1e-9 m asked."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+import cable_ocp as co
+from cable_ocp import cli
+from cable_ocp.control.closed_loop import MpcSettings
+from cable_ocp.scene.bundled import scene_path
+
+HEAVE = {"top.heave.amplitude": 0.5, "top.heave.period": 8.0}
+
+
+@pytest.fixture(scope="module")
+def heaving_optimum(tmp_path_factory):
+    """small_tow with a heave (the optimum rides on its feedforward), saved and loaded."""
+    scene = co.load_scene(scene_path("small_tow"), HEAVE)
+    result = co.optimize(scene, quiet=True)
+    assert result.success and result.heave_feedforward, result.status
+    folder = tmp_path_factory.mktemp("optimum")
+    result.save(folder)
+    return scene, result, co.load_result(folder)
+
+
+def test_an_optimum_replays_from_its_file_on_its_own_scene(heaving_optimum):
+    _, result, loaded = heaving_optimum
+    replay = co.simulate(loaded.scene, winch=loaded, compiled=True)
+    assert abs(replay.omega - result.omega) < 1e-9
+    np.testing.assert_allclose(replay.end, result.trajectory.end, atol=1e-9)
+
+
+def test_an_optimum_replays_on_the_users_scene_with_its_feedforward(heaving_optimum):
+    """The user's scene does not compensate the heave: the replay adds eq. 38 as the
+    optimisation did; without it the end moves with the heave and Omega is far off."""
+    scene, result, loaded = heaving_optimum
+    assert not scene.top.heave_compensated and loaded.scene.top.heave_compensated
+    replay = co.simulate(scene, winch=loaded, compiled=True)
+    assert abs(replay.omega - result.omega) < 1e-9
+    slow = co.simulate(scene, winch=loaded.winch_profile(loaded.scene), compiled=True)
+    assert abs(slow.omega - result.omega) > 1e-3
+
+
+def test_the_profile_samples_at_any_time(heaving_optimum):
+    """``winch_angle(t)`` is the verified run's angle at its output times, and between them the
+    cubic Hermite interpolation of the run's angle and pay-out rate (error O(h^4))."""
+    from scipy.interpolate import CubicHermiteSpline
+
+    from cable_ocp.model.layout import INPUTS
+
+    scene, result, loaded = heaving_optimum
+    run = result.trajectory
+    np.testing.assert_allclose(loaded.winch_angle(run.time), run.winch_angle, atol=1e-12)
+    rate = run.inputs[:, INPUTS.top_length_rate] / scene.winch.drum_radius
+    between = 0.5 * (run.time[1:] + run.time[:-1])
+    interpolated = CubicHermiteSpline(run.time, run.winch_angle, rate)(between)
+    np.testing.assert_allclose(loaded.winch_angle(between), interpolated, atol=1e-4)
+
+
+def test_an_optimum_on_a_fitted_step_replays_at_that_step(tmp_path):
+    """T = 37 s at h = 0.25 s: the verification ran at a shorter step (the nodes on its step
+    ends); the file's scene holds that step, so the replay is the verified run."""
+    scene = co.load_scene(scene_path("small_tow"), {"numerics.duration": 37.0})
+    result = co.optimize(scene, quiet=True)
+    assert result.success, result.status
+    result.save(tmp_path)
+    loaded = co.load_result(tmp_path / "result.nc")
+    assert loaded.scene.numerics.step == pytest.approx(result.verified_step, rel=1e-12)
+    assert loaded.scene.numerics.step < scene.numerics.step
+    replay = co.simulate(loaded.scene, winch=loaded, compiled=True)
+    assert abs(replay.omega - result.omega) < 1e-9
+
+
+def test_a_simulation_keeps_its_scene(tmp_path):
+    scene = co.load_scene(scene_path("hanging"), {"numerics.duration": 2.0})
+    run = co.simulate(scene)
+    run.save(tmp_path / "trajectory")
+    loaded = co.load_result(tmp_path)
+    assert loaded.scene == scene
+    assert co.simulate(loaded.scene).omega == run.omega
+
+
+def test_an_mpc_run_with_a_heave_set_on_the_command_line_reruns_from_its_file(tmp_path, capsys):
+    """``--set`` overrides are in mpc.nc's scene: the loop on it gives the same Omega."""
+    out = tmp_path / "m"
+    command = ["mpc", "small_tow", "--out", str(out), "--quiet",
+               "--set", "top.heave.amplitude=0.5", "--set", "top.heave.period=8.0"]  # fmt: skip
+    assert cli.main(command) in (0, 3), capsys.readouterr().err
+    loaded = co.load_result(out)
+    assert isinstance(loaded, co.MpcResult)
+    assert loaded.scene == co.load_scene(scene_path("small_tow"), HEAVE)
+    again = co.mpc(loaded.scene, MpcSettings(references=("locked",)), quiet=True)
+    assert abs(again.omega - loaded.omega) < 1e-9
+
+
+def test_a_result_written_before_scenes_were_kept_loads_and_says_so(heaving_optimum, tmp_path):
+    from dataclasses import replace
+
+    _, result, _ = heaving_optimum
+    replace(result, scene_record={}).save(tmp_path)
+    old = co.load_result(tmp_path)
+    assert old.scene_record == {} and old.omega == result.omega
+    with pytest.raises(ValueError, match="holds no scene .* load the scene file instead"):
+        _ = old.scene
+
+
+def test_a_folder_without_a_result_is_named(tmp_path):
+    with pytest.raises(ValueError, match="no cable_ocp result there"):
+        co.load_result(tmp_path)
