@@ -136,7 +136,7 @@ def test_the_screened_qp_solves_the_whole_qp(problem, linearisation, monkeypatch
     rows = problem.bounds.matrix @ parameters
     lower, upper = rows - 0.2, rows + 0.05  # the step wants more than 0.05 rad in places
     screened = _solver(problem).step(linear, parameters, lower, upper, {})
-    monkeypatch.setattr(gauss_newton, "SCREENED_ROWS", 0)  # a QP of no rows: the whole QP
+    monkeypatch.setattr(gauss_newton, "SCREENED_ROWS", (0,))  # a QP of no rows: the whole QP
     whole = _solver(problem).step(linear, parameters, lower, upper, {})
     assert screened[2] == whole[2] == "solved"
     active = np.sum(problem.bounds.matrix @ (parameters + whole[0]) > upper - 1e-4)

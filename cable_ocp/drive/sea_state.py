@@ -130,22 +130,26 @@ def sea_state_motion(sea_state) -> Callable[[np.ndarray], tuple[np.ndarray, ...]
     ox, oy, oz = sea_state.winch_offset
     # Each motion's unit displacement of the winch (m per m of heave, per rad of roll or pitch).
     lever = {"heave": (0.0, 0.0, 1.0), "roll": (0.0, -oz, oy), "pitch": (oz, 0.0, -ox)}
-    motions = [
-        (np.array(lever[name])[:, None], amplitude, phase)
-        for name, (amplitude, phase) in responses(sea_state, waves).items()
-        if np.any(amplitude) and np.any(lever[name])
-    ]
     w = waves.frequencies
+    # Each axis's displacement is sum_j a_j cos(w_j t + phase_j) over the motions that move it;
+    # cos(w t + p) = cos(w t) cos(p) - sin(w t) sin(p), so one cosine and one sine of w t serve
+    # every motion and axis: the weights of cos(w t) and sin(w t) per axis (3, components).
+    # The position is taken from t = 0, where cos(w t) = 1 and sin(w t) = 0 exactly.
+    cos_weight, sin_weight = np.zeros((3, w.size)), np.zeros((3, w.size))
+    for name, (amplitude, phase) in responses(sea_state, waves).items():
+        if not (np.any(amplitude) and np.any(lever[name])):
+            continue
+        direction = np.array(lever[name])[:, None]
+        cos_weight += direction * (amplitude * np.cos(phase))
+        sin_weight -= direction * (amplitude * np.sin(phase))
 
     def motion(t):
         t = np.atleast_1d(np.asarray(t, dtype=float))
-        position, velocity, acceleration = (np.zeros((3, t.size)) for _ in range(3))
-        for direction, amplitude, phase in motions:
-            angle = np.outer(t, w) + phase
-            cos, sin = np.cos(angle), np.sin(angle)
-            position += direction * ((cos - np.cos(phase)) @ amplitude)
-            velocity -= direction * (sin @ (amplitude * w))
-            acceleration -= direction * (cos @ (amplitude * w**2))
+        angle = np.outer(w, t)
+        cos, sin = np.cos(angle), np.sin(angle)
+        position = cos_weight @ (cos - 1.0) + sin_weight @ sin
+        velocity = (sin_weight * w) @ cos - (cos_weight * w) @ sin
+        acceleration = -((cos_weight * w**2) @ cos + (sin_weight * w**2) @ sin)
         return position, velocity, acceleration
 
     return motion

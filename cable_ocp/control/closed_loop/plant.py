@@ -42,6 +42,28 @@ PROJECT_ABOVE = 0.5
 AngleFunction = Callable[..., tuple[np.ndarray, np.ndarray, np.ndarray]]
 
 
+class LastCall:
+    """A function of a time array (s) that keeps its last answer.
+
+    A sample asks for the top's motion at the same times twice (for the heave feedback's
+    command, then for the model's inputs); in a sea state each costs a sum over its wave
+    components (a tenth of a thin rope's loop).
+    """
+
+    def __init__(self, function: Callable):
+        self.function = function
+        self._key: tuple | None = None
+        self._value = None
+
+    def __call__(self, t):
+        """``function(t)``, computed again only when ``t`` differs from the last call's."""
+        t = np.atleast_1d(np.asarray(t, dtype=float))
+        key = (t.shape, t.tobytes())
+        if key != self._key:
+            self._key, self._value = key, self.function(t)
+        return self._value
+
+
 @dataclass(frozen=True)
 class Applied:
     """Winch angle applied over some times, with its rates and where the limiter acted.
@@ -80,7 +102,7 @@ class Plant:
         self.scene = scene
         self.model = CableModel.from_scene(scene)
         self.step = scene.numerics.step
-        self.top = top_motion(scene.top)
+        self.top = LastCall(top_motion(scene.top))
         self.radius = scene.winch.drum_radius
         self.top_length = scene.top_element_length
         self.low, self.high = angle_range
