@@ -8,10 +8,8 @@ import numpy as np
 import pytest
 
 import cable_ocp as co
-from cable_ocp.control import optimization
 from cable_ocp.control import problem as problem_module
 from cable_ocp.control.closed_loop import plant as plant_module
-from cable_ocp.control.ocp import make_control
 from cable_ocp.control.optimization import OcpResult
 from cable_ocp.drive.bounds import angle_bounds
 from cable_ocp.drive.controls import HermiteIntervals
@@ -121,13 +119,11 @@ def test_paper_hill_optimum_verified_on_converged_models(hill, validation):
     """The n = 15 optimum replayed at n = 30, 60, 100 (refused at n = 30 and 100 before)."""
     result = co.optimize(hill, quiet=True)
     assert result.success, result.status
-    control = make_control(hill, optimization.METHODS["ipopt"].default)
-    angle = control.angle_function(result.parameters)
     steps = {30: 0.05, 60: 0.025, 100: 0.02}
     omegas = {}
     for n, h in steps.items():
         scene = hill.updated({"model.elements": n, "numerics.step": h})
-        omegas[n] = co.simulate(scene, winch=angle, compiled=True, quiet=True).omega
+        omegas[n] = co.simulate(scene, winch=result, compiled=True, quiet=True).omega
     text = ", ".join(f"{omegas[n]:.2e}" for n in steps)
     validation(
         "paper_hill optimum (IPOPT on the default reduced model, verified at n = 15) on finer "
