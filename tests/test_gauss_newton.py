@@ -145,6 +145,24 @@ def test_the_screened_qp_solves_the_whole_qp(problem, linearisation, monkeypatch
     assert screened[1] == pytest.approx(whole[1], rel=1e-9)
 
 
+def test_a_guess_far_outside_is_brought_inside_by_the_whole_qp_beside_clearance_rows(
+    problem, monkeypatch
+):
+    """With a minimum clearance the whole QP also holds the clearance rows; the nearest feasible
+    point of a guess on the bounds' rows alone fills them with rows that always hold (it raised
+    on the mismatch once more rows than the screened QPs hold were near their limits)."""
+    from cable_ocp.control import gauss_newton
+
+    scene = problem.scene.updated({"seabed.minimum_clearance": 3.0})
+    held = WinchProblem.from_scene(scene, HermiteIntervals(30.0, 6), elements=2, step=0.5)
+    monkeypatch.setattr(gauss_newton, "SCREENED_ROWS", (0,))  # straight to the whole QP
+    solver = _solver(held)
+    assert solver.qp.size1_in(3) > held.bounds.matrix.shape[0]  # the clearance rows are in it
+    guess = np.full(held.control.size, 50.0)  # rad and rad/s: far beyond every bound
+    inside = solver.feasible(guess, held.bounds.lower, held.bounds.upper, {})
+    assert held.bounds.excess(guess) > 10 and held.bounds.excess(inside) < 1e-5
+
+
 def test_keeping_a_jacobian_that_predicts_the_error_finds_the_same_optimum(problem, monkeypatch):
     """The simplified Newton steps (the Jacobian kept while it predicts the error within 5 %)
     reach the optimum of a fresh Jacobian at every iterate: Omega within 1e-6 relative, the

@@ -191,19 +191,14 @@ class GaussNewton:
         pinned = all(parameters[i] == value for i, value in fixed.items())
         if pinned and np.all(values >= lower) and np.all(values <= upper):
             return parameters
-        size = parameters.size
+        size = parameters.size  # no slack: the open loop's QPs are hard (self.soft is False)
         lbx, ubx = _pinned_steps(parameters, fixed)
-        if self.soft:  # the QPs carry the slack: a zero step of it, at no cost
-            lbx, ubx = np.append(lbx, 0.0), np.append(ubx, 0.0)
-            matrix = np.hstack([matrix, np.zeros((matrix.shape[0], 1))])
-        variables = lbx.size
         step, _ = self._screened_solve(
-            np.eye(variables), np.zeros(variables), matrix, lower - values, upper - values,
-            lbx, ubx,
-        )  # fmt: skip
+            np.eye(size), np.zeros(size), matrix, lower - values, upper - values, lbx, ubx
+        )
         if step is None:
             return parameters
-        return parameters + step[:size]
+        return parameters + step
 
     def breach(self, linearised: Linearised) -> float:
         """How far (m) the run goes under the minimum clearance with its back-off (0: not)."""
@@ -265,17 +260,8 @@ class GaussNewton:
             if matrix.shape[0] <= width:
                 kept = np.arange(matrix.shape[0])
             while kept.size <= width:
-                padding = width - kept.size
-                step, status = _solved(
-                    qp,
-                    h=hessian,
-                    g=gradient,
-                    a=np.vstack([matrix[kept], np.zeros((padding, matrix.shape[1]))]),
-                    lba=np.concatenate([lba[kept], np.full(padding, -1.0)]),
-                    uba=np.concatenate([uba[kept], np.full(padding, 1.0)]),
-                    lbx=lbx,
-                    ubx=ubx,
-                )
+                rows = _padded(matrix[kept], lba[kept], uba[kept], width)
+                step, status = _solved(qp, h=hessian, g=gradient, **rows, lbx=lbx, ubx=ubx)
                 if step is None:
                     return None, status
                 values = matrix @ step
@@ -284,7 +270,10 @@ class GaussNewton:
                 if broken.size == 0:
                     return step, status
                 kept = np.union1d(kept, broken)
-        return _solved(self.qp, h=hessian, g=gradient, a=matrix, lba=lba, uba=uba, lbx=lbx, ubx=ubx)
+        # The whole QP holds every row of a step's QP (the clearance rows too); a QP on the
+        # bounds alone (feasible) fills the rest.
+        rows = _padded(matrix, lba, uba, self.qp.size1_in(3))
+        return _solved(self.qp, h=hessian, g=gradient, **rows, lbx=lbx, ubx=ubx)
 
     def solve(
         self,
@@ -522,6 +511,16 @@ def _dense_qp(name: str, size: int, rows: int) -> ca.Function:
         {"h": ca.Sparsity.dense(size, size), "a": ca.Sparsity.dense(rows, size)},
         {"error_on_fail": False, "daqp": {"iter_limit": QP_ITERATIONS}},
     )
+
+
+def _padded(matrix: np.ndarray, lba: np.ndarray, uba: np.ndarray, width: int) -> dict:
+    """Constraint rows filled up to a QP's ``width`` with rows of zeros in [-1, 1] (always held)."""
+    padding = width - matrix.shape[0]
+    return {
+        "a": np.vstack([matrix, np.zeros((padding, matrix.shape[1]))]),
+        "lba": np.concatenate([lba, np.full(padding, -1.0)]),
+        "uba": np.concatenate([uba, np.full(padding, 1.0)]),
+    }
 
 
 def _solved(qp: ca.Function, **data) -> tuple[np.ndarray | None, str]:

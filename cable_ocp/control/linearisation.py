@@ -141,11 +141,12 @@ def propagate_sensitivities(
     # Row 0 of the work array is a spare that stays zero: the padding of each step's rows.
     active = 1 + np.searchsorted(first[order], np.arange(count), side="right")
     ranked = touched[:, order]
-    width = max(int(ranked.sum(axis=1).max()), 1)
+    # Each step's touched rows (1-based) left-aligned in a row of ``width``, padded with 0.
+    hits = ranked.sum(axis=1)
+    width = max(int(hits.max()), 1)
+    steps, columns = np.nonzero(ranked)  # by step, then by row
     rows = np.zeros((count, width), dtype=int)
-    for k in range(count):
-        hit = np.flatnonzero(ranked[k])
-        rows[k, : hit.size] = hit + 1
+    rows[steps, np.arange(steps.size) - (np.cumsum(hits) - hits)[steps]] = columns + 1
     sorted_winch = np.concatenate([np.zeros((count, 4, WINCH_INPUTS, 1)), by_column[..., order]], 3)
     taken = np.take_along_axis(sorted_winch, rows[:, None, None, :], axis=3)  # (K, 4, 3, width)
     forced = np.swapaxes(taken, 2, 3) @ transposed[:, :, nx:, :]  # (K, 4, width, nx)

@@ -40,6 +40,7 @@ from cable_ocp.control.closed_loop.loop import mpc
 from cable_ocp.control.optimization import optimize
 from cable_ocp.drive.bounds import angle_bounds
 from cable_ocp.drive.drive import Drive
+from cable_ocp.drive.vessel import smoothstep
 from cable_ocp.model.cable import CableModel
 from cable_ocp.scene.bundled import scene_path
 from cable_ocp.scene.schema import load_scene
@@ -319,11 +320,11 @@ def bound_run(scene, angle: float) -> tuple[np.ndarray, np.ndarray]:
         ramp = max(ramp, np.sqrt(10 / np.sqrt(3) * size / w.acceleration_max))
 
     def drive(t):
-        s = np.clip(np.atleast_1d(t) / ramp, 0.0, 1.0)
-        shape = s**3 * (10 - 15 * s + 6 * s**2)
-        slope = 30 * s**2 * (1 - s) ** 2 / ramp
+        tau = np.atleast_1d(t) / ramp
+        shape, slope, _ = smoothstep(tau)
+        s = np.clip(tau, 0.0, 1.0)
         curve = 60 * s * (1 - s) * (1 - 2 * s) / ramp**2
-        return angle * shape, angle * slope, angle * curve
+        return angle * shape, angle * (slope / ramp), angle * curve
 
     run = simulate(scene, winch=drive, compiled=True)
     return run.time, run.clearance_error
