@@ -188,3 +188,32 @@ def test_keeping_a_jacobian_that_predicts_the_error_finds_the_same_optimum(probl
     assert kept.omega == pytest.approx(fresh.omega, rel=1e-6)
     np.testing.assert_allclose(kept.parameters, fresh.parameters, atol=1e-6)
     assert kept_calls < len(calls) - kept_calls
+
+
+def test_sensitivities_from_the_step_ends_stay_close_to_the_exact_ones(problem):
+    """The real-time iteration's Jacobians at the step ends only (the middle stages their mean):
+    the same error as the exact sweep's (one model), and a Jacobian within 1e-5 of the exact
+    one's norm that comes closer as the step shrinks (measured 1.3e-6 at h = 0.5 s, 4.7e-7 at
+    0.25 s)."""
+    rng = np.random.default_rng(0)
+    parameters = 0.3 * rng.normal(size=problem.control.size)
+    gaps = []
+    for step in (0.5, 0.25):
+        steps = round(30.0 / step)
+        grid = np.linspace(0.0, 30.0, steps + 1)
+        times, left = stage_times(grid[:-1], step)
+        pair = [
+            ErrorLinearisation(
+                problem.model, step, steps, problem.control, problem.scene.winch.drum_radius,
+                problem.scene.seabed, times, left, where,
+            )
+            for where in ("every", "ends")
+        ]  # fmt: skip
+        values = WinchProblem.from_scene(
+            problem.scene, problem.control, elements=2, step=step
+        ).parameter_values()
+        exact, ends = (linearisation(values, parameters) for linearisation in pair)
+        np.testing.assert_allclose(ends.error, exact.error, atol=1e-12)
+        gaps.append(np.linalg.norm(ends.jacobian - exact.jacobian) / np.linalg.norm(exact.jacobian))
+    assert max(gaps) < 1e-5
+    assert gaps[1] < gaps[0] / 2

@@ -31,7 +31,7 @@ import numpy as np
 
 from cable_ocp.control.checks import Rule, check_fields
 from cable_ocp.control.interrupts import check, keeping_interrupts
-from cable_ocp.control.linearisation import ErrorLinearisation, Linearised
+from cable_ocp.control.linearisation import STAGE_JACOBIANS, ErrorLinearisation, Linearised
 from cable_ocp.control.parameters import ProblemParameters
 from cable_ocp.control.problem import SolverOutcome, WinchProblem
 from cable_ocp.drive.bounds import shrunk
@@ -102,12 +102,17 @@ class GaussNewtonSettings:
         below ``tolerance`` times (1 mm)^2, so that an Omega near zero stops too).
     rate_weight : float, s^2
         Weight of the pay-out speed ``(r_D phi')^2`` against ``e^2`` (0 in the open loop).
+    stage_jacobians : {"every", "ends"}
+        Where the sensitivities take the model's Jacobian: at every RK4 stage (exact), or at
+        the step ends only (a closed loop's real-time iteration,
+        :mod:`cable_ocp.control.linearisation`).
     """
 
     max_iter: int = 30
     tolerance: float = 1e-6
     rate_weight: float = 0.0
     real_time: bool = False
+    stage_jacobians: str = "every"
 
     def __post_init__(self):
         check_fields(
@@ -116,6 +121,7 @@ class GaussNewtonSettings:
                 "max_iter": Rule("integer", low=1),
                 "tolerance": Rule("number", above=0),
                 "rate_weight": Rule("number", low=0, unit="s^2"),
+                "stage_jacobians": Rule("choice", choices=STAGE_JACOBIANS),
             },
         )
 
@@ -141,7 +147,7 @@ class GaussNewton:
         times, left = stage_times(problem.grid[:-1], problem.step)
         self.linearisation = ErrorLinearisation(
             problem.model, problem.step, steps, problem.control, radius,
-            problem.scene.seabed, times, left,
+            problem.scene.seabed, times, left, settings.stage_jacobians,
         )  # fmt: skip
         report = self.linearisation.compile_report
         self.compile_time = report.compile_time

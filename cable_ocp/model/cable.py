@@ -290,6 +290,11 @@ class CableModel(ModelLayout):
         results = self.parametric.output_values(x, u, self.parameters)
         return {name: np.array(value) for name, value in results.items()}
 
+    def bond_values(self, x: np.ndarray, u: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """The bond residual (m) and its rate (m/s) at one state and input, as arrays."""
+        residual, rate = self.parametric.bonds(x, u, self.parameters)
+        return np.array(residual), np.array(rate)
+
     @cached_property
     def rhs(self) -> ca.Function:
         """``(x, u) -> x'`` (see the class attributes)."""

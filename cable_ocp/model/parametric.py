@@ -172,6 +172,17 @@ class ParametricModel(ModelLayout):
         )
         return plain(x=x, u=u, p=p)
 
+    @cached_property
+    def bonds(self) -> ca.Function:
+        """``(x, u, p) ->`` bond residual (m) and its rate (m/s): the outputs' two bond rows.
+
+        The plant checks them at every sample; at n = 17 they cost a fraction of the outputs'
+        3 ms, which solve for the accelerations too.
+        """
+        graph = self._graph.outputs
+        rows = [graph[OUTPUT_NAMES.index(name)] for name in ("bond_residual", "bond_rate")]
+        return self.function("bonds", rows, ["bond_residual", "bond_rate"])
+
     def bond_residual(self) -> ca.SX:
         """The bond residuals ``Phi`` (3 (n+1), m) as an SX expression of ``x, u, p``."""
         return self._graph.outputs[OUTPUT_NAMES.index("bond_residual")]

@@ -99,7 +99,10 @@ class RecedingHorizon:
         self.model, self.control = problem.model, problem.control
         if settings.solver == "gauss-newton":
             rti = GaussNewtonSettings(
-                settings.max_iter, rate_weight=settings.rate_weight, real_time=True
+                settings.max_iter,
+                rate_weight=settings.rate_weight,
+                real_time=True,
+                stage_jacobians="ends",
             )
             self.solver = GaussNewton(problem, rti)
         else:

@@ -225,9 +225,8 @@ class Plant:
             return x
         at = np.array([float(start)])
         u = self.inputs(self.apply(angle, at), at)[:, 0]
-        outputs = self.model.output_values(x, u)
-        residual = float(np.max(np.abs(outputs["bond_residual"])))
-        residual += span * float(np.max(np.abs(outputs["bond_rate"])))
+        residual, rate = self.model.bond_values(x, u)
+        residual = float(np.max(np.abs(residual))) + span * float(np.max(np.abs(rate)))
         if residual <= PROJECT_ABOVE * self.scene.numerics.constraint_tolerance:
             return x
         self.projections += 1
@@ -268,7 +267,7 @@ class Plant:
         h = self.step / substeps
         if not np.all(np.isfinite(x)):
             return f"the state became non-finite by t = {t:.6g} s at h = {h:g} s"
-        residual = float(np.max(np.abs(self.model.output_values(x, u)["bond_residual"])))
+        residual = float(np.max(np.abs(self.model.bond_values(x, u)[0])))
         tolerance = self.scene.numerics.constraint_tolerance
         if residual > tolerance:
             shown, limit = apart(residual, tolerance)
