@@ -116,21 +116,12 @@ class HermiteIntervals:
         interval), or, where ``left`` (bool, or array like ``t``) is true, to the interval that
         ends there (node 0 to the first). Beyond ``duration``: the C2 extension (class docstring).
         """
-        t = t_given = np.atleast_1d(np.asarray(t, dtype=float))
-        beyond = t > self.duration * (1 + 1e-9)
-        t = np.clip(t, 0.0, self.duration)
-        if left is not None:
-            left = np.where(beyond, True, left)  # the end's rows from the last interval
+        t_given, beyond, k, s = self._located(t, left)
         width = self.duration / self.intervals
-        k = (t / width + 1e-9).astype(int)
-        if left is not None:
-            k = np.where(left, np.ceil(t / width - 1e-9).astype(int) - 1, k)
-        k = np.clip(k, 0, self.intervals - 1)
-        s = t / width - k
         h00, h10, h01, h11 = hermite_polynomials(s)
         scale = np.array([1.0, 1.0 / width, 1.0 / width**2])[:, None]
-        out = np.zeros((3, t.size, self.size))
-        rows = np.arange(t.size)
+        out = np.zeros((3, s.size, self.size))
+        rows = np.arange(s.size)
         first = 0 if self.free_start else 1  # node 0 is fixed at phi = phi' = 0 unless free
         rates = self.intervals + self.free_start
         for node, (value_basis, rate_basis) in ((k, (h00, h10)), (k + 1, (h01, h11))):
@@ -142,6 +133,49 @@ class HermiteIntervals:
         if np.any(beyond):
             out[:, beyond] = self._extension(out[:, beyond], (t_given[beyond] - self.duration))
         return out[0], out[1], out[2]
+
+    def evaluate(
+        self, parameters: np.ndarray, t: np.ndarray, left=None
+    ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """Angle, rate and acceleration (rad, rad/s, rad/s^2) at the times ``t`` (s).
+
+        ``basis(t, left) @ parameters`` without the basis: the closed loop evaluates its plans
+        at every sample's stage times, where the basis's (3, len(t), size) rows cost 3x more.
+        """
+        t_given, beyond, k, s = self._located(t, left)
+        width = self.duration / self.intervals
+        first = 0 if self.free_start else 1
+        nodes = self.intervals + 1
+        angles = np.zeros(nodes)
+        rates = np.zeros(nodes)
+        angles[first:], rates[first:] = np.split(np.asarray(parameters, dtype=float), 2)
+        h00, h10, h01, h11 = hermite_polynomials(s)
+        scale = np.array([1.0, 1.0 / width, 1.0 / width**2])[:, None]
+        out = scale * (
+            h00 * angles[k] + h01 * angles[k + 1] + width * (h10 * rates[k] + h11 * rates[k + 1])
+        )
+        if np.any(beyond):
+            tail = self._extension(out[:, beyond, None], (t_given[beyond] - self.duration))
+            out[:, beyond] = tail[..., 0]
+        return out[0], out[1], out[2]
+
+    def _located(self, t: np.ndarray, left) -> tuple[np.ndarray, np.ndarray, np.ndarray, ...]:
+        """The times ``t`` (s) as given, which lie beyond the end, their intervals and place.
+
+        A time on a node belongs to the interval that starts there, or to the one that ends
+        there where ``left`` is true (:meth:`basis`); a time beyond the end to the last one.
+        """
+        t = t_given = np.atleast_1d(np.asarray(t, dtype=float))
+        beyond = t > self.duration * (1 + 1e-9)
+        t = np.clip(t, 0.0, self.duration)
+        if left is not None:
+            left = np.where(beyond, True, left)  # the end's rows from the last interval
+        width = self.duration / self.intervals
+        k = (t / width + 1e-9).astype(int)
+        if left is not None:
+            k = np.where(left, np.ceil(t / width - 1e-9).astype(int) - 1, k)
+        k = np.clip(k, 0, self.intervals - 1)
+        return t_given, beyond, k, t / width - k
 
     def _extension(self, end: np.ndarray, tau: np.ndarray) -> np.ndarray:
         """Rows (3, k, size) of the angle ``tau`` (s) past the end, from its rows there."""
@@ -175,7 +209,6 @@ class HermiteIntervals:
         parameters = np.asarray(parameters, dtype=float).ravel()
 
         def angle(t, left=None):
-            b0, b1, b2 = self.basis(t, left)
-            return b0 @ parameters, b1 @ parameters, b2 @ parameters
+            return self.evaluate(parameters, t, left)
 
         return angle

@@ -66,8 +66,7 @@ class Plan:
     def __call__(self, t: np.ndarray, left=None) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """Angle, rate and acceleration (rad, rad/s, rad/s^2) at the times ``t``."""
         t = np.atleast_1d(np.asarray(t, dtype=float))
-        bases = self.control.basis(t - self.start, left)
-        new = [b @ self.parameters for b in bases]
+        new = self.control.evaluate(self.parameters, t - self.start, left)
         if self.previous is None or self.blend <= 0:
             return tuple(new)
         old = self.previous(t, left)
