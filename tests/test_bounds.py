@@ -81,7 +81,7 @@ def on_the_bound(short):
     """IPOPT on a scene whose angle bound (0.5 rad) is too tight for the winch it wants (~1 rad)."""
     scene = short.updated({"winch.angle_max": 0.5, "winch.rate_max": 0.05})
     settings = IpoptSettings(intervals=4)
-    return scene, settings, optimize(scene, "ipopt", settings, quiet=True)
+    return scene, settings, optimize(scene, settings=settings, quiet=True)
 
 
 def test_ipopt_on_the_angle_bound_returns_a_result_within_tolerance(on_the_bound):
@@ -128,7 +128,7 @@ def test_verification_failure_is_a_failed_result(short, monkeypatch):
         raise SimulationError("the bonds tore at t = 3 s")
 
     monkeypatch.setattr(verification_module, "checked_simulation", broken)
-    result = optimize(short, "ipopt", IpoptSettings(intervals=2), quiet=True)
+    result = optimize(short, settings=IpoptSettings(intervals=2), quiet=True)
     assert not result.success
     assert "; verification failed: no trustworthy simulation of the full model" in result.status
     assert result.status.startswith("Gauss-Newton converged")

@@ -138,7 +138,7 @@ def test_quiet_and_verbose_reach_the_optimiser(
 ):
     calls = []
 
-    def record(scene, method, settings, **kwargs):
+    def record(scene, solver=None, settings=None, **kwargs):
         calls.append(kwargs)
         raise ValueError("stopped by the test")
 
@@ -185,7 +185,7 @@ def test_simulate_animates_when_asked(tmp_path, monkeypatch, capsys):
 def test_shooting_option_reaches_the_ipopt_settings(tmp_path, monkeypatch, capsys, shooting):
     calls = []
 
-    def record(scene, method, settings, **kwargs):
+    def record(scene, solver=None, settings=None, **kwargs):
         calls.append(settings)
         raise ValueError("stopped by the test")
 

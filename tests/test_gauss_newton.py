@@ -94,7 +94,7 @@ def _minimum_clearance_solve(scene, solver: str):
     from cable_ocp.control.optimization import METHODS, optimize
 
     settings = replace(METHODS["ipopt"].default, intervals=12, solver=solver)
-    return optimize(scene, "ipopt", settings, quiet=True)
+    return optimize(scene, settings=settings, quiet=True)
 
 
 def test_the_minimum_clearance_holds_on_the_verified_run(held_scene):

@@ -30,7 +30,7 @@ def small(models_dir):
 
 @pytest.fixture(scope="module")
 def solved(small):
-    return optimize(small, "ipopt", SETTINGS, quiet=True), simulate(small)
+    return optimize(small, settings=SETTINGS, quiet=True), simulate(small)
 
 
 def test_ipopt_beats_locked_winch(solved, small):
@@ -93,7 +93,7 @@ def test_infeasible_bounds_fail_loudly(small):
             "winch.rate_max": 0.1,
         }
     )
-    result = optimize(scene, "ipopt", SETTINGS, quiet=True)
+    result = optimize(scene, settings=SETTINGS, quiet=True)
     assert not result.success
     assert "Infeasible" in result.status
 
@@ -112,7 +112,7 @@ def test_gauss_newton_and_ipopt_find_the_same_winch(solved, small):
     2.2322025e-4 m and 2.2322025e-4 m; 2 against 17 iterations)."""
     gauss_newton, _ = solved
     assert SETTINGS.solver == "gauss-newton"
-    ipopt = optimize(small, "ipopt", replace(SETTINGS, solver="ipopt"), quiet=True)
+    ipopt = optimize(small, "ipopt", SETTINGS, quiet=True)
     assert gauss_newton.success and ipopt.success, (gauss_newton.status, ipopt.status)
     assert gauss_newton.omega == pytest.approx(ipopt.omega, rel=1e-3)
     assert gauss_newton.iterations < ipopt.iterations
@@ -125,7 +125,7 @@ def test_single_and_multiple_shooting_find_the_same_winch(solved, small):
     single, _ = solved
     assert SETTINGS.shooting == "single"
     ipopt_multiple = replace(SETTINGS, shooting="multiple", solver="ipopt")
-    multiple = optimize(small, "ipopt", ipopt_multiple, quiet=True)
+    multiple = optimize(small, settings=ipopt_multiple, quiet=True)
     assert single.success and multiple.success, (single.status, multiple.status)
     assert abs(single.omega - multiple.omega) < 1e-5
 
@@ -162,11 +162,6 @@ def test_exact_hessian_needs_the_interpreted_model():
         IpoptSettings(solver="ipopt", hessian="exact", compiled=True)
 
 
-def test_unknown_method_is_rejected(small):
-    with pytest.raises(ValueError, match="method"):
-        optimize(small, "gradient-descent")
-
-
 def test_spline_basis_matches_the_winch_spline():
     control = KnotSpline(210.0, 14)
     values = np.random.default_rng(3).normal(size=14)
@@ -201,16 +196,16 @@ def short(small):
 
 
 def test_quiet_prints_nothing_at_all(short, capfd):
-    optimize(short, "ipopt", TINY, quiet=True)  # a first run may compile the model
+    optimize(short, settings=TINY, quiet=True)  # a first run may compile the model
     capfd.readouterr()
-    result = optimize(short, "ipopt", TINY, quiet=True)
+    result = optimize(short, settings=TINY, quiet=True)
     out, err = capfd.readouterr()
     assert result.success, result.status
     assert out == "" and err == ""
 
 
 def test_default_prints_one_line_per_iteration_and_no_ipopt_log(short, capfd):
-    result = optimize(short, "ipopt", TINY)
+    result = optimize(short, settings=TINY)
     out, err = capfd.readouterr()
     assert BANNER not in out + err and "EXIT:" not in out + err
     lines = [line for line in err.splitlines() if line.startswith("gauss-newton iter")]
@@ -221,16 +216,39 @@ def test_default_prints_one_line_per_iteration_and_no_ipopt_log(short, capfd):
 
 
 def test_verbose_prints_the_ipopt_log(short, capfd):
-    optimize(short, "ipopt", replace(TINY, solver="ipopt"), verbose=True)
+    optimize(short, "ipopt", TINY, verbose=True)
     out, err = capfd.readouterr()
     assert BANNER in out and "EXIT:" in out
     assert "ipopt iter" not in err
 
 
 def test_quiet_and_verbose_together_are_rejected(short):
-    for method in ("ipopt", "nelder-mead"):
+    for solver in ("gauss-newton", "ipopt", "nelder-mead"):
         with pytest.raises(ValueError, match="quiet.*verbose"):
-            optimize(short, method, quiet=True, verbose=True)
+            optimize(short, solver, quiet=True, verbose=True)
+
+
+def test_the_result_names_the_solver_that_ran_and_keeps_it_in_its_files(short, tmp_path):
+    """``solver`` chooses, and the result, its summary and its file say which one ran: the
+    settings' solver without the argument, the argument's over the settings'."""
+    by_settings = optimize(short, settings=TINY, quiet=True)
+    assert by_settings.solver == TINY.solver == "gauss-newton"
+    ipopt = optimize(short, "ipopt", TINY, quiet=True)
+    assert ipopt.solver == "ipopt" and ipopt.success, ipopt.status
+    assert ipopt.summary()["solver"] == "ipopt"
+    ipopt.save(tmp_path / "run")
+    assert OcpResult.load(tmp_path / "run").solver == "ipopt"
+    simplex = optimize(short, "nelder-mead", NelderMeadSettings(max_evaluations=5), quiet=True)
+    assert simplex.solver == "nelder-mead"
+
+
+def test_a_solver_that_does_not_fit_its_settings_is_refused_before_any_work(short):
+    with pytest.raises(ValueError, match="solver = 'gradient-descent': must be one of 'gauss-n"):
+        optimize(short, "gradient-descent")
+    with pytest.raises(ValueError, match="NelderMeadSettings given for solver 'ipopt'"):
+        optimize(short, "ipopt", NelderMeadSettings())
+    with pytest.raises(ValueError, match="IpoptSettings given for solver 'nelder-mead'"):
+        optimize(short, "nelder-mead", TINY)
 
 
 def test_nelder_mead_quiet_prints_nothing(short, capfd):
@@ -240,7 +258,7 @@ def test_nelder_mead_quiet_prints_nothing(short, capfd):
 
 
 def test_failed_result_saves_nan_as_null_and_loads_back(short, tmp_path):
-    result = optimize(short, "ipopt", IpoptSettings(intervals=2, max_iter=1), quiet=True)
+    result = optimize(short, settings=IpoptSettings(intervals=2, max_iter=1), quiet=True)
     # A failed solve is still simulated on the scene's model (where it got to), never a success.
     assert not result.success and result.trajectory is not None
     result = replace(result, trajectory=None, omega=float("nan"), history=[1.0, float("nan")])

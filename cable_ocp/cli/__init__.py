@@ -204,12 +204,12 @@ def _optimize(args) -> int:
     output = {"quiet": args.quiet, "verbose": args.verbose}
     if args.method == "ipopt":
         settings = _ipopt_settings(args)
-        result = optimize(scene, "ipopt", settings, refinements=args.refinements, **output)
+        result = optimize(scene, settings=settings, refinements=args.refinements, **output)
     else:
         result = optimize(scene, "nelder-mead", _nelder_mead_settings(args), **output)
     locked, locked_failure = _locked_reference(scene)
     seabed, bounds = scene.seabed, (scene.winch.angle_min, scene.winch.angle_max)
-    runs = [("locked winch", locked), (f"optimised ({result.method})", result.trajectory)]
+    runs = [("locked winch", locked), (f"optimised ({result.solver})", result.trajectory)]
     runs = [(label, run) for label, run in runs if run is not None]
     summary = {"scene": scene.name, **result.summary(),
                "locked_omega_m": locked.omega if locked is not None else float("nan")}  # fmt: skip
@@ -235,7 +235,7 @@ def _optimize(args) -> int:
     )
     locked_omega = "no locked run" if locked is None else f"locked: {locked.omega:.3f} m"
     print(
-        f"{result.method}: success = {result.success} ({result.status}); {omega} "
+        f"{result.solver}: success = {result.success} ({result.status}); {omega} "
         f"({locked_omega}); iterations {result.iterations}, evaluations "
         f"{result.evaluations}, wall {result.wall_time:.1f} s (build {result.build_time:.1f} s, "
         f"solver {result.solve_time:.1f} s of which functions {result.function_time:.1f} s)"
@@ -266,13 +266,16 @@ def _compare(args) -> int:
     rows = []
     for scene in scenes:
         runs = [
-            ("ipopt, hermite", optimize(scene, "ipopt", base, **output)),
-            ("ipopt, spline", optimize(scene, "ipopt", replace(base, control="spline"), **output)),
+            (f"{base.solver}, hermite", optimize(scene, settings=base, **output)),
+            (
+                f"{base.solver}, spline",
+                optimize(scene, settings=replace(base, control="spline"), **output),
+            ),
             ("nelder-mead, spline", optimize(scene, "nelder-mead", simplex, **output)),
         ]
         rows += [(scene.name, label, r) for label, r in runs]
     lines = [
-        "| scene | method | control | Omega verified [m] | success | iterations | evaluations "
+        "| scene | solver | control | Omega verified [m] | success | iterations | evaluations "
         "| wall [s] | build [s] |",
         "|---|---|---|---:|---|---:|---:|---:|---:|",
     ]

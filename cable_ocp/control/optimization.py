@@ -1,4 +1,8 @@
-"""The front door for optimal winch control: ``optimize(scene, method="ipopt" | "nelder-mead")``.
+"""The front door for optimal winch control: ``optimize(scene, solver=...)``.
+
+``solver`` is ``"gauss-newton"`` (the default), ``"ipopt"`` (both on the direct-shooting
+transcription, :class:`~cable_ocp.control.ocp.IpoptSettings`) or ``"nelder-mead"`` (the paper's
+method over spline knots, :class:`~cable_ocp.control.nelder_mead.NelderMeadSettings`).
 
 Whatever model the optimiser works on, the result's Omega comes from a simulation of the scene's
 own model with the optimised winch angle. With a reduced optimisation model, IPOPT's answer is
@@ -53,7 +57,7 @@ class OcpResult:
     Attributes
     ----------
     method : str
-        ``"ipopt"`` or ``"nelder-mead"``.
+        The transcription: ``"ipopt"`` (direct shooting, whichever solver) or ``"nelder-mead"``.
     parameters : array
         Winch parameters of the control (rad, rad/s).
     control : str
@@ -118,6 +122,9 @@ class OcpResult:
         gives it: the user's with its overrides, and with what the verification changed (the
         heave compensation of a feedforward, a step that puts the control's nodes on step ends;
         ``notes`` says which). :attr:`scene` rebuilds it; empty in files written before it.
+    solver : str
+        The solver that ran: ``"gauss-newton"``, ``"ipopt"`` or ``"nelder-mead"`` (empty in
+        files written before it was recorded).
     """
 
     method: str
@@ -146,6 +153,7 @@ class OcpResult:
     minimum_clearance: float = float("nan")
     minimum_clearance_time: float = float("nan")
     scene_record: dict = field(default_factory=dict)
+    solver: str = ""
 
     @property
     def scene(self):
@@ -184,6 +192,7 @@ class OcpResult:
     def summary(self) -> dict:
         """The scalar figures of the result (json-ready; units in the keys, as ``MpcResult``'s)."""
         return {
+            "solver": self.solver,
             "method": self.method,
             "control": self.control,
             "success": self.success,
@@ -282,6 +291,7 @@ class OcpResult:
 _OPTIONAL_FIELDS = {
     "compile_time", "verification_time", "bound_time", "bond_residual", "verified_step",
     "heave_feedforward", "notes", "minimum_clearance", "minimum_clearance_time", "scene_record",
+    "solver",
 }  # fmt: skip
 
 
@@ -415,6 +425,7 @@ def solve_ipopt(
     shown = best_outcome or outcomes[-1]
     return OcpResult(
         method="ipopt",
+        solver=settings.solver,
         parameters=shown.parameters,
         control=f"{settings.control}({problem.control.size})",
         trajectory=best,
@@ -523,6 +534,7 @@ def solve_nelder_mead_verified(
     omega = trajectory.omega if trajectory is not None else float("nan")
     return OcpResult(
         method="nelder-mead",
+        solver="nelder-mead",
         parameters=outcome.parameters,
         control=f"spline({problem.control.size})",
         trajectory=trajectory,
@@ -566,6 +578,8 @@ class Method:
     solve: Callable[..., OcpResult]
 
 
+# The solvers optimize() runs: two on the direct-shooting transcription, and the paper's.
+SOLVERS = ("gauss-newton", "ipopt", "nelder-mead")
 # A reduced model derived from the scene optimises; the scene's own model verifies.
 METHODS = {
     "ipopt": Method(IpoptSettings(), resolved, ipopt_problem, solve_ipopt),
@@ -577,7 +591,7 @@ METHODS = {
 
 def optimize(
     scene,
-    method: str = "ipopt",
+    solver: str | None = None,
     settings: IpoptSettings | NelderMeadSettings | None = None,
     quiet: bool = False,
     verbose: bool = False,
@@ -586,50 +600,47 @@ def optimize(
     """Optimise the winch angle of a scene.
 
     States the scene's :class:`~cable_ocp.control.problem.WinchProblem` once (with the control,
-    model and step of the settings), solves it with the method, and verifies the result on the
+    model and step of the settings), solves it with the solver, and verifies the result on the
     scene's own model.
 
     Parameters
     ----------
     scene : Scene
-    method : str
-        ``"ipopt"`` (direct shooting) or ``"nelder-mead"`` (the paper's method).
+    solver : {"gauss-newton", "ipopt", "nelder-mead"}, optional
+        Gauss-Newton SQP or IPOPT on the direct-shooting transcription, or the paper's
+        Nelder-Mead over spline knots. None: the settings' (``IpoptSettings.solver``;
+        ``"nelder-mead"`` for :class:`NelderMeadSettings`), or ``"gauss-newton"`` without
+        settings. Given with ``IpoptSettings``, it replaces their ``solver``.
     settings : IpoptSettings or NelderMeadSettings, optional
         Defaults: a reduced model derived from the scene (3 elements, more on a long rope; its
         RK4 step from its limit along the locked run, at most 0.5 s:
-        :mod:`cable_ocp.control.defaults`); Gauss-Newton on single shooting with a Hermite
-        control of about 5 s intervals, Nelder-Mead over the scene's spline knots. The result's
-        ``notes`` say what was derived.
+        :mod:`cable_ocp.control.defaults`); single shooting with a Hermite control of about
+        5 s intervals, or Nelder-Mead over the scene's spline knots. The result's ``notes`` say
+        what was derived.
     quiet : bool
         Print nothing at all.
     verbose : bool
         IPOPT's full log (by default, one progress line per iteration); not with ``quiet``.
     **kwargs
-        Passed on (``refinements`` for IPOPT).
+        Passed on (``refinements`` for the shooting solvers).
 
     Returns
     -------
     OcpResult
         Check ``success``: a failed solve is returned with ``success = False`` and the solver's
-        status, never as an answer. On a valid scene it never raises: a failure of the physics on
-        the way (no equilibrium, a simulation that blows up, a solver error) is such a result,
-        with the reason and a remedy.
+        status, never as an answer; ``solver`` names the solver that ran. On a valid scene it
+        never raises: a failure of the physics on the way (no equilibrium, a simulation that
+        blows up, a solver error) is such a result, with the reason and a remedy.
 
     Raises
     ------
     ValueError
-        Bad input (a method, setting or scene field out of range), before any heavy work.
+        Bad input (a solver, setting or scene field out of range), before any heavy work.
     """
     check_verbosity(quiet, verbose)
-    if method not in METHODS:
-        raise ValueError(f"method = {method!r}: must be one of {', '.join(map(repr, METHODS))}")
+    solver, settings = chosen_solver(solver, settings)
+    method = "nelder-mead" if solver == "nelder-mead" else "ipopt"
     chosen = METHODS[method]
-    settings = settings or chosen.default
-    if not isinstance(settings, type(chosen.default)):
-        raise ValueError(
-            f"settings: {type(settings).__name__} given for method {method!r}, which takes "
-            f"{type(chosen.default).__name__}"
-        )
     started = time.perf_counter()
     model = "the optimisation model"
     try:
@@ -644,10 +655,34 @@ def optimize(
         problem = chosen.problem(scene, settings)
         result = chosen.solve(problem, settings, quiet=quiet, verbose=verbose, **kwargs)
     except RuntimeError as error:  # SimulationError, EquilibriumError, CasADi's errors
-        return failed_result(method, settings, error, time.perf_counter() - started, model)
+        failed = failed_result(method, settings, error, time.perf_counter() - started, model)
+        return replace(failed, solver=solver)
     notes = "; ".join(text for text in (result.notes, derived) if text)
     ran = result.trajectory.scene_record if result.trajectory is not None else scene.to_dict()
     return replace(result, notes=notes, scene_record=ran)
+
+
+def chosen_solver(
+    solver: str | None, settings: IpoptSettings | NelderMeadSettings | None
+) -> tuple[str, IpoptSettings | NelderMeadSettings]:
+    """The solver :func:`optimize` runs and its settings (ValueError naming a misfit)."""
+    if solver is not None and solver not in SOLVERS:
+        raise ValueError(f"solver = {solver!r}: must be one of {', '.join(map(repr, SOLVERS))}")
+    if settings is None:
+        solver = solver or "gauss-newton"
+        if solver == "nelder-mead":
+            return solver, METHODS["nelder-mead"].default
+        return solver, replace(METHODS["ipopt"].default, solver=solver)
+    if isinstance(settings, NelderMeadSettings) and solver in (None, "nelder-mead"):
+        return "nelder-mead", settings
+    if isinstance(settings, IpoptSettings) and solver != "nelder-mead":
+        if solver is not None and solver != settings.solver:
+            settings = replace(settings, solver=solver)
+        return settings.solver, settings
+    takes = "NelderMeadSettings" if solver == "nelder-mead" else "IpoptSettings"
+    raise ValueError(
+        f"settings: {type(settings).__name__} given for solver {solver!r}, which takes {takes}"
+    )
 
 
 def failed_result(

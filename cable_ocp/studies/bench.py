@@ -227,18 +227,18 @@ def ocp_report(models_dir: Path, quick: bool = False) -> list[tuple[str, OcpResu
     if quick:
         scene = load_scene(models_dir / "small_tow.toml")
         cases = [
-            ("ipopt", "IPOPT, Hermite", IpoptSettings(step=0.25, intervals=8)),
+            (None, "Gauss-Newton, Hermite", IpoptSettings(step=0.25, intervals=8)),
             ("nelder-mead", "Nelder-Mead, knots", NelderMeadSettings(step=0.25)),
         ]
     else:
         scene = load_scene(models_dir / "paper_flat.toml")
         spline = IpoptSettings(elements=3, step=0.5, control="spline")
         cases = [
-            ("ipopt", "IPOPT, Hermite", None),
-            ("ipopt", "IPOPT, 14-knot spline", spline),
+            (None, "Gauss-Newton, Hermite", None),
+            (None, "Gauss-Newton, 14-knot spline", spline),
             ("nelder-mead", "Nelder-Mead, 14 knots", None),
         ]
-    rows = [(label, optimize(scene, method, s, quiet=True)) for method, label, s in cases]
+    rows = [(label, optimize(scene, solver, s, quiet=True)) for solver, label, s in cases]
     print(f"Winch optimisation on {scene.name} (Omega verified on the scene's n = "
           f"{scene.model.elements} model), same run")  # fmt: skip
     print(f"{'method':<24}{'Omega [m]':>11}{'success':>9}{'iter.':>7}{'evals':>7}{'solve [s]':>11}"
@@ -273,7 +273,7 @@ def hessian_report(models_dir: Path) -> None:
         settings = IpoptSettings(
             step=0.25, intervals=8, solver="ipopt", hessian=hessian, compiled=compiled
         )
-        r = optimize(scene, "ipopt", settings, quiet=True)
+        r = optimize(scene, settings=settings, quiet=True)
         print(
             f"{hessian:<16}{str(compiled):>9}{r.iterations:>12}{r.omega:>12.3e}"
             f"{r.solve_time:>11.1f}{r.solve_time / max(r.iterations, 1):>13.2f}"
@@ -300,7 +300,7 @@ def ocp_speed_case(scene_path: str, solver: str, quick: bool) -> dict:
     base = QUICK_OCP_SETTINGS if quick else {"elements": 3, "step": 0.5}
     settings = IpoptSettings(**base, solver=solver)
     started = time.perf_counter()
-    result = optimize(scene, "ipopt", settings, quiet=True)
+    result = optimize(scene, settings=settings, quiet=True)
     wall = time.perf_counter() - started
     control = make_control(scene, settings)
     return {

@@ -68,7 +68,9 @@ def run_case(scene: Scene, task: str, method: str, settings: Any) -> dict[str, A
             trajectory = simulate(scene, quiet=True)
             record.update(success=True, status="ok")
         else:
-            result = optimize(scene, method, settings, quiet=True)
+            result = optimize(
+                scene, "nelder-mead" if method == "nelder-mead" else None, settings, quiet=True
+            )
             trajectory = result.trajectory
             record.update(
                 success=bool(result.success),

@@ -313,7 +313,7 @@ def _references(scene, plant: Plant, names, time_grid) -> tuple[dict[str, np.nda
         try:
             # The settings optimize() derives, fixed here: the profile's control needs them.
             settings, _ = resolved(calm, METHODS["ipopt"].default)
-            result = optimize(calm, "ipopt", settings, quiet=True)
+            result = optimize(calm, settings=settings, quiet=True)
         except (ValueError, RuntimeError) as error:  # the derivation's locked run, say
             missing.append(f"reference 'open-loop' left out: {error}")
             return out, missing

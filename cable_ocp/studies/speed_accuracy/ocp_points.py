@@ -42,7 +42,7 @@ def ocp_point(scene, setting: OcpSetting, intervals: int, quiet: bool = True) ->
     """Solve the OCP with one setting; Omega is verified on the scene's own model."""
     kwargs = {"refinements": setting.refinements} if setting.method == "ipopt" else {}
     settings = setting.settings(intervals)
-    result, cpu, _ = timed(lambda: optimize(scene, setting.method, settings, quiet=quiet, **kwargs))
+    result, cpu, _ = timed(lambda: optimize(scene, settings=settings, quiet=quiet, **kwargs))
     return OcpPoint(
         setting=setting,
         omega=result.omega,

@@ -235,10 +235,10 @@ def knots_comparison(
             compiled=compiled,
             solver="ipopt",
         )
-        plain = optimize(local, "ipopt", ipopt, refinements=0, quiet=quiet)
+        plain = optimize(local, settings=ipopt, refinements=0, quiet=quiet)
         runs.append(_knot_run(p, "ipopt", plain))
         if refinements > 0:
-            corrected = optimize(local, "ipopt", ipopt, refinements=refinements, quiet=quiet)
+            corrected = optimize(local, settings=ipopt, refinements=refinements, quiet=quiet)
             runs.append(_knot_run(p, "ipopt + correction", corrected))
         search = NelderMeadSettings(
             elements=elements, step=step, max_evaluations=max_evaluations, compiled=compiled
