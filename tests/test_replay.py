@@ -111,3 +111,35 @@ def test_a_result_written_before_scenes_were_kept_loads_and_says_so(heaving_opti
 def test_a_folder_without_a_result_is_named(tmp_path):
     with pytest.raises(ValueError, match="no cable_ocp result there"):
         co.load_result(tmp_path)
+
+
+def test_cable_ocp_replay_drives_a_saved_optimum_on_its_scene_or_a_changed_one(
+    heaving_optimum, tmp_path, capsys
+):
+    """``cable-ocp replay FOLDER``: the saved scene and profile give the saved Omega again
+    (1e-9 m); ``--set`` changes the scene (a finer model keeps the profile and moves Omega)."""
+    import json
+
+    scene, result, loaded = heaving_optimum
+    folder = tmp_path / "optimum"
+    result.save(folder)
+    assert cli.main(["replay", str(folder), "--out", str(tmp_path / "same"), "--quiet"]) == 0
+    same = json.loads((tmp_path / "same" / "summary.json").read_text())
+    assert abs(same["omega_m"] - result.omega) < 1e-9
+    assert same["saved_omega_m"] == result.omega
+    assert (tmp_path / "same" / "clearance.png").is_file()
+    finer = ["replay", str(folder), "--out", str(tmp_path / "finer"), "--quiet"]
+    assert cli.main([*finer, "--set", "model.elements=8"]) == 0
+    moved = json.loads((tmp_path / "finer" / "summary.json").read_text())
+    assert np.isfinite(moved["omega_m"]) and moved["omega_m"] != same["omega_m"]
+    capsys.readouterr()
+
+
+def test_cable_ocp_replay_refuses_what_is_not_an_optimum(tmp_path, capsys):
+    run = co.simulate(co.load_scene(scene_path("small_tow")), compiled=True)
+    (tmp_path / "run").mkdir()
+    run.save(tmp_path / "run" / "trajectory")
+    code = cli.main(["replay", str(tmp_path / "run"), "--out", str(tmp_path / "o"), "--quiet"])
+    assert code == 2
+    assert "holds a Trajectory; replay takes what optimize saved" in capsys.readouterr().err
+    assert not (tmp_path / "o").exists()

@@ -53,7 +53,6 @@ def parse_overrides(pairs: list[str]) -> dict:
 
 
 def _simulate(args) -> int:
-    from cable_ocp import plots
     from cable_ocp.simulation.run import simulate
 
     scene = load_scene(args.scene, parse_overrides(args.set))
@@ -66,10 +65,39 @@ def _simulate(args) -> int:
     # Compiled unless --interpreted: without a compiler or a writable cache, the interpreted
     # model runs after the same warning as the API's.
     trajectory = simulate(scene, winch=knots, quiet=args.quiet, compiled=not args.interpreted)
+    _write_run(trajectory, scene, Path(args.out), args.animate)
+    return 0
+
+
+def _replay(args) -> int:
+    from cable_ocp.control.optimization import OcpResult
+    from cable_ocp.control.results import load_result
+    from cable_ocp.simulation.run import simulate
+
+    result = load_result(args.result)
+    if not isinstance(result, OcpResult):
+        raise ValueError(
+            f"{args.result}: holds a {type(result).__name__}; replay takes what optimize saved "
+            "(result.nc), whose profile it drives"
+        )
+    if not result.scene_record:
+        raise ValueError(
+            f"{args.result}: written before results kept their scene; run optimize again"
+        )
+    scene = result.scene.updated(parse_overrides(args.set)) if args.set else result.scene
+    trajectory = simulate(scene, winch=result, quiet=args.quiet)
+    _write_run(trajectory, scene, Path(args.out), args.animate, {"saved_omega_m": result.omega})
+    return 0
+
+
+def _write_run(trajectory, scene, out: Path, animate: bool, extra: dict | None = None) -> None:
+    """A run's trajectory, figures and summary.json in ``out``; the summary printed."""
+    from cable_ocp import plots
+
     seabed = scene.seabed
-    with results_folder(args.out) as folder:
+    with results_folder(out) as folder:
         trajectory.save(folder / "trajectory")
-        if args.animate:
+        if animate:
             plots.animate(trajectory, folder / "animation.gif", seabed.clearance)
         plots.end_trajectory(trajectory, path=folder / "end_trajectory.png")
         plots.clearance(trajectory, seabed.clearance, path=folder / "clearance.png",
@@ -83,11 +111,11 @@ def _simulate(args) -> int:
             "end_rise_m": float(trajectory.end[:, 2].max() - trajectory.end[0, 2]),
             "final_end_position_m": trajectory.end[-1].tolist(),
             "max_top_tension_N": float(trajectory.top_tension.max()),
+            **(extra or {}),
         }
         (folder / "summary.json").write_text(json_text(summary))
     print(json_text(summary))
-    print(f"results and figures written to {Path(args.out).resolve()}")
-    return 0
+    print(f"results and figures written to {out.resolve()}")
 
 
 def _given(args, names: tuple[str, ...]) -> dict:
@@ -494,6 +522,19 @@ def build_parser() -> argparse.ArgumentParser:
     sim.add_argument("--interpreted", action="store_true", help=interpreted)
     sim.add_argument("--animate", action="store_true", help=ANIMATE_HELP)
     sim.set_defaults(run=_simulate)
+
+    rep = commands.add_parser(
+        "replay", **shown,
+        help="drive a scene by a saved optimum (on its own scene, or changed by --set)",
+    )  # fmt: skip
+    rep.add_argument("result", type=Path,
+                     help="a folder that optimize wrote (or its result.nc)")  # fmt: skip
+    rep.add_argument("--out", type=Path, required=True, help=OUT_HELP)
+    rep.add_argument("--set", action="append", default=[], metavar="KEY=VALUE",
+                     help="change the saved scene, e.g. --set model.elements=60")  # fmt: skip
+    rep.add_argument("--quiet", action="store_true", help="no progress bar")
+    rep.add_argument("--animate", action="store_true", help=ANIMATE_HELP)
+    rep.set_defaults(run=_replay)
 
     val = commands.add_parser(
         "validate", **shown, help="statics check against the analytic catenary"
