@@ -19,3 +19,28 @@ def test_ocp_speed_case_reports_a_verified_solve(models_dir):
 def test_bench_accepts_the_ocp_speed_and_mpc_parts():
     args = build_parser().parse_args(["bench", "--only", "mpc", "ocp-speed", "--quick"])
     assert args.only == ["mpc", "ocp-speed"] and args.quick
+
+
+def test_bench_writes_its_figure_only_into_out(tmp_path, monkeypatch, capsys):
+    """``bench --only mpc``: without ``--out`` nothing lands in the working directory; with it,
+    the solve-time figure is in that folder."""
+    from cable_ocp import cli
+    from cable_ocp.plots import closed_loop
+    from cable_ocp.studies import bench_mpc
+
+    drawn = []
+    monkeypatch.setattr(bench_mpc, "report", lambda models, quick: ["results"])
+    monkeypatch.setattr(
+        closed_loop,
+        "solve_time_comparison",
+        lambda results, path, scene_name: drawn.append(path) or path.write_bytes(b"png"),
+    )
+    work = tmp_path / "work"
+    work.mkdir()
+    monkeypatch.chdir(work)
+    assert cli.main(["bench", "--only", "mpc"]) == 0
+    assert not drawn and list(work.iterdir()) == []
+    assert "not written (give --out DIR)" in capsys.readouterr().out
+    assert cli.main(["bench", "--only", "mpc", "--out", str(tmp_path / "figures")]) == 0
+    assert (tmp_path / "figures" / "mpc_solve_times.png").read_bytes() == b"png"
+    assert list(work.iterdir()) == []

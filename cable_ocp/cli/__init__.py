@@ -438,7 +438,7 @@ def _bench(args) -> int:
         "moordyn": moordyn_report,
         "ocp": bench.ocp_report,
         "ocp-speed": bench.ocp_speed_report,
-        "mpc": _bench_mpc,
+        "mpc": lambda models, quick: _bench_mpc(models, quick, args.out),
         "robustness": lambda _, quick: robustness.report(
             args.cases or (6 if quick else 50), args.seed
         ),
@@ -449,15 +449,19 @@ def _bench(args) -> int:
     return 0
 
 
-def _bench_mpc(models: Path, quick: bool = False) -> None:
-    """The closed loop's benchmark, with its figure of solve times saved beside."""
+def _bench_mpc(models: Path, quick: bool = False, out: Path | None = None) -> None:
+    """The closed loop's benchmark; its figure of solve times saved in ``out`` when given."""
     from cable_ocp.plots.closed_loop import solve_time_comparison
     from cable_ocp.studies import bench_mpc
 
     results = bench_mpc.report(models, quick=quick)
-    path = Path("mpc_solve_times.png")
-    solve_time_comparison(results, path=path, scene_name="paper_hill")  # bench_mpc's scene
-    print(f"figure written to {path.resolve()}")
+    if out is None:
+        print("figure of the solve times not written (give --out DIR)")
+        return
+    with results_folder(out) as folder:
+        path = folder / "mpc_solve_times.png"
+        solve_time_comparison(results, path=path, scene_name="paper_hill")  # bench_mpc's scene
+    print(f"figure written to {(Path(out) / path.name).resolve()}")
 
 
 def _study(args) -> int:
@@ -618,6 +622,10 @@ def build_parser() -> argparse.ArgumentParser:
     bench.add_argument(
         "--hessian", action="store_true", help="IPOPT exact vs limited-memory Hessian instead"
     )
+    bench.add_argument(
+        "--out", type=Path, default=None,
+        help="folder for the benchmarks' figures (none are written without it)",
+    )  # fmt: skip
     bench.set_defaults(run=_bench)
     return parser
 
