@@ -344,3 +344,31 @@ def test_real_time_iteration_and_ipopt_solve_one_transcription(short_hill, close
     converged = mpc(short_hill, quiet=True, references=(), solver="ipopt", max_iter=100, **SHORT)
     assert converged.success, converged.status
     assert closed_loop.omega == pytest.approx(converged.omega, rel=0.02)
+
+
+def test_a_users_loop_steps_the_plant_and_the_estimator_sample_by_sample(short_hill):
+    """Plant.make_step under a locked winch, one 5 s sample at a time, is the run that
+    ``simulate`` makes of the whole 40 s at once (another code path) to 1e-9 m; the estimator
+    steps on what the plant measured (its forecast starts at the measured top)."""
+    from cable_ocp.control.closed_loop.estimator import Estimator
+    from cable_ocp.control.closed_loop.plant import Plant
+    from cable_ocp.simulation.run import simulate
+
+    calm = short_hill.updated({"top.heave": None})
+    settings, _ = MpcSettings(**SHORT).resolved(calm)
+    plant = Plant(calm, (calm.winch.angle_min, calm.winch.angle_max), settings.limiter_band)
+    locked = lambda t, left=None: tuple(np.zeros((3, np.size(t))))  # noqa: E731
+    measured = plant.start(locked)
+    reduced = CableModel.from_scene(calm, settings.elements)
+    height = measured.inputs[0, INPUTS.top][2]
+    estimator = Estimator(settings, plant.model, reduced, calm.winch.drum_radius, height)
+    ends = [measured.states[:, :3]]
+    for k in range(8):
+        estimate = estimator.make_step(measured, 0.0, 0.0)
+        np.testing.assert_allclose(estimate.forecast.position, measured.inputs[-1, INPUTS.top])
+        assert estimate.state.size == reduced.state_size
+        measured = plant.make_step(locked, (k + 1) * settings.sample)
+        assert measured.now == (k + 1) * settings.sample
+        ends.append(measured.states[:, :3])
+    whole = simulate(calm, compiled=True)
+    np.testing.assert_allclose(np.concatenate(ends), whole.end, atol=1e-9)

@@ -305,7 +305,7 @@ def test_a_closed_loop_qp_that_the_heave_room_makes_infeasible_is_solved_on_the_
     estimator = Estimator(settings, plant.model, controller.model, scene.winch.drum_radius, u[2])
     estimator.reference = 5.0
     angle, rate = high - 1.5, 0.5
-    estimate = estimator.make_step(0.0, x, u, angle, rate)
+    estimate = estimator.estimate(0.0, x, u, angle, rate)
     roomy = Estimate(estimate.state, estimate.forecast, estimate.end_offset, 5.0, 3.0)
     narrowed = controller.problem.bounds.narrowed(roomy.margin, settings.sample)
     values = controller.parameter_values(0.0, roomy)

@@ -13,6 +13,7 @@ import numpy as np
 
 from cable_ocp.control.closed_loop.controller import Estimate
 from cable_ocp.control.closed_loop.forecast import HeightFilter, TopForecast, forecast_top
+from cable_ocp.control.closed_loop.plant import Measurement
 from cable_ocp.control.closed_loop.projection import project_state
 from cable_ocp.control.closed_loop.settings import MpcSettings
 from cable_ocp.model.cable import CableModel
@@ -67,14 +68,22 @@ class Estimator:
         """The low-passed top height at every measured time (m)."""
         return np.concatenate(self.filtered)
 
-    def make_step(
+    def make_step(self, measured: Measurement, angle: float, rate: float) -> Estimate:
+        """The estimate at the end of a sample from what the plant measured over it.
+
+        The top heights measured since the last call go through the filter; the state and
+        inputs at the sample's end make the estimate. ``angle``, ``rate`` (rad, rad/s): the
+        plan's winch then, which sets the reduced model's top element.
+        """
+        new = measured.time > self.times[-1][-1]
+        if np.any(new):
+            self.measure(measured.time[new], measured.inputs[new], measured.step)
+        return self.estimate(measured.now, measured.states[-1], measured.inputs[-1], angle, rate)
+
+    def estimate(
         self, now: float, x: np.ndarray, u: np.ndarray, angle: float, rate: float
     ) -> Estimate:
-        """The estimate at ``now`` from the plant's state ``x`` and inputs ``u``.
-
-        ``angle``, ``rate`` (rad, rad/s): the plan's winch now, which sets the reduced model's
-        top element.
-        """
+        """The estimate at ``now`` (s) from the plant's state ``x`` and inputs ``u``."""
         forecast = self.forecast(now, u[INPUTS.top], u[INPUTS.top_velocity])
         projected = project_state(
             self.plant,

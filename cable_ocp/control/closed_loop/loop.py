@@ -6,7 +6,9 @@ the top forecast, the room for the heave feedback), the controller (:mod:`.contr
 receding-horizon winch problem from its previous plan moved on by one sample, and the plant
 (:mod:`.plant`) runs one sample under the new plan with the heave feedback. A failed solve keeps
 the previous plan, and is counted and reported. The controller never sees the heave except
-through these measurements.
+through these measurements. Each part's ``make_step`` is public: the loop below is those three
+calls and the bookkeeping of what they return (a :class:`~.plant.Measurement` per sample, a
+:class:`~.controller.Solve` per solve).
 """
 
 from __future__ import annotations
@@ -147,7 +149,6 @@ def mpc(scene, settings: MpcSettings | None = None, quiet: bool = False, **field
     plant = Plant(scene, (low, high), settings.limiter_band)
     radius = scene.winch.drum_radius
     duration, h = scene.numerics.duration, plant.step
-    per_sample = round(settings.sample / h)
     samples = round(duration / settings.sample)
     build_time = time.perf_counter() - started
 
@@ -161,26 +162,18 @@ def mpc(scene, settings: MpcSettings | None = None, quiet: bool = False, **field
     if not settings.heave_feedback:
         height = None
     # With the heave feedback the winch already pays out the heave's speed at t = 0.
-    applied = plant.apply(_command(plan, height, plant.top, radius), zero)
-    x = plant.initial_state(applied)
-    check_start(scene.seabed, x[:3])
-    estimator.reference = clearance_reference(scene.seabed, x)
-    times, states = [zero], [x[None, :]]
-    inputs = [plant.inputs(applied, zero).T]
-    angles, planned = [applied.angle], [np.zeros(1)]
-    limited = 0
-    sample_times, solve_times, iterations, statuses, failures = [], [], [], [], []
+    measured = plant.start(_command(plan, height, plant.top, radius))
+    check_start(scene.seabed, plant.state[:3])
+    estimator.reference = clearance_reference(scene.seabed, plant.state)
+    runs, planned, solves, failures = [measured], [np.zeros(1)], [], []
     plant_failure = None
     progress = Progress("mpc", duration, quiet)
     for k in range(samples):
         now = k * settings.sample
         phi, rate, _ = plan(np.array([now]))
-        estimate = estimator.make_step(now, x, inputs[-1][-1], phi[0], rate[0])
+        estimate = estimator.make_step(measured, phi[0], rate[0])
         solve = controller.make_step(now, estimate, phi[0], rate[0])
-        sample_times.append(now)
-        solve_times.append(solve.solve_time)
-        iterations.append(solve.iterations)
-        statuses.append(solve.status)
+        solves.append(solve)
         if solve.success:
             plan = Plan(now, solve.parameters, controller.control, plan.settled(), settings.step)
         else:
@@ -188,56 +181,52 @@ def mpc(scene, settings: MpcSettings | None = None, quiet: bool = False, **field
         if settings.heave_feedback:
             height = BlendedHeight(previous, estimate.forecast, now, settings.sample)
         previous = estimate.forecast
-        command = _command(plan, height, plant.top, radius)
         try:
-            block, block_inputs, applied = plant.advance(x, now, per_sample, command)
+            measured = plant.make_step(
+                _command(plan, height, plant.top, radius), (k + 1) * settings.sample
+            )
         except SimulationError as error:
-            where = ", ".join(f"{value:.6g}" for value in x[:3])
+            where = ", ".join(f"{value:.6g}" for value in plant.state[:3])
             verb = "stopped" if isinstance(error, OffGridError) else "failed"
             plant_failure = (
                 f"the plant {verb} between t = {now:g} and {now + settings.sample:g} s (the end "
                 f"at (x, y, z) = ({where}) m at t = {now:g} s): {error}"
             )
             break
-        x = block[-1]
-        step_times = now + np.arange(1, per_sample + 1) * h
-        estimator.measure(step_times, block_inputs[1:], h)
-        times.append(step_times)
-        states.append(block[1:])
-        inputs.append(block_inputs[1:])
-        angles.append(applied.angle[1:])
-        planned.append(plan(step_times)[0])
-        limited += int(np.count_nonzero(applied.limited[1:]))
+        runs.append(measured)
+        planned.append(plan(measured.time)[0])
         progress.update(now + settings.sample, f"solve {solve.solve_time * 1e3:.0f} ms")
     progress.close()
     wall_time = time.perf_counter() - loop_started
 
-    time_grid = np.concatenate(times)
-    end = np.concatenate(states)[:, 0:3]
+    time_grid = np.concatenate([run.time for run in runs])
+    end = np.concatenate([run.states for run in runs])[:, 0:3]
     error = clearance_error(scene.seabed, end)
     ref_errors, ref_failures = _references(scene, plant, settings.references, time_grid)
     # lowest_clearance reads a run's time and end, as a Trajectory has them.
     _, _, too_low = lowest_clearance(scene.seabed, SimpleNamespace(time=time_grid, end=end))
+    statuses = [solve.status for solve in solves]
+    solve_times = [solve.solve_time for solve in solves]
     widened = sum(WIDENED in text for text in statuses)
     if widened:
         ref_failures = [f"{widened} solves {WIDENED}", *ref_failures]
     status = _status(samples, failures, plant_failure, too_low, ref_failures)
     return MpcResult(
         time=time_grid,
-        winch_angle=np.concatenate(angles),
+        winch_angle=np.concatenate([run.applied.angle for run in runs]),
         planned_angle=np.concatenate(planned),
         end=end,
-        top=np.concatenate(inputs)[:, 0:3],
+        top=np.concatenate([run.inputs for run in runs])[:, 0:3],
         clearance_error=error,
         # No Omega of a plant that failed in its first sample (one point, no span).
         omega=rms_objective(time_grid, error) if time_grid.size > 1 else float("nan"),
-        sample_times=np.array(sample_times),
+        sample_times=settings.sample * np.arange(len(solves)),
         solve_times=np.array(solve_times),
-        iterations=np.array(iterations),
+        iterations=np.array([solve.iterations for solve in solves]),
         statuses=statuses,
         failures=failures,
         success=not failures and plant_failure is None and too_low is None,
-        limited_steps=limited,
+        limited_steps=sum(int(np.count_nonzero(run.applied.limited)) for run in runs[1:]),
         projected_samples=plant.projections,
         angle_range=(low, high),
         real_time_factor=duration / wall_time,

@@ -86,6 +86,33 @@ class Applied:
             self.angle, self.rate, self.acceleration, self.limited)))  # fmt: skip
 
 
+@dataclass(frozen=True)
+class Measurement:
+    """What the plant reports of one sample (or of its start).
+
+    Attributes
+    ----------
+    now : float, s
+        The time the sample ends at (the plant's clock), where the last state holds.
+    time : array (k,), s
+        The plant's steps in the sample after its start (``now`` alone at the start).
+    states : array (k, state_size)
+    inputs : array (k, 15)
+        The model's inputs there: the true top motion, the line out, the end force.
+    applied : Applied
+        The winch angle applied there.
+    step : float, s
+        The plant's RK4 step.
+    """
+
+    now: float
+    time: np.ndarray
+    states: np.ndarray
+    inputs: np.ndarray
+    applied: Applied
+    step: float
+
+
 class Plant:
     """The scene's model integrated by RK4 at the scene's step, compiled to C.
 
@@ -108,6 +135,28 @@ class Plant:
         self.low, self.high = angle_range
         self.band = band
         self.projections = 0  # samples started from a state moved onto its bonds
+        self.state, self.now = np.zeros(0), 0.0  # set by start()
+
+    def start(self, command: AngleFunction) -> Measurement:
+        """Put the plant at its start (:meth:`initial_state`) under ``command``; report it."""
+        zero = np.zeros(1)
+        applied = self.apply(command, zero)
+        self.state, self.now = self.initial_state(applied), 0.0
+        inputs = self.inputs(applied, zero).T
+        return Measurement(0.0, zero, self.state[None, :], inputs, applied, self.step)
+
+    def make_step(self, command: AngleFunction, until: float) -> Measurement:
+        """Run from the plant's time to ``until`` (s, whole steps) under ``command``.
+
+        Returns the sample's steps after its start. Raises as :meth:`advance` does, the plant
+        left at the sample's start.
+        """
+        start = self.now
+        count = round((until - start) / self.step)
+        states, inputs, applied = self.advance(self.state, start, count, command)
+        self.state, self.now = states[-1], until
+        times = start + np.arange(1, count + 1) * self.step
+        return Measurement(until, times, states[1:], inputs[1:], applied.tail(count), self.step)
 
     def apply(self, angle: AngleFunction, t: np.ndarray, left=None) -> Applied:
         """Limit a commanded angle history to the winch range at the times ``t``.
