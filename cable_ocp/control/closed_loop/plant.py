@@ -22,7 +22,7 @@ from cable_ocp.drive.winch import with_left
 from cable_ocp.model.cable import CableModel
 from cable_ocp.model.layout import INPUTS
 from cable_ocp.simulation.figures import apart
-from cable_ocp.simulation.integrate import SimulationError, step_function
+from cable_ocp.simulation.integrate import SimulationError, evaluate_into, step_function
 from cable_ocp.simulation.seabed import check_on_grid
 from cable_ocp.simulation.statics import equilibrium
 
@@ -304,11 +304,14 @@ class Plant:
             lambda: step_function(self.model, h, compiled=True).mapaccum(steps),
         )
         stages = inputs[:, : times.size]
+        run_states = np.empty((steps, x.size))
         # A Ctrl-C inside the CasADi call can leave Python's error set under a result that
-        # numpy then rejects (SystemError): it is the user's interrupt.
+        # numpy then rejects (SystemError): it is the user's interrupt. The states are written
+        # into numpy directly (evaluate_into): through CasADi's DM they cost 5.2 ms against
+        # 3.8 ms a sample at n = 20 (50 steps).
         with keeping_interrupts():
-            run_states = np.array(run(x, stages))
-        states = np.vstack([x, run_states.T[substeps - 1 :: substeps]])
+            evaluate_into(run, [x, stages.T], [run_states])
+        states = np.vstack([x, run_states[substeps - 1 :: substeps]])
         return states, inputs[:, times.size :].T, applied.tail(count + 1)
 
     def _health(self, x: np.ndarray, u: np.ndarray, t: float, substeps: int) -> str | None:
