@@ -10,10 +10,11 @@ view, with ``projection`` for the reduced state and ``forecast`` for the top), `
 ``cable_ocp.plots.closed_loop`` and its command in ``cable_ocp.cli.mpc``. The package is not
 called ``mpc`` so that ``cable_ocp.mpc`` can be the function.
 
-A loop of one's own steps the three parts as :func:`~.loop.mpc` does: ``estimate =
-estimator.make_step(measured, angle, rate)``, ``solve = controller.make_step(now, estimate, angle,
-rate)``, ``measured = plant.make_step(command, until)`` (:class:`Estimator`,
-:class:`RecedingHorizon`, :class:`Plant`, :class:`Measurement`).
+A loop of one's own steps the parts that :func:`loop_parts` builds as :func:`~.loop.mpc` does:
+``estimate = estimator.make_step(measured, angle, rate)``, ``solve = controller.make_step(now,
+estimate, angle, rate)``, ``command.make_step(now, solve, estimate)``, ``measured =
+plant.make_step(angle, until)`` (:class:`Estimator`, :class:`RecedingHorizon`,
+:class:`WinchCommand`, :class:`Plant`, :class:`Measurement`).
 
 The names below are imported on first use (PEP 562), so that the command line reads the settings'
 defaults without loading the solvers.
@@ -25,9 +26,10 @@ from importlib import import_module
 from typing import TYPE_CHECKING
 
 if TYPE_CHECKING:  # what __getattr__ imports, for type checkers and the import graph
+    from cable_ocp.control.closed_loop.command import WinchCommand
     from cable_ocp.control.closed_loop.controller import RecedingHorizon
     from cable_ocp.control.closed_loop.estimator import Estimator
-    from cable_ocp.control.closed_loop.loop import mpc
+    from cable_ocp.control.closed_loop.loop import LoopParts, loop_parts, mpc
     from cable_ocp.control.closed_loop.plant import Measurement, Plant
     from cable_ocp.control.closed_loop.result import MpcResult
     from cable_ocp.control.closed_loop.settings import MpcSettings
@@ -37,12 +39,16 @@ _SOURCES = {
     "Measurement": "cable_ocp.control.closed_loop.plant",
     "Plant": "cable_ocp.control.closed_loop.plant",
     "RecedingHorizon": "cable_ocp.control.closed_loop.controller",
+    "LoopParts": "cable_ocp.control.closed_loop.loop",
+    "WinchCommand": "cable_ocp.control.closed_loop.command",
+    "loop_parts": "cable_ocp.control.closed_loop.loop",
     "mpc": "cable_ocp.control.closed_loop.loop",
     "MpcResult": "cable_ocp.control.closed_loop.result",
     "MpcSettings": "cable_ocp.control.closed_loop.settings",
 }
 __all__ = [
-    "Estimator", "Measurement", "MpcResult", "MpcSettings", "Plant", "RecedingHorizon", "mpc",
+    "Estimator", "LoopParts", "Measurement", "MpcResult", "MpcSettings", "Plant",
+    "RecedingHorizon", "WinchCommand", "loop_parts", "mpc",
 ]  # fmt: skip
 
 

@@ -14,14 +14,15 @@ calls and the bookkeeping of what they return (a :class:`~.plant.Measurement` pe
 from __future__ import annotations
 
 import time
+from dataclasses import dataclass
 from types import SimpleNamespace
 
 import numpy as np
 
+from cable_ocp.control.closed_loop.command import WinchCommand
 from cable_ocp.control.closed_loop.controller import WIDENED, RecedingHorizon
 from cable_ocp.control.closed_loop.estimator import Estimator
-from cable_ocp.control.closed_loop.forecast import BlendedHeight
-from cable_ocp.control.closed_loop.plant import Plant
+from cable_ocp.control.closed_loop.plant import Measurement, Plant
 from cable_ocp.control.closed_loop.result import MpcResult
 from cable_ocp.control.closed_loop.settings import MpcSettings
 from cable_ocp.control.interrupts import interrupt_here
@@ -29,9 +30,7 @@ from cable_ocp.control.ocp import compile_ahead, make_control, resolved
 from cable_ocp.control.optimization import METHODS, optimize
 from cable_ocp.control.verification import lowest_clearance
 from cable_ocp.drive.bounds import angle_bounds
-from cable_ocp.drive.controls import HermiteIntervals
 from cable_ocp.drive.drive import Drive
-from cable_ocp.drive.winch import heave_payout
 from cable_ocp.simulation.integrate import SimulationError
 from cable_ocp.simulation.progress import Progress
 from cable_ocp.simulation.seabed import (
@@ -43,66 +42,67 @@ from cable_ocp.simulation.seabed import (
 )
 
 
-class Plan:
-    """The plan in force: the controller's parameters from the solve at ``start`` (s).
+@dataclass(frozen=True)
+class LoopParts:
+    """The parts of a scene's closed loop, each stepped once a sample (module docstring).
 
-    A new plan starts at the winch's angle and rate (its first node is held there) but not at
-    its acceleration: over its first ``blend`` seconds (one RK4 step of the controller's model)
-    it takes over from the ``previous`` one by the quintic smoothstep, as the heave reference
-    does (:class:`.forecast.BlendedHeight`), so that the top element's acceleration never jumps
-    at a sample (with it, one of the 5 heaving robustness scenes whose plant's bonds opened ran
-    through; a wider limiter band did the rest, ``MpcSettings.limiter_band``).
+    Attributes
+    ----------
+    settings : MpcSettings
+        Resolved for the scene (nothing left unset).
+    derived : str
+        How the settings left unset were derived.
+    estimator : Estimator
+    controller : RecedingHorizon
+    command : WinchCommand
+    plant : Plant
     """
 
-    def __init__(
-        self,
-        start: float,
-        parameters: np.ndarray,
-        control: HermiteIntervals,
-        previous: Plan | None = None,
-        blend: float = 0.0,
-    ):
-        self.start, self.parameters, self.control = start, parameters, control
-        self.previous, self.blend = previous, blend
+    settings: MpcSettings
+    derived: str
+    estimator: Estimator
+    controller: RecedingHorizon
+    command: WinchCommand
+    plant: Plant
 
-    def __call__(self, t: np.ndarray, left=None) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-        """Angle, rate and acceleration (rad, rad/s, rad/s^2) at the times ``t``."""
-        t = np.atleast_1d(np.asarray(t, dtype=float))
-        new = self.control.evaluate(self.parameters, t - self.start, left)
-        if self.previous is None or self.blend <= 0:
-            return tuple(new)
-        old = self.previous(t, left)
-        tau = np.clip((t - self.start) / self.blend, 0.0, 1.0)
-        keep = 1 - tau**3 * (10 - 15 * tau + 6 * tau**2)
-        keep_rate = -30 * tau**2 * (1 - tau) ** 2 / self.blend
-        keep_acc = -(60 * tau - 180 * tau**2 + 120 * tau**3) / self.blend**2
-        gap = [o - n for o, n in zip(old, new, strict=True)]
-        return (
-            new[0] + keep * gap[0],
-            new[1] + keep * gap[1] + keep_rate * gap[0],
-            new[2] + keep * gap[2] + 2 * keep_rate * gap[1] + keep_acc * gap[0],
-        )
+    def start(self) -> Measurement:
+        """Start the plant at its equilibrium under the command; what it measured there.
 
-    def settled(self) -> Plan:
-        """The same plan without its predecessor (once the blend is over)."""
-        return Plan(self.start, self.parameters, self.control)
+        Raises :class:`~cable_ocp.simulation.seabed.OffGridError` when the end starts off the
+        bathymetry grid or under the seabed; sets the estimator's clearance reference.
+        """
+        measured = self.plant.start(self.command.angle)
+        seabed = self.plant.scene.seabed
+        check_start(seabed, self.plant.state[:3])
+        self.estimator.reference = clearance_reference(seabed, self.plant.state)
+        return measured
 
 
-def _command(plan: Plan, reference: BlendedHeight | None, top, radius: float):
-    """The commanded angle: the plan, plus the heave feedback when ``reference`` is given."""
+def loop_parts(scene, settings: MpcSettings) -> LoopParts:
+    """Build the closed loop's parts for a scene (the controller's libraries compiled).
 
-    def angle(t, left=None):
-        phi, rate, acc = plan(t, left)
-        if reference is None:
-            return phi, rate, acc
-        position, velocity, acceleration = top(t)
-        height, speed, height_acc = reference(t)
-        payout = heave_payout(
-            position[2] - height, velocity[2] - speed, acceleration[2] - height_acc, radius
-        )
-        return phi + payout[0], rate + payout[1], acc + payout[2]
+    A loop of one's own steps them as :func:`mpc` does::
 
-    return angle
+        measured = parts.start()
+        for k in range(samples):
+            now = k * parts.settings.sample
+            estimate = parts.estimator.make_step(measured, *parts.command.winch(now))
+            solve = parts.controller.make_step(now, estimate, *parts.command.winch(now))
+            angle = parts.command.make_step(now, solve, estimate)
+            measured = parts.plant.make_step(angle, now + parts.settings.sample)
+
+    Raises ValueError for a setting that does not fit the scene, before any heavy work.
+    """
+    settings, derived = settings.resolved(scene)
+    compile_ahead(scene, settings.elements, settings.solver == "gauss-newton")
+    controller = RecedingHorizon(scene, settings)
+    plant = Plant(scene, angle_bounds(scene), settings.limiter_band)
+    radius = scene.winch.drum_radius
+    position, velocity, _ = plant.top(np.zeros(1))
+    estimator = Estimator(settings, plant.model, controller.model, radius, position[2, 0])
+    first = estimator.forecast(0.0, position[:, 0], velocity[:, 0])
+    command = WinchCommand(settings, controller.control, plant.top, radius, first)
+    return LoopParts(settings, derived, estimator, controller, command, plant)
 
 
 def mpc(scene, settings: MpcSettings | None = None, quiet: bool = False, **fields) -> MpcResult:
@@ -140,51 +140,29 @@ def mpc(scene, settings: MpcSettings | None = None, quiet: bool = False, **field
     """
     if settings is not None and fields:
         raise ValueError(f"mpc: pass settings or its fields ({', '.join(fields)}), not both")
-    settings = settings or MpcSettings(**fields)
-    settings, derived = settings.resolved(scene)
     started = time.perf_counter()
-    compile_ahead(scene, settings.elements, settings.solver == "gauss-newton")
-    low, high = angle_bounds(scene)
-    controller = RecedingHorizon(scene, settings)
-    plant = Plant(scene, (low, high), settings.limiter_band)
-    radius = scene.winch.drum_radius
+    parts = loop_parts(scene, settings or MpcSettings(**fields))
+    settings, plant, estimator = parts.settings, parts.plant, parts.estimator
+    controller, command = parts.controller, parts.command
     duration, h = scene.numerics.duration, plant.step
     samples = round(duration / settings.sample)
     build_time = time.perf_counter() - started
 
     loop_started = time.perf_counter()
-    plan = Plan(0.0, np.zeros(controller.control.size), controller.control)
-    zero = np.zeros(1)
-    position, velocity, _ = plant.top(zero)
-    estimator = Estimator(settings, plant.model, controller.model, radius, position[2, 0])
-    previous = estimator.forecast(0.0, position[:, 0], velocity[:, 0])
-    height = BlendedHeight(previous, previous, 0.0, settings.sample)
-    if not settings.heave_feedback:
-        height = None
-    # With the heave feedback the winch already pays out the heave's speed at t = 0.
-    measured = plant.start(_command(plan, height, plant.top, radius))
-    check_start(scene.seabed, plant.state[:3])
-    estimator.reference = clearance_reference(scene.seabed, plant.state)
+    measured = parts.start()
     runs, planned, solves, failures = [measured], [np.zeros(1)], [], []
     plant_failure = None
     progress = Progress("mpc", duration, quiet)
     for k in range(samples):
         now = k * settings.sample
-        phi, rate, _ = plan(np.array([now]))
-        estimate = estimator.make_step(measured, phi[0], rate[0])
-        solve = controller.make_step(now, estimate, phi[0], rate[0])
+        estimate = estimator.make_step(measured, *command.winch(now))
+        solve = controller.make_step(now, estimate, *command.winch(now))
         solves.append(solve)
-        if solve.success:
-            plan = Plan(now, solve.parameters, controller.control, plan.settled(), settings.step)
-        else:
+        if not solve.success:
             failures.append(f"t = {now:g} s: {solve.status}")
-        if settings.heave_feedback:
-            height = BlendedHeight(previous, estimate.forecast, now, settings.sample)
-        previous = estimate.forecast
+        angle = command.make_step(now, solve, estimate)
         try:
-            measured = plant.make_step(
-                _command(plan, height, plant.top, radius), (k + 1) * settings.sample
-            )
+            measured = plant.make_step(angle, (k + 1) * settings.sample)
         except SimulationError as error:
             where = ", ".join(f"{value:.6g}" for value in plant.state[:3])
             verb = "stopped" if isinstance(error, OffGridError) else "failed"
@@ -194,7 +172,7 @@ def mpc(scene, settings: MpcSettings | None = None, quiet: bool = False, **field
             )
             break
         runs.append(measured)
-        planned.append(plan(measured.time)[0])
+        planned.append(command.plan(measured.time)[0])
         progress.update(now + settings.sample, f"solve {solve.solve_time * 1e3:.0f} ms")
     progress.close()
     wall_time = time.perf_counter() - loop_started
@@ -228,14 +206,14 @@ def mpc(scene, settings: MpcSettings | None = None, quiet: bool = False, **field
         success=not failures and plant_failure is None and too_low is None,
         limited_steps=sum(int(np.count_nonzero(run.applied.limited)) for run in runs[1:]),
         projected_samples=plant.projections,
-        angle_range=(low, high),
+        angle_range=plant.angle_range,
         real_time_factor=duration / wall_time,
         worst_solve_time=float(np.max(solve_times)),
         wall_time=wall_time,
         build_time=build_time,
         settings={
             **settings.record(),
-            "derived": derived,
+            "derived": parts.derived,
             "plant_elements": scene.model.elements,
             "plant_step_s": h,
         },

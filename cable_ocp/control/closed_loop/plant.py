@@ -133,6 +133,7 @@ class Plant:
         self.radius = scene.winch.drum_radius
         self.top_length = scene.top_element_length
         self.low, self.high = angle_range
+        self.angle_range = angle_range
         self.band = band
         self.projections = 0  # samples started from a state moved onto its bonds
         self.state, self.now = np.zeros(0), 0.0  # set by start()
