@@ -28,9 +28,7 @@ DOFS = 5  # 5-DOF elements: x, y, z, psi, theta
 
 def axis(psi: np.ndarray, theta: np.ndarray) -> np.ndarray:
     """``e(psi, theta) = (cos theta cos psi, sin theta, cos theta sin psi)`` (CONVENTIONS.md §3)."""
-    return np.array(
-        [np.cos(theta) * np.cos(psi), np.sin(theta), np.cos(theta) * np.sin(psi)]
-    )
+    return np.array([np.cos(theta) * np.cos(psi), np.sin(theta), np.cos(theta) * np.sin(psi)])
 
 
 def axis_derivatives(psi: float, theta: float) -> tuple[np.ndarray, np.ndarray]:

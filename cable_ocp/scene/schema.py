@@ -627,7 +627,8 @@ class WinchLine(_Validated):
         from cable_ocp.scene.line_mesh import LineMesh
 
         shortest = self.top_length_min
-        return LineMesh(self.element_length, self.element_length / 2 if shortest is None else shortest)
+        half = self.element_length / 2
+        return LineMesh(self.element_length, half if shortest is None else shortest)
 
 
 @_section("winch")

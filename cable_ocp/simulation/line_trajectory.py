@@ -122,13 +122,19 @@ class LineTrajectory:
                 "top_tension": ("time", self.top_tension, {"units": "N"}),
             },
             coords={"time": ("time", self.time, {"units": "s"}), "component": ["x", "y", "z"]},
-            attrs={"cable_ocp_kind": KIND, "segments": len(self.segments),
-                   "element_length": self.element_length},  # fmt: skip
+            attrs={
+                "cable_ocp_kind": KIND,
+                "segments": len(self.segments),
+                "element_length": self.element_length,
+            },  # fmt: skip
         )
         return whole
 
     def save(self, path: str | Path) -> Path:
-        """Write ``path.nc``: the whole-run views at the root, segment ``K`` in group ``segment_K``."""
+        """Write ``path.nc``: the whole-run views at its root, segment ``K`` in group ``segment_K``.
+
+        Returns the path.
+        """
         path = Path(path).with_suffix(".nc")
         self.to_xarray().to_netcdf(path, mode="w", format="NETCDF4")
         for k, segment in enumerate(self.segments):
