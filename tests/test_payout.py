@@ -1,0 +1,229 @@
+"""A line paid out and hauled in by elements (issue 26; CONVENTIONS.md §3, the line on the drum).
+
+References independent of the code under test: the line out from the drum's angle
+(``L_0 + r_D (phi - phi(0))``), the statics of a vertical rope (payload and line weights less
+buoyancy), finite differences of the element axis, and the bonds evaluated by the model's own
+outputs (a different path from the state maps).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+from conftest import MODELS, chained_state
+
+import cable_ocp as co
+from cable_ocp.model.cable import spec_from_scene
+from cable_ocp.model.layout import INPUTS
+from cable_ocp.model.line_models import LineModels
+from cable_ocp.model.line_state import axis_rate, merge, momentum, split
+from cable_ocp.simulation.line_trajectory import LineTrajectory
+
+WATER, GRAVITY = 1025.0, 9.81
+PAYLOAD = {"mass": 2000.0, "volume": 0.256, "drag_area": 1.0}  # 2 t of steel
+
+
+def ramped_pay_out(speed: float, ramp: float, radius: float, reverse_at: float | None = None):
+    """Drum angle paying out at ``speed`` (m/s) after a quintic ramp of ``ramp`` s.
+
+    With ``reverse_at`` (s) the line comes back in at the same speed from then on (a C2 turn
+    over ``ramp`` s).
+    """
+
+    def rate_shape(t):
+        tau = np.clip(t / ramp, 0.0, 1.0)
+        return 10 * tau**3 - 15 * tau**4 + 6 * tau**5
+
+    def integral(t):
+        tau = np.clip(t / ramp, 0.0, 1.0)
+        return ramp * (2.5 * tau**4 - 3 * tau**5 + tau**6) + np.maximum(t - ramp, 0.0)
+
+    def derivative(t):
+        tau = np.clip(t / ramp, 0.0, 1.0)
+        return (30 * tau**2 - 60 * tau**3 + 30 * tau**4) / ramp
+
+    def angle(t, left=None):
+        t = np.asarray(t, dtype=float)
+        phi, rate, acc = integral(t), rate_shape(t), derivative(t)
+        if reverse_at is not None:
+            back = t - reverse_at
+            phi = phi - 2 * np.where(back > 0, integral(back), 0.0)
+            rate = rate - 2 * np.where(back > 0, rate_shape(back), 0.0)
+            acc = acc - 2 * np.where(back > 0, derivative(back), 0.0)
+        scale = speed / radius
+        return scale * phi, scale * rate, scale * acc
+
+    return angle
+
+
+def line_scene(overrides: dict, **line) -> co.Scene:
+    base = {
+        "top.motion": "fixed",
+        "numerics.constraint_tolerance": 1e-4,
+        "winch.line": {"element_length": 10.0, **line},
+        "end.payload": PAYLOAD,
+    }
+    return co.load_scene(MODELS / "paper_flat.toml", {**base, **overrides})
+
+
+def submerged_weight_per_length(scene) -> float:
+    cable = scene.cable
+    return (cable.density - WATER) * np.pi * cable.diameter**2 / 4 * GRAVITY
+
+
+def test_split_keeps_every_point_and_the_bonds():
+    scene = line_scene({})
+    models = LineModels(spec_from_scene(scene), 10.0, compiled=False)
+    before, after = models.model(4), models.model(5)
+    u = np.zeros(15)
+    u[INPUTS.top_length], u[INPUTS.top_length_rate] = 17.0, 0.4
+    psi = np.pi / 2 + np.array([0.05, 0.04, -0.02, 0.03, 0.1])
+    state = chained_state(before, u, psi, [0.01, -0.02, 0.0, 0.02, 0.03])
+    size = state.size // 2
+    state[size + 3 :: 5] = [0.01, -0.02, 0.03, 0.02, 0.05]  # psi rates
+    state[size + 4 :: 5] = [0.0, 0.01, -0.01, 0.02, -0.03]  # theta rates
+    # Joint velocities that keep the bonds' rates: chained up from A_0 at rest.
+    q, qd = state[:size].reshape(-1, 5), state[size:].reshape(-1, 5)
+    lengths = [5.0, 10.0, 10.0, 10.0]
+    for i in range(1, 5):
+        qd[i, :3] = qd[i - 1, :3] + lengths[i - 1] * axis_rate(*q[i - 1, 3:5], *qd[i - 1, 3:5])
+    top_velocity = (
+        qd[4, :3]
+        + 17.0 * axis_rate(*q[4, 3:5], *qd[4, 3:5])
+        + 0.4
+        * np.array(
+            [np.cos(q[4, 4]) * np.cos(q[4, 3]), np.sin(q[4, 4]), np.cos(q[4, 4]) * np.sin(q[4, 3])]
+        )
+    )
+    u[INPUTS.top_velocity] = top_velocity
+    state = np.concatenate([q.ravel(), qd.ravel()])
+    mapped = split(state, 4, 10.0)
+    u_after = u.copy()
+    u_after[INPUTS.top_length] = 7.0
+    out_before = before.output_values(state, u)
+    out_after = after.output_values(mapped, u_after)
+    assert np.abs(out_before["bond_residual"]).max() < 1e-12
+    assert np.abs(out_after["bond_residual"]).max() < 1e-12
+    assert np.abs(out_after["bond_rate"]).max() < 1e-12
+    # The new joint is the old rod's point Delta above A_n, moving as that point moved.
+    np.testing.assert_allclose(out_after["joints"][:, :5], out_before["joints"][:, :5], atol=1e-12)
+    p_before, m_before = momentum(state, np.array([5.0, 10, 10, 10, 17]), 31.0)
+    p_after, m_after = momentum(mapped, np.array([5.0, 10, 10, 10, 10, 7]), 31.0)
+    assert m_after == pytest.approx(m_before, rel=1e-15)
+    np.testing.assert_allclose(p_after, p_before, atol=1e-12 * np.abs(p_before).max())
+
+
+def test_axis_rate_is_the_derivative_of_the_axis():
+    from conftest import axis
+
+    psi, theta, d_psi, d_theta, h = 1.3, 0.2, 0.7, -0.4, 1e-6
+    numeric = (
+        axis(psi + h * d_psi, theta + h * d_theta) - axis(psi - h * d_psi, theta - h * d_theta)
+    ) / (2 * h)
+    np.testing.assert_allclose(axis_rate(psi, theta, d_psi, d_theta), numeric, atol=1e-9)
+
+
+def test_merge_holds_the_bonds_and_moves_the_rope_by_the_chord_excess():
+    scene = line_scene({})
+    models = LineModels(spec_from_scene(scene), 10.0, compiled=False)
+    before, after = models.model(5), models.model(4)
+    u = np.zeros(15)
+    u[INPUTS.top_length] = 4.0
+    kink = 0.02
+    psi = np.pi / 2 + np.array([0.0, 0.0, 0.0, 0.0, 0.0, kink])
+    state = chained_state(before, u, psi, 0.0)
+    mapped = merge(state, 5, 10.0, 4.0, u[INPUTS.top], u[INPUTS.top_velocity], 0.0)
+    u_after = u.copy()
+    u_after[INPUTS.top_length] = 14.0
+    out = after.output_values(mapped, u_after)
+    assert np.abs(out["bond_residual"]).max() < 1e-12
+    assert np.abs(out["bond_rate"]).max() < 1e-12
+    # A straight rod is longer than the kinked pair's chord by Delta l alpha^2 / (2 (Delta + l)).
+    excess = 10.0 * 4.0 * kink**2 / (2 * 14.0)
+    moved = np.linalg.norm(mapped[:3] - state[:3])
+    assert moved == pytest.approx(excess, rel=0.01)
+
+
+def test_mass_follows_the_drum_through_splits_and_merges():
+    """Acceptance 1: the rope's mass is mu L_out(t) at every output; the bonds hold."""
+    scene = line_scene(
+        {
+            "top.motion": "tow",
+            "cable.length": 60.0,
+            "numerics.duration": 60.0,
+            "numerics.step": 0.05,
+            "environment.current": [0.3, 0.1, 0.0],
+        },
+        pay_out_max=60.0,
+        haul_in_max=10.0,
+    )
+    radius = scene.winch.drum_radius
+    angle = ramped_pay_out(2.0, 5.0, radius, reverse_at=30.0)
+    run = co.simulate(scene, winch=angle, compiled=True)
+    counts = run.element_count
+    assert np.any(np.diff(counts) > 0) and np.any(np.diff(counts) < 0)
+    mu = scene.cable.density * np.pi * scene.cable.diameter**2 / 4
+    expected = mu * (scene.cable.length + radius * (run.winch_angle - run.winch_angle[0]))
+    modelled = np.concatenate(
+        [mu * run.element_lengths(k).sum(axis=1)[:-1] for k in range(len(run.segments) - 1)]
+        + [mu * run.element_lengths(len(run.segments) - 1).sum(axis=1)]
+    )
+    np.testing.assert_allclose(modelled, expected, rtol=1e-12)
+    assert run.bond_residual <= scene.numerics.constraint_tolerance
+
+
+def test_quasi_static_pay_out_follows_the_line_and_its_weight():
+    """Acceptance 2 (short): a vertical rope with 2 t in still water paid out from 50 m."""
+    scene = line_scene(
+        {"cable.length": 50.0, "numerics.duration": 300.0, "numerics.step": 0.05},
+        pay_out_max=70.0,
+    )
+    run = co.simulate(scene, winch=ramped_pay_out(0.2, 10.0, 0.5), compiled=True)
+    settled = run.time > 60.0
+    line = scene.cable.length + 0.5 * (run.winch_angle - run.winch_angle[0])
+    depth_error = run.end[:, 2] - (run.top[:, 2] - line)
+    assert np.abs(depth_error[settled]).max() < 0.01
+    weight = (PAYLOAD["mass"] - WATER * PAYLOAD["volume"]) * GRAVITY
+    static = weight + submerged_weight_per_length(scene) * line
+    assert np.abs(run.top_tension[settled] / static[settled] - 1).max() < 0.005
+    assert len(run.segments) > 3
+
+
+def test_a_graded_top_element_is_not_paid_out_into_a_rod():
+    scene = co.load_scene(MODELS / "paper_hill.toml", {"winch.angle_max": 600.0})
+    knots = np.linspace(0, 400.0, scene.winch.knots)
+    with pytest.raises(ValueError, match="rigid rod"):
+        co.simulate(scene, winch=knots)
+
+
+@pytest.mark.parametrize(
+    ("overrides", "field"),
+    [
+        ({"winch.line": {"haul_in_max": 290.0}}, "winch.line.haul_in_max"),
+        ({"winch.line": {"pay_out_max": 1e5}}, "winch.line.pay_out_max"),
+        ({"winch.line": {"haul_in_max": 5.0}, "winch.angle_min": -2.0}, "winch.angle_min"),
+        ({"winch.line": {"element_length": -1.0}}, "winch.line.element_length"),
+    ],
+)
+def test_a_line_it_cannot_follow_is_refused(overrides, field):
+    with pytest.raises(ValueError, match=field.replace(".", r"\.")):
+        co.load_scene(MODELS / "paper_flat.toml", overrides)
+
+
+def test_the_drum_beyond_its_metres_is_refused_before_integrating():
+    scene = line_scene({"cable.length": 50.0, "numerics.duration": 20.0}, pay_out_max=1.0)
+    with pytest.raises(ValueError, match="winch.line.pay_out_max"):
+        co.simulate(scene, winch=ramped_pay_out(0.5, 2.0, 0.5))
+
+
+def test_a_line_run_round_trips_through_netcdf(tmp_path):
+    scene = line_scene(
+        {"cable.length": 50.0, "numerics.duration": 30.0, "numerics.step": 0.05},
+        pay_out_max=20.0,
+    )
+    run = co.simulate(scene, winch=ramped_pay_out(0.6, 2.0, 0.5), compiled=True)
+    assert len(run.segments) >= 2
+    loaded = LineTrajectory.load(run.save(tmp_path / "line"))
+    assert len(loaded.segments) == len(run.segments)
+    assert all(a.equals(b) for a, b in zip(run.segments, loaded.segments, strict=True))
+    np.testing.assert_array_equal(loaded.element_count, run.element_count)
