@@ -395,7 +395,7 @@ def _validate(args) -> int:
 
 
 def _bench(args) -> int:
-    from cable_ocp.studies import bench, bench_simulate, robustness
+    from cable_ocp.studies import bench, bench_payout, bench_simulate, robustness
     from cable_ocp.studies.moordyn_compare import moordyn_report
 
     if args.hessian:
@@ -405,6 +405,7 @@ def _bench(args) -> int:
         "rk4": bench.rk4_report,
         "simulate": bench_simulate.report,
         "moordyn": moordyn_report,
+        "payout": bench_payout.report,
         "ocp": bench.ocp_report,
         "ocp-speed": bench.ocp_speed_report,
         "mpc": _bench_mpc,
@@ -559,7 +560,7 @@ def build_parser() -> argparse.ArgumentParser:
     bench.add_argument(
         "--only",
         nargs="+",
-        choices=["rk4", "simulate", "moordyn", "ocp", "ocp-speed", "mpc", "robustness"],
+        choices=["rk4", "simulate", "moordyn", "payout", "ocp", "ocp-speed", "mpc", "robustness"],
         help="run only these parts (robustness runs only when named)",
     )
     bench.add_argument(
