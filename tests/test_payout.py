@@ -238,14 +238,41 @@ def test_the_drum_beyond_its_metres_is_refused_before_integrating():
         co.simulate(scene, winch=ramped_pay_out(0.5, 2.0, 0.5))
 
 
-def test_a_line_run_round_trips_through_netcdf(tmp_path):
+@pytest.fixture(scope="module")
+def short_run():
+    """50 m -> 66 m at 0.6 m/s: three segments."""
     scene = line_scene(
         {"cable.length": 50.0, "numerics.duration": 30.0, "numerics.step": 0.05},
         pay_out_max=20.0,
     )
-    run = co.simulate(scene, winch=ramped_pay_out(0.6, 2.0, 0.5), compiled=True)
+    return co.simulate(scene, winch=ramped_pay_out(0.6, 2.0, 0.5), compiled=True)
+
+
+def test_a_line_run_round_trips_through_netcdf(tmp_path, short_run):
+    run = short_run
     assert len(run.segments) >= 2
     loaded = LineTrajectory.load(run.save(tmp_path / "line"))
     assert len(loaded.segments) == len(run.segments)
     assert all(a.equals(b) for a, b in zip(run.segments, loaded.segments, strict=True))
     np.testing.assert_array_equal(loaded.element_count, run.element_count)
+
+
+def test_the_whole_run_views_take_each_instant_once(short_run):
+    run = short_run
+    assert np.all(np.diff(run.time) > 0)
+    assert run.joints.shape == (run.time.size, 3, run.element_count.max() + 2)
+    first = run.segments[0]
+    k = first.time.size - 1  # the change: the state after it, with one more joint
+    assert np.isnan(run.joints[k - 1, 0, -1]) and np.isfinite(run.joints[k, 0, -1])
+    np.testing.assert_array_equal(run.end[:k], first.end[:-1])
+
+
+def test_a_line_run_is_plotted_and_animated_with_its_element_count(tmp_path, short_run):
+    from cable_ocp import plots
+
+    plots.line_run(short_run, path=tmp_path / "line.png")
+    animation = plots.animate(short_run, path=tmp_path / "line.gif", frames=4)
+    assert (tmp_path / "line.png").stat().st_size > 0
+    assert (tmp_path / "line.gif").stat().st_size > 0
+    label = animation._func(short_run.time.size - 1)[-1]
+    assert label.get_text().endswith(f"n = {short_run.element_count[-1]}")

@@ -25,6 +25,7 @@ import numpy as np
 from matplotlib.figure import Figure
 
 from cable_ocp.plots.animation import animate as animate  # a GIF of the run
+from cable_ocp.plots.line import line_run as line_run  # a line paid out by elements
 from cable_ocp.scene.schema import Seabed
 from cable_ocp.simulation.seabed import bathymetry, clearance_reference, seabed_elevation
 from cable_ocp.simulation.trajectory import Trajectory

@@ -73,6 +73,27 @@ class LineTrajectory:
         return self._whole(lambda s: s.end)
 
     @property
+    def joints(self) -> np.ndarray:
+        """Joint positions ``A_0 .. A_{n+1}`` (k, 3, largest n + 2), m, NaN past each top.
+
+        A sample of fewer elements than the largest is padded after its top joint, so that
+        plotting a sample draws its own joints and nothing else.
+        """
+        width = max(s.joints.shape[2] for s in self.segments)
+
+        def padded(s: Trajectory) -> np.ndarray:
+            out = np.full((s.time.size, 3, width), np.nan)
+            out[:, :, : s.joints.shape[2]] = s.joints
+            return out
+
+        return self._whole(padded)
+
+    @property
+    def scene_name(self) -> str:
+        """The scene's name."""
+        return self.segments[0].scene_name
+
+    @property
     def top(self) -> np.ndarray:
         """Position of the top point (k, 3), m."""
         return self._whole(lambda s: s.top)
