@@ -18,6 +18,7 @@ from cable_ocp.model.layout import INPUTS
 from cable_ocp.model.line_models import LineModels
 from cable_ocp.model.line_state import axis_rate, merge, momentum, split
 from cable_ocp.simulation.line_trajectory import LineTrajectory
+from cable_ocp.studies import payout_validation as pv
 
 WATER, GRAVITY = 1025.0, 9.81
 PAYLOAD = {"mass": 2000.0, "volume": 0.256, "drag_area": 1.0}  # 2 t of steel
@@ -276,3 +277,136 @@ def test_a_line_run_is_plotted_and_animated_with_its_element_count(tmp_path, sho
     assert (tmp_path / "line.gif").stat().st_size > 0
     label = animation._func(short_run.time.size - 1)[-1]
     assert label.get_text().endswith(f"n = {short_run.element_count[-1]}")
+
+
+# ----------------------------------------------------------------------------------------------
+# Long validation runs (-m slow): the issue's acceptance 2-4 and 6.
+
+
+@pytest.mark.slow
+def test_quasi_static_pay_out_from_50_m_to_1000_m(validation):
+    """Acceptance 2: 2 t in still water, 0.2 m/s from 50 m to 1000 m, 10 m elements."""
+    duration = 5.0 + 950.0 / 0.2  # the ramp's half and the steady pay-out
+    scene = line_scene(
+        {
+            "cable.length": 50.0,
+            "numerics.duration": duration,
+            "numerics.step": 0.05,
+            "numerics.output_every": 20,
+        },
+        pay_out_max=951.0,
+    )
+    run = co.simulate(scene, winch=ramped_pay_out(0.2, 10.0, 0.5), compiled=True)
+    settled = run.time > 60.0
+    line = scene.cable.length + 0.5 * (run.winch_angle - run.winch_angle[0])
+    depth = float(np.abs(run.end[:, 2] - (run.top[:, 2] - line))[settled].max())
+    static = pv.static_top_tension(scene, line)
+    tension = float(np.abs(run.top_tension / static - 1)[settled].max())
+    validation(
+        f"vertical rope, 2 t payload, still water, 0.2 m/s from 50 m to {line[-1]:.0f} m, "
+        f"10 m elements (n = {run.element_count.min()}..{run.element_count.max()}), after 60 s",
+        "analytic",
+        "z_top - L_out(t); submerged weight of payload and line out",
+        "end depth error; top tension relative error (the axial drag at 0.2 m/s: 0.2 %)",
+        f"{depth:.1e} m; {tension:.1e}",
+        "< 1 cm; < 0.5 %",
+    )
+    assert depth < 0.01
+    assert tension < 0.005
+
+
+CONVERGENCE_LENGTHS = (20.0, 10.0, 5.0, 2.5)
+
+
+def _converges(validation, start: float, change: float, what: str) -> pv.Convergence:
+    result = pv.convergence(start, change, CONVERGENCE_LENGTHS, speed=2.0)
+    differences = ", ".join(f"{d * 100:.2g}" for d in result.differences)
+    validation(
+        f"{what} {start:.0f} m -> {start + change:.0f} m at 2 m/s under the tow and a sheared "
+        f"current, 2 t payload, Delta = 20, 10, 5, 2.5 m ({result.changes} changes at 2.5 m)",
+        "converged reference",
+        "the same run at Delta = 2.5 m",
+        "largest end distance at Delta = 20, 10, 5 m; observed order (10 vs 5)",
+        f"{differences} cm; {result.order:.2f}",
+        "falls with Delta; order > 1.5; finest two < 5 cm",
+    )
+    assert np.all(np.diff(result.differences) < 0)
+    assert result.order > 1.5
+    assert result.finest_two < 0.05
+    return result
+
+
+@pytest.mark.slow
+def test_pay_out_under_tow_converges_in_the_element_length(validation):
+    """Acceptance 3: 100 m -> 800 m under the tow and a sheared current."""
+    _converges(validation, 100.0, 700.0, "pay-out")
+
+
+@pytest.mark.slow
+def test_haul_in_under_tow_converges_as_the_pay_out(validation):
+    """Acceptance 6 (convergence): the reverse of acceptance 3, 800 m -> 100 m."""
+    _converges(validation, 800.0, -700.0, "haul-in")
+
+
+TRANSIENT_LENGTHS = (10.0, 5.0, 2.5)
+FINEST_TRANSIENT = 1.25  # m
+
+
+@pytest.fixture(scope="module")
+def insertion_transients():
+    """Acceptance 4's runs: 0.5 m/s from 100 m to 200 m, the shortest top 5 cm."""
+    finest = pv.tow_run(100.0, 100.0, FINEST_TRANSIENT, 0.5, top_length_min=0.05)
+    return {
+        d: pv.transient(pv.tow_run(100.0, 100.0, d, 0.5, top_length_min=0.05), finest)
+        for d in TRANSIENT_LENGTHS
+    }
+
+
+@pytest.mark.slow
+def test_insertion_transient_is_under_one_percent(validation, insertion_transients):
+    """Acceptance 4: the top tension's jump at a split, against the finest run (1.25 m)."""
+    rows = insertion_transients
+    figures = "; ".join(
+        f"new top {t.new_top_length:.2g} m: {t.jump:.1e}, {t.against_finest:.1e}"
+        for t in rows.values()
+    )
+    validation(
+        "pay-out at 0.5 m/s from 100 m to 200 m under the tow and a sheared current, "
+        "Delta = 10, 5, 2.5 m (top after a split l_min + Delta/2, l_min = 5 cm)",
+        "converged reference",
+        "the static top tension; the same run at Delta = 1.25 m",
+        "largest top tension jump at a split; its change against the finest run (relative)",
+        figures,
+        "< 1 % each",
+    )
+    for t in rows.values():
+        assert t.changes > 5
+        assert t.jump < 0.01
+        assert t.against_finest < 0.01
+
+
+@pytest.mark.slow
+def test_merging_makes_no_larger_transient_than_splitting(validation, insertion_transients):
+    """Acceptance 6 (transient): 200 m -> 100 m at 0.5 m/s, against acceptance 4's splits."""
+    # The top shrinks to l_min before a merge: at 5 cm the RK4 step of 0.004 s/m * Delta blew
+    # up (a stiff short pendulum); the default l_min = Delta / 2 holds.
+    fine = pv.tow_run(200.0, -100.0, FINEST_TRANSIENT, 0.5)
+    merges = {d: pv.transient(pv.tow_run(200.0, -100.0, d, 0.5), fine) for d in TRANSIENT_LENGTHS}
+    figures = "; ".join(
+        f"Delta {d:g} m: {t.jump:.1e}, {t.against_finest:.1e} "
+        f"(splits {insertion_transients[d].jump:.1e})"
+        for d, t in merges.items()
+    )
+    validation(
+        "haul-in at 0.5 m/s from 200 m to 100 m under the tow and a sheared current, "
+        "Delta = 10, 5, 2.5 m (l_min = Delta/2; at 5 cm the short top blew RK4 up)",
+        "converged reference",
+        "the splits of the reverse pay-out; the same run at Delta = 1.25 m",
+        "largest top tension jump at a merge; its change against the finest run (relative)",
+        figures,
+        "<= the pay-out's at the same Delta; < 1 %",
+    )
+    for d, t in merges.items():
+        assert t.changes > 5
+        assert t.jump <= insertion_transients[d].jump
+        assert t.against_finest < 0.01
