@@ -410,3 +410,12 @@ def test_merging_makes_no_larger_transient_than_splitting(validation, insertion_
         assert t.changes > 5
         assert t.jump <= insertion_transients[d].jump
         assert t.against_finest < 0.01
+
+
+def test_outputs_too_far_apart_for_the_pay_out_are_refused_before_integrating():
+    scene = line_scene(
+        {"cable.length": 50.0, "numerics.duration": 20.0, "numerics.output_every": 100},
+        pay_out_max=20.0,
+    )  # 5 s between outputs at 0.6 m/s: 3 m, more than half the shortest top element (5 m)
+    with pytest.raises(ValueError, match="numerics.output_every = 100"):
+        co.simulate(scene, winch=ramped_pay_out(0.6, 2.0, 0.5))

@@ -61,6 +61,27 @@ def step_for(element_length: float) -> float:
     return 1.0 / np.ceil(1.0 / step)
 
 
+def output_every(element_length: float, top_length_min: float | None, speed: float) -> int:
+    """Steps per output, the most that keep the line's rule between outputs.
+
+    Outputs fall on every whole second, and between two the line moves at most half the
+    shorter of ``Delta`` and ``l_min`` (:func:`cable_ocp.simulation.line_run.check_line`).
+    """
+    per_second = round(1.0 / step_for(element_length))
+    shortest = element_length / 2 if top_length_min is None else top_length_min
+    allowed = min(element_length, shortest) / 2
+    return max(
+        k for k in range(1, per_second + 1)
+        if per_second % k == 0 and k * speed / per_second <= allowed
+    )  # fmt: skip
+
+
+def on_whole_seconds(run: LineTrajectory) -> np.ndarray:
+    """The end's positions (k, 3), m, at the run's whole seconds."""
+    whole = np.isclose(run.time, np.round(run.time), rtol=0.0, atol=1e-9)
+    return run.end[whole]
+
+
 def tow_scene(start: float, change: float, element_length: float, speed: float,
               top_length_min: float | None = None) -> Scene:  # fmt: skip
     """``paper_flat``'s tow over a sheared current, ``start`` m of line out, payload at the end.
@@ -79,7 +100,7 @@ def tow_scene(start: float, change: float, element_length: float, speed: float,
             "top.tow.sway_period": duration,
             "numerics.duration": duration,
             "numerics.step": step_for(element_length),
-            "numerics.output_every": round(SAMPLE / step_for(element_length)),
+            "numerics.output_every": output_every(element_length, top_length_min, speed),
             "winch.line": {k: v for k, v in line.items() if v is not None},
         },
     )
@@ -124,7 +145,7 @@ def convergence(
 ) -> Convergence:
     """The end's trajectory of :func:`tow_run` at each element length, against the finest."""
     runs = [tow_run(start, change, length, speed) for length in element_lengths]
-    ends = [run.end for run in runs]
+    ends = [on_whole_seconds(run) for run in runs]
     reference = ends[-1]
     differences = tuple(float(np.linalg.norm(e - reference, axis=1).max()) for e in ends[:-1])
     order = float(np.log2(differences[-2] / differences[-1]))
