@@ -419,3 +419,48 @@ def test_outputs_too_far_apart_for_the_pay_out_are_refused_before_integrating():
     )  # 5 s between outputs at 0.6 m/s: 3 m, more than half the shortest top element (5 m)
     with pytest.raises(ValueError, match="numerics.output_every = 100"):
         co.simulate(scene, winch=ramped_pay_out(0.6, 2.0, 0.5))
+
+
+@pytest.mark.slow
+def test_pay_out_agrees_with_moordyn(validation):
+    """Acceptance 5: MoorDyn's rescaled line against the split-off elements, N = 100."""
+    pytest.importorskip("moordyn")
+    from cable_ocp.studies import moordyn_payout
+
+    result = moordyn_payout.compare(start=100.0, pay_out=200.0, elements=100, speed=1.0)
+    assert np.all(np.isfinite(result.moordyn))
+    moved = float(np.linalg.norm(result.cable_ocp[-1] - result.cable_ocp[0]))
+    validation(
+        "paper_flat's tow, 100 m -> 300 m at 1 m/s, N = 100 at 300 m (cable_ocp 3 m "
+        "elements, 34 -> 100; MoorDyn 100 segments of L(t)/100)",
+        "peer code",
+        "MoorDyn 2 (lumped mass, extensible; SetLineUnstretchedLength/Vel every 1 ms), RK4 at "
+        "2e-4 s",
+        "largest end distance over the run, as a share of the line paid out",
+        f"{result.difference:.3f} m = {result.share:.2%} (the end moved {moved:.0f} m)",
+        "< 0.5 %",
+    )
+    assert moved > 100.0
+    assert result.share < 0.005
+
+
+@pytest.mark.parametrize("elements", [2, 7, 70])
+def test_the_models_of_every_n_match_the_flat_model_on_one_library(elements):
+    """The compiled kernels in blocks (70 = 64 + 4 + 1 + 1) give the flat model's x'."""
+    from cable_ocp.model import structured
+    from cable_ocp.model.cable import CableModel
+    from cable_ocp.model.line_models import line_spec
+
+    scene = line_scene({"environment.current": [0.4, 0.1, 0.0]})
+    models = LineModels(spec_from_scene(scene), 10.0, compiled=True)
+    model = models.model(elements)
+    flat = CableModel(line_spec(spec_from_scene(scene), elements, 10.0))
+    rng = np.random.default_rng(elements)
+    u = np.zeros(15)
+    u[INPUTS.top_length], u[INPUTS.top_length_rate] = 7.0, 0.3
+    state = chained_state(model, u, np.pi / 2 + 0.05 * rng.standard_normal(elements + 1), 0.02)
+    state[state.size // 2 :] = 0.05 * rng.standard_normal(state.size // 2)
+    compiled = model.bind(structured.compiled_library(model.parametric, "rhs")[0])
+    ours = np.array(compiled(state, u)).ravel()
+    reference = np.array(flat.rhs(state, u)).ravel()
+    np.testing.assert_allclose(ours, reference, rtol=0, atol=1e-12 * np.abs(reference).max())

@@ -16,7 +16,10 @@ The kernels take the parameters ``p`` of their own structure, whose segment leng
 
 from __future__ import annotations
 
-from dataclasses import replace
+import dataclasses
+from collections.abc import Callable
+from dataclasses import dataclass, field, replace
+from functools import partial
 
 import casadi as ca
 
@@ -37,6 +40,75 @@ KERNEL_FIELDS = (
 )  # fmt: skip
 
 
+# Columns per call of the compiled loops: n columns are covered greedily by these (100 = 64 +
+# 2 x 16 + 4), so a loop over n costs a few calls from CasADi's virtual machine, not n.
+BLOCKS = (64, 16, 4, 1)
+MAPPED = ("joint", "element", "bond", "accelerations")
+ACCUMULATED = ("forward", "backward")
+
+
+@dataclass(frozen=True)
+class BlockedKernels(structured.Kernels):
+    """Kernels whose loops over n columns call compiled loops over :data:`BLOCKS` columns.
+
+    ``blocks[name][size]`` is kernel ``name`` mapped (or accumulated) over ``size`` columns.
+    """
+
+    blocks: dict = field(default_factory=dict)
+
+    def map(self, name: str, count: int) -> Callable:
+        """Kernel ``name`` over ``count`` columns, in blocks (see the class)."""
+        return partial(_blocked, self.blocks[name], getattr(self, name), count, False)
+
+    def mapaccum(self, name: str, count: int) -> Callable:
+        """Kernel ``name`` accumulated over ``count`` columns, in blocks."""
+        return partial(_blocked, self.blocks[name], getattr(self, name), count, True)
+
+
+def _cover(count: int) -> list[int]:
+    """Block sizes of :data:`BLOCKS` that add up to ``count``, largest first."""
+    sizes = []
+    for size in BLOCKS:
+        sizes += [size] * ((count - sum(sizes)) // size)
+    return sizes
+
+
+def _blocked(blocks: dict, single: ca.Function, count: int, accumulate: bool, *args):
+    """The outputs of ``single`` over ``count`` columns of ``args``, by calls of ``blocks``.
+
+    An argument as wide as one call's input is shared by every column (as ``map`` broadcasts
+    it); an accumulated loop's first argument is the accumulator, its first output the states.
+    """
+    widths = [single.size2_in(k) for k in range(single.n_in())]
+    shared = [a.size2() == w and count > 1 for a, w in zip(args, widths, strict=True)]
+    outputs: list[list] = [[] for _ in range(single.n_out())]
+    start, state = 0, args[0] if accumulate else None
+    for size in _cover(count):
+        piece = []
+        for k, (a, w) in enumerate(zip(args, widths, strict=True)):
+            if accumulate and k == 0:
+                piece.append(state)
+            else:
+                piece.append(a if shared[k] else a[:, start * w : (start + size) * w])
+        results = blocks[size](*piece)
+        results = results if isinstance(results, tuple | list) else [results]
+        for k, r in enumerate(results):
+            outputs[k].append(r)
+        if accumulate:
+            width = single.size2_out(0)
+            state = results[0][:, (size - 1) * width :]
+        start += size
+    joined = [ca.horzcat(*pieces) for pieces in outputs]
+    return joined[0] if len(joined) == 1 else tuple(joined)
+
+
+def _loop(single: ca.Function, name: str, size: int) -> ca.Function:
+    """``single`` mapped (or accumulated) over ``size`` columns, named ``name_size``."""
+    if name in ACCUMULATED:
+        return single.mapaccum(f"{name}_{size}", size)
+    return single.map(f"{name}_{size}", "serial", size, [], [])
+
+
 def line_spec(template: ModelSpec, elements: int, element_length: float) -> ModelSpec:
     """The spec of ``n = elements`` below-top elements of ``element_length`` (m) each.
 
@@ -54,7 +126,7 @@ def line_spec(template: ModelSpec, elements: int, element_length: float) -> Mode
 
 def compiled_kernels(
     template: ModelSpec, compiled: bool
-) -> tuple[structured.Kernels, CompileReport | None]:
+) -> tuple[BlockedKernels, CompileReport | None]:
     """The structured kernels of ``template``'s structure at ``n = 2``, compiled to C or not.
 
     Returns the kernels and a :class:`~cable_ocp.model.compile.CompileReport` (None when not
@@ -62,15 +134,29 @@ def compiled_kernels(
     """
     reference = ParametricModel(structure_of(replace(template, elements=KERNEL_ELEMENTS)))
     kernels = structured.kernels_of(reference)
-    if not compiled:
-        return kernels, None
-    functions, report = compiled_from(
-        lambda: [getattr(kernels, name) for name in KERNEL_FIELDS],
-        list(KERNEL_NAMES),
-        f"{reference.structure!r}|structured kernels for every n",
-        False,
-    )
-    return replace(kernels, **dict(zip(KERNEL_FIELDS, functions, strict=True))), report
+    loops = {}
+    for name in (*MAPPED, *ACCUMULATED):
+        single = getattr(kernels, name)
+        loops[name] = {size: single if size == 1 else _loop(single, name, size) for size in BLOCKS}
+    names = [f"{name}_{size}" for name in loops for size in BLOCKS if size > 1]
+    functions = [loops[name][size] for name in loops for size in BLOCKS if size > 1]
+    if compiled:
+        compiled_functions, report = compiled_from(
+            lambda: [getattr(kernels, name) for name in KERNEL_FIELDS] + functions,
+            list(KERNEL_NAMES) + names,
+            f"{reference.structure!r}|structured kernels for every n, blocks {BLOCKS}",
+            False,
+        )
+        singles = dict(zip(KERNEL_FIELDS, compiled_functions, strict=False))
+        kernels = replace(kernels, **singles)
+        built = iter(compiled_functions[len(KERNEL_FIELDS) :])
+        for name in loops:
+            for size in BLOCKS:
+                loops[name][size] = getattr(kernels, name) if size == 1 else next(built)
+    else:
+        report = None
+    fields = {f.name: getattr(kernels, f.name) for f in dataclasses.fields(kernels)}
+    return BlockedKernels(**fields, blocks=loops), report
 
 
 def kernel_parameters(names: list[str], elements: int):

@@ -342,6 +342,14 @@ class Kernels:
     segment_length: ca.Function
     parameters: Callable[[ca.MX], ca.MX] = lambda p: p
 
+    def map(self, name: str, count: int) -> Callable:
+        """Kernel ``name`` over ``count`` columns (CasADi's ``map``)."""
+        return getattr(self, name).map(count)
+
+    def mapaccum(self, name: str, count: int) -> Callable:
+        """Kernel ``name`` accumulated over ``count`` columns (CasADi's ``mapaccum``)."""
+        return getattr(self, name).mapaccum(count)
+
 
 def kernels_of(model: ParametricModel) -> Kernels:
     """The structured loops' Functions of ``model`` itself (SX, interpreted until compiled)."""
@@ -381,14 +389,14 @@ def structured_graph(model: ModelLayout, kernels: Kernels) -> tuple[ca.MX, ...]:
     delta = kernels.segment_length(p)
     p_kernel = kernels.parameters(p)
 
-    lower_forces, upper_forces = kernels.joint.map(count - 1)(
+    lower_forces, upper_forces = kernels.map("joint", count - 1)(
         q[:, :-1], q[:, 1:], qd[:, :-1], qd[:, 1:], p_kernel
     )
     zero = ca.MX.zeros(dofs, 1)
     spring = ca.horzcat(lower_forces, zero) + ca.horzcat(zero, upper_forces)
 
     lengths = ca.horzcat(ca.repmat(delta, 1, count - 2), top_length)
-    rest = kernels.element.map(count - 1)(q[:, 1:], qd[:, 1:], lengths, spring[:, 1:], p_kernel)
+    rest = kernels.map("element", count - 1)(q[:, 1:], qd[:, 1:], lengths, spring[:, 1:], p_kernel)
     first = kernels.element_end(
         q[:, 0], qd[:, 0], delta / 2, spring[:, 0], u[INPUTS.end_force], p_kernel
     )
@@ -399,7 +407,7 @@ def structured_graph(model: ModelLayout, kernels: Kernels) -> tuple[ca.MX, ...]:
     def column(matrix, k, width=1):
         return matrix[:, k * width : (k + 1) * width]
 
-    interior = kernels.bond.map(count - 1)(
+    interior = kernels.map("bond", count - 1)(
         free[:, :-1], along_d[:, : 3 * (count - 1)], top_jac[:, : dofs * (count - 1)],
         point[:, :-1], rate[:, :-1], quad[:, :-1],
         free[:, 1:], along_p[:, 3:], along_d[:, 3:], top_jac[:, dofs:],
@@ -421,16 +429,16 @@ def structured_graph(model: ModelLayout, kernels: Kernels) -> tuple[ca.MX, ...]:
     rhs = ca.horzcat(rhs_in, top_rhs)
 
     start = ca.vertcat(ca.vec(kernels.inverse(diag[:, 0:3])), rhs[:, 0])
-    sweep = kernels.forward.mapaccum(count - 1)(start, lower, upper, diag[:, 3:], rhs[:, 1:])
+    sweep = kernels.mapaccum("forward", count - 1)(start, lower, upper, diag[:, 3:], rhs[:, 1:])
     packed = ca.horzcat(start, sweep)
     final = ca.reshape(packed[:9, last], 3, 3) @ packed[9:, last]
     backwards = list(range(last - 1, -1, -1))
     reverse_upper = ca.horzcat(*[upper[:, 3 * j : 3 * j + 3] for j in backwards])
     reverse_packed = ca.horzcat(*[packed[:, j] for j in backwards])
-    solved = kernels.backward.mapaccum(last)(final, reverse_packed, reverse_upper)
+    solved = kernels.mapaccum("backward", last)(final, reverse_packed, reverse_upper)
     forces = ca.horzcat(*[solved[:, k] for k in range(last - 1, -1, -1)], final)
     below = ca.horzcat(ca.MX.zeros(3, 1), forces[:, :-1])
-    qdd = kernels.accelerations.map(count)(free, along_p, along_d, forces, below)
+    qdd = kernels.map("accelerations", count)(free, along_p, along_d, forces, below)
     joints = ca.horzcat(q[0:3, :], column(point, last))
     residual = ca.horzcat(q[0:3, 1:], top) - point  # each bond's lower point less its upper one
     return x, u, p, ca.vertcat(x[size:], ca.vec(qdd)), forces, joints, residual
