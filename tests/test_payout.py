@@ -431,8 +431,8 @@ def test_pay_out_agrees_with_moordyn(validation):
     assert np.all(np.isfinite(result.moordyn))
     moved = float(np.linalg.norm(result.cable_ocp[-1] - result.cable_ocp[0]))
     validation(
-        "paper_flat's tow, 100 m -> 300 m at 1 m/s, N = 100 at 300 m (cable_ocp 3 m "
-        "elements, 34 -> 100; MoorDyn 100 segments of L(t)/100)",
+        "paper_flat's tow, 100 m -> 300 m at 1 m/s (cable_ocp 3 m elements, n = "
+        f"{result.elements[0]} -> {result.elements[1]}; MoorDyn N = 100 segments of L(t)/100)",
         "peer code",
         "MoorDyn 2 (lumped mass, extensible; SetLineUnstretchedLength/Vel every 1 ms), RK4 at "
         "2e-4 s",
@@ -464,3 +464,22 @@ def test_the_models_of_every_n_match_the_flat_model_on_one_library(elements):
     ours = np.array(compiled(state, u)).ravel()
     reference = np.array(flat.rhs(state, u)).ravel()
     np.testing.assert_allclose(ours, reference, rtol=0, atol=1e-12 * np.abs(reference).max())
+
+
+def test_the_command_line_simulates_a_line_and_draws_its_element_count(tmp_path, capsys):
+    from cable_ocp import cli
+
+    scene = tmp_path / "lowering.toml"
+    scene.write_text(
+        "[model]\n[numerics]\nduration = 28.0\nstep = 0.05\nconstraint_tolerance = 1e-4\n"
+        "[top]\nmotion = 'fixed'\n[cable]\nlength = 50.0\n[end.payload]\nmass = 2000.0\n"
+        "volume = 0.256\n[winch]\nknots = 4\n[winch.line]\npay_out_max = 30.0\n"
+    )
+    out = tmp_path / "out"
+    knots = "10,20,30,40"  # rad on r_D = 0.5 m: 20 m paid out over 28 s
+    assert cli.main(["simulate", str(scene), "--out", str(out), "--quiet", "--knots", knots]) == 0
+    assert (out / "line_run.png").stat().st_size > 1000
+    run = LineTrajectory.load(out / "trajectory")
+    assert run.line_out[-1] == pytest.approx(70.0, abs=1e-9)
+    assert run.element_count[-1] > run.element_count[0]
+    capsys.readouterr()

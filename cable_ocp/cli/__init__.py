@@ -77,6 +77,8 @@ def _simulate(args) -> int:
         plots.cable_shapes(trajectory, seabed=seabed, path=folder / "cable_shapes.png")
         plots.winch_angle(trajectory, bounds=(scene.winch.angle_min, scene.winch.angle_max),
                           path=folder / "winch_angle.png")  # fmt: skip
+        if scene.winch.line is not None:  # a line paid out by elements: n over time
+            plots.line_run(trajectory, path=folder / "line_run.png")
         summary = {
             "scene": scene.name,
             "omega_m": trajectory.omega,

@@ -11,6 +11,8 @@ extensible, lumped masses at nodes, its end a node where ours is the tip of a ha
 
 from __future__ import annotations
 
+import ctypes
+import sys
 import tempfile
 import time
 from dataclasses import dataclass
@@ -47,6 +49,8 @@ class PayOutComparison:
         Largest end distance over the run.
     moordyn_wall, cable_ocp_wall : float, s
         Wall time of each run (cable_ocp: ``simulate`` with its statics; MoorDyn: its loop).
+    elements : (int, int)
+        cable_ocp's ``n`` at the start and at the end.
     """
 
     time: np.ndarray
@@ -56,6 +60,7 @@ class PayOutComparison:
     difference: float
     moordyn_wall: float
     cable_ocp_wall: float
+    elements: tuple[int, int]
 
     @property
     def share(self) -> float:
@@ -94,7 +99,8 @@ def run_moordyn(scene: Scene, angle, elements: int, times: np.ndarray) -> tuple[
     drive = Drive.from_scene(scene)
     drum = pay_out_drive(scene, angle)
     shift = mc.frame_shift(scene, float(times[-1]))
-    text = mc.moordyn_input(scene, elements, INTERNAL_STEP, shift)
+    longest = scene.cable.length + scene.winch.line.pay_out_max
+    text = mc.moordyn_input(scene, elements, INTERNAL_STEP, shift, longest=longest)
     per_sample = round((times[1] - times[0]) / COUPLING_STEP)
     coupling = np.arange((times.size - 1) * per_sample) * COUPLING_STEP
     position, velocity, _ = drive.top(coupling)
@@ -112,9 +118,11 @@ def run_moordyn(scene: Scene, angle, elements: int, times: np.ndarray) -> tuple[
             line, point = moordyn.GetLine(system, 1), moordyn.GetPoint(system, 1)
             end[0] = moordyn.GetPointPos(point)
             started = time.perf_counter()
+            set_length = _keeping_none(moordyn.SetLineUnstretchedLength, line, length[0])
+            set_rate = _keeping_none(moordyn.SetLineUnstretchedLengthVel, line, rate[0])
             for k, t in enumerate(coupling):
-                moordyn.SetLineUnstretchedLength(line, float(length[k]))
-                moordyn.SetLineUnstretchedLengthVel(line, float(rate[k]))
+                set_length(line, float(length[k]))
+                set_rate(line, float(rate[k]))
                 moordyn.Step(
                     system, position[:, k].tolist(), velocity[:, k].tolist(), t, COUPLING_STEP
                 )
@@ -125,6 +133,28 @@ def run_moordyn(scene: Scene, angle, elements: int, times: np.ndarray) -> tuple[
             moordyn.Close(system)
     end[:, 2] += shift
     return end, wall
+
+
+def _keeping_none(setter, line, value: float):
+    """``setter`` made safe from a reference it steals from ``None``.
+
+    The moordyn binding's ``SetLineUnstretchedLength`` and ``SetLineUnstretchedLengthVel``
+    return ``None`` without a new reference (moordyn 2.x: ``None``'s count fell by 100 in 100
+    calls), so that a long run frees ``None`` and the interpreter aborts ("deallocating None").
+    One trial call measures what a call steals, and each call gives that back.
+    """
+    before = sys.getrefcount(None)
+    setter(line, float(value))
+    stolen = before - sys.getrefcount(None)
+    for _ in range(stolen):
+        ctypes.pythonapi.Py_IncRef(ctypes.py_object(None))
+
+    def call(*args):
+        setter(*args)
+        for _ in range(stolen):
+            ctypes.pythonapi.Py_IncRef(ctypes.py_object(None))
+
+    return call
 
 
 def compare(start: float = 100.0, pay_out: float = 200.0, elements: int = 100,

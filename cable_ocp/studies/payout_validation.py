@@ -9,7 +9,6 @@ figures; the slow tests assert them and write the validation rows.
 from __future__ import annotations
 
 from dataclasses import dataclass
-from pathlib import Path
 
 import numpy as np
 
@@ -166,14 +165,6 @@ def tension_jumps(run: LineTrajectory) -> np.ndarray:
             for before, after in zip(run.segments[:-1], run.segments[1:], strict=True)
         ]
     )
-
-
-def save_figure(run: LineTrajectory, path: Path) -> Path:
-    """The run's :func:`cable_ocp.plots.line_run` figure at ``path``."""
-    from cable_ocp import plots
-
-    plots.line_run(run, path=path)
-    return path
 
 
 def static_top_tension(scene: Scene, line_out: np.ndarray) -> np.ndarray:
