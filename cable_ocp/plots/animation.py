@@ -31,8 +31,9 @@ def animate(
     Parameters
     ----------
     trajectory : Trajectory or LineTrajectory
-        A line paid out by elements (:class:`~cable_ocp.simulation.line_trajectory.
-        LineTrajectory`) is drawn with the elements of each sample, and its n in the label.
+        A line paid out by elements
+        (:class:`~cable_ocp.simulation.line_trajectory.LineTrajectory`) is drawn with the
+        elements of each sample, and its n in the label.
     path : str or Path, optional
         A ``.gif`` to write (then the figure is closed); without it the animation is returned
         with its figure open, e.g. for ``IPython.display.HTML(animation.to_jshtml())``.

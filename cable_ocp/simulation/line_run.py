@@ -3,12 +3,13 @@
 ``simulate(scene)`` of a scene with ``[winch.line]`` comes here. The line out is
 ``L_out(t) = cable.length + r_D (phi(t) - phi(0))`` (the heave compensation included); its mesh
 (:class:`~cable_ocp.scene.line_mesh.LineMesh`) gives ``n`` at every output time, and the run is
-integrated as segments of constant ``n`` on the models of :class:`~cable_ocp.model.line_models.
-LineModels` (one compiled library for every ``n``). At an output time where ``n`` changes the
-state is mapped (:mod:`cable_ocp.model.line_state`: split exactly, merge with the chord's
-offset) and the next segment starts from it, so changes fall on output times: the top element
-leaves its range between two outputs by at most the line paid out in one output interval,
-which is checked before integrating.
+integrated as segments of constant ``n`` on the models of
+:class:`~cable_ocp.model.line_models.LineModels` (one compiled library for every ``n``). At an
+output time where ``n`` changes the state is mapped (:mod:`cable_ocp.model.line_state`: split
+exactly, merge with the chord's offset) and the next segment starts from it, so changes fall on
+output times: between two outputs the top element may leave its range by the line moved in one
+output interval, at most half the shorter of ``Delta`` and ``l_min`` (:func:`check_line`,
+before integrating).
 """
 
 from __future__ import annotations

@@ -2,11 +2,12 @@
 
 MoorDyn keeps its ``N`` segments and rescales them to ``L(t) / N`` as the line's unstretched
 length changes (``SetLineUnstretchedLength`` and its rate ``SetLineUnstretchedLengthVel``, set at
-every coupling step); cable_ocp splits elements off at the drum (:mod:`cable_ocp.model.
-line_models`). Same rope, same tow, same pay-out, both from their own hanging equilibrium; the
-free ends are compared on whole seconds. The input file and the console handling are those of
-:mod:`cable_ocp.studies.moordyn_compare` (its differences hold here too: MoorDyn's line is
-extensible, lumped masses at nodes, its end a node where ours is the tip of a half element).
+every coupling step); cable_ocp splits elements off at the drum
+(:mod:`cable_ocp.model.line_models`). Same rope, same tow, same pay-out, both from their own
+hanging equilibrium; the free ends are compared on whole seconds. The input file and the
+console handling are those of :mod:`cable_ocp.studies.moordyn_compare` (its differences hold
+here too: MoorDyn's line is extensible, lumped masses at nodes, its end a node where ours is the
+tip of a half element).
 """
 
 from __future__ import annotations
