@@ -170,4 +170,7 @@ def compare(start: float = 100.0, pay_out: float = 200.0, elements: int = 100,
     times, ours_end = ours.time[whole], ours.end[whole]
     theirs, theirs_wall = run_moordyn(scene, angle, elements, times)
     difference = float(np.linalg.norm(theirs - ours_end, axis=1).max())
-    return PayOutComparison(times, theirs, ours_end, pay_out, difference, theirs_wall, ours_wall)
+    counts = (int(ours.element_count[0]), int(ours.element_count[-1]))
+    return PayOutComparison(
+        times, theirs, ours_end, pay_out, difference, theirs_wall, ours_wall, counts
+    )
