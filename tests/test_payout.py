@@ -483,3 +483,12 @@ def test_the_command_line_simulates_a_line_and_draws_its_element_count(tmp_path,
     assert run.line_out[-1] == pytest.approx(70.0, abs=1e-9)
     assert run.element_count[-1] > run.element_count[0]
     capsys.readouterr()
+
+
+def test_the_bench_prints_the_pay_out_beside_the_fixed_n_model(capsys):
+    from cable_ocp.studies import bench_payout
+
+    rows = bench_payout.report(MODELS, quick=True)
+    out = capsys.readouterr().out
+    assert "variable n (split/merge, shared kernels)" in out and "fixed n = 24" in out
+    assert rows["line_real_time"] > 1.0 and rows["fixed_real_time"] > 1.0
