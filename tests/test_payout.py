@@ -492,3 +492,18 @@ def test_the_bench_prints_the_pay_out_beside_the_fixed_n_model(capsys):
     out = capsys.readouterr().out
     assert "variable n (split/merge, shared kernels)" in out and "fixed n = 24" in out
     assert rows["line_real_time"] > 1.0 and rows["fixed_real_time"] > 1.0
+
+
+def test_a_survey_site_pays_out_over_its_grid_in_its_sea_state():
+    """``survey`` (bathymetry grid, current profile, JONSWAP heave) with a line on the drum."""
+    scene = co.load_scene(
+        MODELS / "survey.toml",
+        {"numerics.duration": 60.0, "winch.line": {"pay_out_max": 30.0, "element_length": 10.0}},
+    )
+    run = co.simulate(scene, winch=ramped_pay_out(0.5, 5.0, scene.winch.drum_radius))
+    assert run.element_count[-1] > run.element_count[0]
+    expected = scene.cable.length + 0.5 * (run.time - 2.5)  # after the ramp's half
+    settled = run.time > 5.0
+    np.testing.assert_allclose(run.line_out[settled], expected[settled], atol=1e-9)
+    assert run.bond_residual <= scene.numerics.constraint_tolerance
+    assert np.isfinite(run.omega)
