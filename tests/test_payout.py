@@ -507,3 +507,12 @@ def test_a_survey_site_pays_out_over_its_grid_in_its_sea_state():
     np.testing.assert_allclose(run.line_out[settled], expected[settled], atol=1e-9)
     assert run.bond_residual <= scene.numerics.constraint_tolerance
     assert np.isfinite(run.omega)
+
+
+def test_outputs_that_cannot_fit_in_memory_are_refused_before_integrating(monkeypatch):
+    from cable_ocp.simulation import budget
+
+    monkeypatch.setattr(budget, "available_memory", lambda: 10**6)  # 1 MB
+    scene = line_scene({"cable.length": 50.0, "numerics.duration": 300.0}, pay_out_max=100.0)
+    with pytest.raises(ValueError, match="over the limit of 0.0008 GB"):
+        co.simulate(scene, winch=ramped_pay_out(0.3, 5.0, 0.5))

@@ -26,6 +26,7 @@ from cable_ocp.model.cable import spec_from_scene
 from cable_ocp.model.layout import INPUTS
 from cable_ocp.model.line_models import LineModels
 from cable_ocp.model.line_state import merge, split
+from cable_ocp.simulation.budget import check_simulation_memory
 from cable_ocp.simulation.integrate import integrate, step_count
 from cable_ocp.simulation.line_trajectory import LineTrajectory
 from cable_ocp.simulation.run import joints_and_tensions, step_times, winch_function
@@ -142,7 +143,8 @@ def simulate_line(scene, winch=None, quiet: bool = True, compiled: bool = True) 
     Raises
     ------
     ValueError
-        Before integrating: the drum beyond ``winch.line``'s metres, outputs too far apart.
+        Before integrating: the drum beyond ``winch.line``'s metres, outputs too far apart,
+        outputs that cannot fit in memory (counted at the largest ``n`` of the run).
     SimulationError
         As :func:`~cable_ocp.simulation.integrate.integrate` raises it (bonds, blow-up).
     """
@@ -158,6 +160,7 @@ def simulate_line(scene, winch=None, quiet: bool = True, compiled: bool = True) 
     times = np.arange(count // numerics.output_every + 1) * interval
     lines = scene.cable.length + drive.inputs(times)[INPUTS.top_length]
     counts = mesh.schedule(lines, mesh.starting_elements(scene.cable.length))
+    check_simulation_memory(scene, int(counts.max()))  # as if every output had the most
     models = LineModels(spec_from_scene(scene), mesh.element_length, compiled)
     changes = [0, *np.flatnonzero(np.diff(counts)) + 1, len(times) - 1]
     changes = sorted(set(changes))
