@@ -27,6 +27,7 @@ if TYPE_CHECKING:  # what __getattr__ imports, for type checkers and the import 
     from cable_ocp.model.cable import INPUT_NAMES, CableModel
     from cable_ocp.scene.schema import Scene, load_scene
     from cable_ocp.simulation.integrate import SimulationError, integrate, reference_solution
+    from cable_ocp.simulation.line_trajectory import LineTrajectory
     from cable_ocp.simulation.run import simulate
     from cable_ocp.simulation.statics import EquilibriumError, equilibrium
     from cable_ocp.simulation.trajectory import Trajectory
@@ -44,6 +45,7 @@ _SOURCES = {
     "OcpResult": "cable_ocp.control.optimization",
     "Drive": "cable_ocp.drive.drive",
     "EquilibriumError": "cable_ocp.simulation.statics",
+    "LineTrajectory": "cable_ocp.simulation.line_trajectory",
     "Scene": "cable_ocp.scene.schema",
     "SimulationError": "cable_ocp.simulation.integrate",
     "Trajectory": "cable_ocp.simulation.trajectory",
@@ -70,6 +72,7 @@ __all__ = [
     "OcpResult",
     "Drive",
     "EquilibriumError",
+    "LineTrajectory",
     "Scene",
     "SimulationError",
     "Trajectory",

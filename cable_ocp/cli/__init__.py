@@ -105,6 +105,8 @@ def _write_run(trajectory, scene, out: Path, animate: bool, extra: dict | None =
         plots.cable_shapes(trajectory, seabed=seabed, path=folder / "cable_shapes.png")
         plots.winch_angle(trajectory, bounds=(scene.winch.angle_min, scene.winch.angle_max),
                           path=folder / "winch_angle.png")  # fmt: skip
+        if scene.winch.line is not None:  # a line paid out by elements: n over time
+            plots.line_run(trajectory, path=folder / "line_run.png")
         summary = {
             "scene": scene.name,
             "omega_m": trajectory.omega,
@@ -426,7 +428,7 @@ def _validate(args) -> int:
 
 
 def _bench(args) -> int:
-    from cable_ocp.studies import bench, bench_simulate, robustness
+    from cable_ocp.studies import bench, bench_payout, bench_simulate, robustness
     from cable_ocp.studies.moordyn_compare import moordyn_report
 
     if args.hessian:
@@ -436,6 +438,7 @@ def _bench(args) -> int:
         "rk4": bench.rk4_report,
         "simulate": bench_simulate.report,
         "moordyn": moordyn_report,
+        "payout": bench_payout.report,
         "ocp": bench.ocp_report,
         "ocp-speed": bench.ocp_speed_report,
         "mpc": lambda models, quick: _bench_mpc(models, quick, args.out),
@@ -607,7 +610,7 @@ def build_parser() -> argparse.ArgumentParser:
     bench.add_argument(
         "--only",
         nargs="+",
-        choices=["rk4", "simulate", "moordyn", "ocp", "ocp-speed", "mpc", "robustness"],
+        choices=["rk4", "simulate", "moordyn", "payout", "ocp", "ocp-speed", "mpc", "robustness"],
         help="run only these parts (robustness runs only when named)",
     )
     bench.add_argument(

@@ -27,7 +27,7 @@ from cable_ocp.model.kinematics import TWIST_ANGLE
 from cable_ocp.model.kkt import sparse_kkt_solve
 from cable_ocp.model.layout import INPUT_NAMES, INPUT_SIZE
 from cable_ocp.model.parameters import parameter_names, parameter_values, structure_of
-from cable_ocp.model.parametric import ModelLayout, parametric_model
+from cable_ocp.model.parametric import ModelLayout, ParametricModel, parametric_model
 from cable_ocp.model.rfe import ElementProperties
 
 __all__ = ["INPUT_NAMES", "INPUT_SIZE", "CableModel", "ModelSpec", "Payload", "spec_from_scene"]
@@ -203,7 +203,8 @@ class CableModel(ModelLayout):
     ----------
     spec : ModelSpec
     parametric : ParametricModel
-        The model of this structure, shared by every spec that differs only in its numbers.
+        The model of this structure, shared by every spec that differs only in its numbers
+        (or the one given: a model of a paid-out line, :mod:`cable_ocp.model.line_models`).
     parameters : array
         The numbers bound to its input ``p`` (names: :attr:`parameter_names`).
     x : SX
@@ -221,11 +222,11 @@ class CableModel(ModelLayout):
         ``(x, u) ->`` kinetic plus potential energy (J), external force excluded.
     """
 
-    def __init__(self, spec: ModelSpec):
+    def __init__(self, spec: ModelSpec, parametric: ParametricModel | None = None):
         if spec.elements < 1:
             raise ValueError(f"elements = {spec.elements} is out of range: must be >= 1")
         super().__init__(spec)
-        self.parametric = parametric_model(structure_of(spec))
+        self.parametric = parametric or parametric_model(structure_of(spec))
         self.parameters = parameter_values(spec)
         self.x, self.u = self.parametric.x, self.parametric.u
         self._memo: dict = {}

@@ -16,6 +16,9 @@ library.
 
 from __future__ import annotations
 
+from collections.abc import Callable
+from dataclasses import dataclass
+
 import casadi as ca
 
 from cable_ocp.model.cable import CableModel
@@ -313,12 +316,64 @@ def _library_arguments(model: ParametricModel) -> tuple:
 
 
 def _shared_graph(model: ParametricModel) -> tuple[ca.MX, ...]:
-    """:func:`_structured_graph`, built once per model for the right-hand side and the outputs."""
-    return model.memo(("structured", "graph"), lambda: _structured_graph(model))
+    """:func:`structured_graph`, built once per model for the right-hand side and the outputs."""
+    return model.memo(("structured", "graph"), lambda: structured_graph(model, kernels_of(model)))
 
 
-def _structured_graph(model: ParametricModel) -> tuple[ca.MX, ...]:
-    """Inputs ``x, u, p`` and the MX expressions of ``x'``, bond forces, joints, bond residuals."""
+@dataclass(frozen=True)
+class Kernels:
+    """The small Functions the structured loops call, and what they take as ``p``.
+
+    ``parameters`` maps the graph's ``p`` (MX) to the ``p`` the kernels take: the identity for
+    the kernels of the model itself (:func:`kernels_of`); one set of kernels built and compiled
+    on another structure of another ``n`` serves every ``n`` when it maps the segment length
+    onto its own (:mod:`cable_ocp.model.payout`).
+    """
+
+    joint: ca.Function
+    element: ca.Function
+    element_end: ca.Function
+    bond: ca.Function
+    top_bond: ca.Function
+    forward: ca.Function
+    backward: ca.Function
+    accelerations: ca.Function
+    inverse: ca.Function
+    segment_length: ca.Function
+    parameters: Callable[[ca.MX], ca.MX] = lambda p: p
+
+    def map(self, name: str, count: int) -> Callable:
+        """Kernel ``name`` over ``count`` columns (CasADi's ``map``)."""
+        return getattr(self, name).map(count)
+
+    def mapaccum(self, name: str, count: int) -> Callable:
+        """Kernel ``name`` accumulated over ``count`` columns (CasADi's ``mapaccum``)."""
+        return getattr(self, name).mapaccum(count)
+
+
+def kernels_of(model: ParametricModel) -> Kernels:
+    """The structured loops' Functions of ``model`` itself (SX, interpreted until compiled)."""
+    matrix = ca.SX.sym("m", 3, 3)
+    return Kernels(
+        joint=_joint_forces(model),
+        element=_element_solve(model, end=False),
+        element_end=_element_solve(model, end=True),
+        bond=_bond_blocks(model),
+        top_bond=_top_bond(model),
+        forward=_forward_sweep(),
+        backward=_backward_sweep(),
+        accelerations=_accelerations(model.dofs),
+        inverse=ca.Function("inverse", [matrix], [inverse_3x3(matrix)]),
+        segment_length=ca.Function("segment_length", [model.p], [model.spec.segment_length]),
+    )
+
+
+def structured_graph(model: ModelLayout, kernels: Kernels) -> tuple[ca.MX, ...]:
+    """Inputs ``x, u, p`` and the MX expressions of ``x'``, bond forces, joints, bond residuals.
+
+    ``model`` gives the layout (``n``, the state's size, the size of ``p``), ``kernels`` the
+    Functions evaluated in its loops.
+    """
     if not supports(model):
         raise ValueError("the structured right-hand side needs 5-DOF elements and n >= 2")
     dofs, count = model.dofs, model.element_count
@@ -331,20 +386,19 @@ def _structured_graph(model: ParametricModel) -> tuple[ca.MX, ...]:
     top_acceleration = u[INPUTS.top_acceleration]
     top_length, top_length_rate = u[INPUTS.top_length], u[INPUTS.top_length_rate]
     top_length_acc = u[INPUTS.top_length_acceleration]
-    delta = ca.Function("segment_length", [model.p], [model.spec.segment_length])(p)
+    delta = kernels.segment_length(p)
+    p_kernel = kernels.parameters(p)
 
-    lower_forces, upper_forces = _joint_forces(model).map(count - 1)(
-        q[:, :-1], q[:, 1:], qd[:, :-1], qd[:, 1:], p
+    lower_forces, upper_forces = kernels.map("joint", count - 1)(
+        q[:, :-1], q[:, 1:], qd[:, :-1], qd[:, 1:], p_kernel
     )
     zero = ca.MX.zeros(dofs, 1)
     spring = ca.horzcat(lower_forces, zero) + ca.horzcat(zero, upper_forces)
 
     lengths = ca.horzcat(ca.repmat(delta, 1, count - 2), top_length)
-    rest = _element_solve(model, end=False).map(count - 1)(
-        q[:, 1:], qd[:, 1:], lengths, spring[:, 1:], p
-    )
-    first = _element_solve(model, end=True)(
-        q[:, 0], qd[:, 0], delta / 2, spring[:, 0], u[INPUTS.end_force], p
+    rest = kernels.map("element", count - 1)(q[:, 1:], qd[:, 1:], lengths, spring[:, 1:], p_kernel)
+    first = kernels.element_end(
+        q[:, 0], qd[:, 0], delta / 2, spring[:, 0], u[INPUTS.end_force], p_kernel
     )
     free, along_p, along_d, top_jac, point, rate, quad, axis, axis_rate = (
         ca.horzcat(a, b) for a, b in zip(first, rest, strict=True)
@@ -353,11 +407,11 @@ def _structured_graph(model: ParametricModel) -> tuple[ca.MX, ...]:
     def column(matrix, k, width=1):
         return matrix[:, k * width : (k + 1) * width]
 
-    interior = _bond_blocks(model).map(count - 1)(
+    interior = kernels.map("bond", count - 1)(
         free[:, :-1], along_d[:, : 3 * (count - 1)], top_jac[:, : dofs * (count - 1)],
         point[:, :-1], rate[:, :-1], quad[:, :-1],
         free[:, 1:], along_p[:, 3:], along_d[:, 3:], top_jac[:, dofs:],
-        q[0:3, 1:], qd[0:3, 1:], p,
+        q[0:3, 1:], qd[0:3, 1:], p_kernel,
     )  # fmt: skip
     diag_in, rhs_in, upper, lower = interior
     last = count - 1
@@ -368,28 +422,23 @@ def _structured_graph(model: ParametricModel) -> tuple[ca.MX, ...]:
         + 2 * top_length_rate * column(axis_rate, last)
         - top_acceleration
     )
-    top_rhs = _top_bond(model)(
-        top_quad, top_velocity - top_rate, top - column(point, last), p
+    top_rhs = kernels.top_bond(
+        top_quad, top_velocity - top_rate, top - column(point, last), p_kernel
     ) + column(top_jac, last, dofs) @ column(free, last)
     diag = ca.horzcat(diag_in, column(top_jac, last, dofs) @ column(along_d, last, 3))
     rhs = ca.horzcat(rhs_in, top_rhs)
 
-    start = ca.vertcat(ca.vec(_inverse_mx(diag[:, 0:3])), rhs[:, 0])
-    sweep = _forward_sweep().mapaccum(count - 1)(start, lower, upper, diag[:, 3:], rhs[:, 1:])
+    start = ca.vertcat(ca.vec(kernels.inverse(diag[:, 0:3])), rhs[:, 0])
+    sweep = kernels.mapaccum("forward", count - 1)(start, lower, upper, diag[:, 3:], rhs[:, 1:])
     packed = ca.horzcat(start, sweep)
     final = ca.reshape(packed[:9, last], 3, 3) @ packed[9:, last]
     backwards = list(range(last - 1, -1, -1))
     reverse_upper = ca.horzcat(*[upper[:, 3 * j : 3 * j + 3] for j in backwards])
     reverse_packed = ca.horzcat(*[packed[:, j] for j in backwards])
-    solved = _backward_sweep().mapaccum(last)(final, reverse_packed, reverse_upper)
+    solved = kernels.mapaccum("backward", last)(final, reverse_packed, reverse_upper)
     forces = ca.horzcat(*[solved[:, k] for k in range(last - 1, -1, -1)], final)
     below = ca.horzcat(ca.MX.zeros(3, 1), forces[:, :-1])
-    qdd = _accelerations(dofs).map(count)(free, along_p, along_d, forces, below)
+    qdd = kernels.map("accelerations", count)(free, along_p, along_d, forces, below)
     joints = ca.horzcat(q[0:3, :], column(point, last))
     residual = ca.horzcat(q[0:3, 1:], top) - point  # each bond's lower point less its upper one
     return x, u, p, ca.vertcat(x[size:], ca.vec(qdd)), forces, joints, residual
-
-
-def _inverse_mx(block: ca.MX) -> ca.MX:
-    matrix = ca.SX.sym("m", 3, 3)
-    return ca.Function("inverse", [matrix], [inverse_3x3(matrix)])(block)

@@ -25,7 +25,9 @@ import numpy as np
 from matplotlib.figure import Figure
 
 from cable_ocp.plots.animation import animate as animate  # a GIF of the run
+from cable_ocp.plots.line import line_run as line_run  # a line paid out by elements
 from cable_ocp.scene.schema import Seabed
+from cable_ocp.simulation.line_trajectory import LineTrajectory
 from cable_ocp.simulation.seabed import bathymetry, clearance_reference, seabed_elevation
 from cable_ocp.simulation.trajectory import Trajectory
 
@@ -75,7 +77,8 @@ def run_title(what: str, scenes: Sequence[str | None], runs: Sequence[str]) -> s
 
 
 def _labelled(trajectories, labels):
-    trajectories = [trajectories] if isinstance(trajectories, Trajectory) else list(trajectories)
+    one = isinstance(trajectories, Trajectory | LineTrajectory)
+    trajectories = [trajectories] if one else list(trajectories)
     if labels:
         labels = list(labels)
     elif len({_scene(t) for t in trajectories}) > 1:
@@ -178,7 +181,8 @@ def cable_shapes(
         (line,) = ax.plot(joints[0], joints[2], "-o", ms=2, label=f"t = {trajectory.time[k]:.0f} s")
         ground = seabed_elevation(seabed, joints[0, 0], joints[1, 0], reference)
         ax.plot(joints[0, 0], ground, "v", color=line.get_color())
-    low, high = trajectory.joints[:, 0].min() - 20, trajectory.joints[:, 0].max() + 20
+    # nanmin: a line paid out by elements pads each sample's joints after its top with NaN
+    low, high = np.nanmin(trajectory.joints[:, 0]) - 20, np.nanmax(trajectory.joints[:, 0]) + 20
     grid = bathymetry(seabed)
     if grid is not None:
         low, high = max(low, grid.x[0]), min(high, grid.x[-1])

@@ -30,7 +30,10 @@ def animate(
 
     Parameters
     ----------
-    trajectory : Trajectory
+    trajectory : Trajectory or LineTrajectory
+        A line paid out by elements
+        (:class:`~cable_ocp.simulation.line_trajectory.LineTrajectory`) is drawn with the
+        elements of each sample, and its n in the label.
     path : str or Path, optional
         A ``.gif`` to write (then the figure is closed); without it the animation is returned
         with its figure open, e.g. for ``IPython.display.HTML(animation.to_jshtml())``.
@@ -51,12 +54,13 @@ def animate(
     shown = np.unique(np.linspace(0, time.size - 1, min(frames, time.size)).round().astype(int))
     ground = end[:, 2] - trajectory.clearance_error - clearance_depth  # under the end (eq. 39)
     order = np.argsort(end[:, 0], kind="stable")
-    low, high = joints[:, 0].min(), joints[:, 0].max()
+    low, high = np.nanmin(joints[:, 0]), np.nanmax(joints[:, 0])
     margin = 0.05 * max(high - low, 1.0)
     x = np.linspace(low - margin, high + margin, 300)
     seabed = np.interp(x, end[order, 0], ground[order])
-    bottom = min(seabed.min(), joints[:, 2].min()) - 2 * margin
-    top = max(joints[:, 2].max(), 0.0) + margin
+    bottom = min(seabed.min(), np.nanmin(joints[:, 2])) - 2 * margin
+    top = max(np.nanmax(joints[:, 2]), 0.0) + margin
+    counts = getattr(trajectory, "element_count", None)  # a line paid out by elements
 
     fig, ax = plt.subplots(figsize=(8, 4))
     ax.fill_between(x, bottom, seabed, color="tan", alpha=0.6, label="seabed under the end's path")
@@ -77,7 +81,7 @@ def animate(
         cable.set_data(joints[k, 0], joints[k, 2])
         trace.set_data(end[: k + 1, 0], end[: k + 1, 2])
         tip.set_data(end[k : k + 1, 0], end[k : k + 1, 2])
-        label.set_text(f"t = {time[k]:.1f} s")
+        label.set_text(f"t = {time[k]:.1f} s" + ("" if counts is None else f", n = {counts[k]}"))
         return cable, trace, tip, label
 
     animation = FuncAnimation(fig, draw, frames=shown, interval=1000 / fps, blit=True)

@@ -56,6 +56,7 @@ __all__ = [
 Vector3 = tuple[float, float, float]
 
 MAX_STEPS = 10**8  # RK4 steps of a simulation: numerics.duration / numerics.step
+MAX_LINE_ELEMENTS = 1000  # elements of a line on the drum at its longest (as model.elements)
 # Rows of environment.current_profile: every row adds the same instructions to the drag at each
 # Gauss point (about 390 at n = 15, against 19 000 for the whole right-hand side with 3 rows), so
 # 100 rows double the model's size, compile time and cost per step; thin a longer profile.
@@ -600,6 +601,36 @@ class EndLoad(_Validated):
     )
 
 
+@_section("winch.line")
+@dataclass(frozen=True)
+class WinchLine(_Validated):
+    """The line on the drum, in metres: a line paid out and hauled in by elements (paper §2).
+
+    The table is the switch: with ``[winch.line]`` the line out at the start is
+    ``cable.length``, the drum's angle range follows from ``winch.drum_radius``
+    (``winch.angle_min = -haul_in_max / r_D``, ``winch.angle_max = pay_out_max / r_D``), and
+    the model splits off or merges back an element at the top as the line goes out or in
+    (CONVENTIONS.md §3, the line on the drum).
+    """
+
+    pay_out_max: float = _param(0.0, doc="Line the drum can pay out.", ge=0, unit="m")
+    haul_in_max: float = _param(0.0, doc="Line the drum can haul in.", ge=0, unit="m")
+    element_length: float = _param(10.0, doc="Delta, every element below the top.", gt=0, unit="m")
+    top_length_min: float | None = _param(
+        None, doc="Shortest top element (none: Delta / 2); the longest is 3/2 Delta more.",
+        gt=0, unit="m", optional=True,
+    )  # fmt: skip
+
+    @property
+    def mesh(self):
+        """The :class:`~cable_ocp.model.line_mesh.LineMesh` of the line's element lengths."""
+        from cable_ocp.scene.line_mesh import LineMesh
+
+        shortest = self.top_length_min
+        half = self.element_length / 2
+        return LineMesh(self.element_length, half if shortest is None else shortest)
+
+
 @_section("winch")
 @dataclass(frozen=True)
 class Winch(_Validated):
@@ -618,12 +649,32 @@ class Winch(_Validated):
         None, doc="Longest top element (none: winch.angle_max alone).", gt=0, unit="m",
         optional=True,
     )  # fmt: skip
+    line: WinchLine | None = _param(None, "section", "[winch.line]", item=WinchLine, optional=True)
 
     def _check_relations(self) -> None:
-        if self.angle_min >= self.angle_max:
+        if self.line is not None:
+            self._angles_from_line()
+        elif self.angle_min >= self.angle_max:
             raise self._fail("angle_min", "< winch.angle_max")
         if self.top_length_max is not None and self.top_length_max <= self.top_length_min:
             raise self._fail("top_length_max", "> winch.top_length_min")
+
+    def _angles_from_line(self) -> None:
+        """Set the angle range from ``[winch.line]``; refuse another one given beside it."""
+        derived = {
+            "angle_min": 0.0 - self.line.haul_in_max / self.drum_radius,
+            "angle_max": self.line.pay_out_max / self.drum_radius,
+        }
+        for name, value in derived.items():
+            given = getattr(self, name)
+            default = type(self).__dataclass_fields__[name].default
+            if given not in (default, value):
+                raise self._fail(
+                    name,
+                    f"{value!r}, set by [winch.line] (its metres over winch.drum_radius; leave "
+                    "it out)",
+                )
+            object.__setattr__(self, name, value)
 
 
 @_section("hill")
@@ -794,6 +845,9 @@ class Scene(_Validated):
                     f"floats. Add a payload of more than {lift - load:.4g} kg, or use a rope "
                     "denser than water",
                 )
+        if self.winch.line is not None:
+            self._check_line()
+            return
         w, top = self.winch, self.top_element_length
         reach = w.top_length_min - w.drum_radius * w.angle_min
         if reach >= self.cable.length / 2:
@@ -808,6 +862,31 @@ class Scene(_Validated):
                 "top_length_max",
                 f">= the top element's length at phi = 0, max(cable.length / model.elements / 2, "
                 f"winch.top_length_min - winch.drum_radius * winch.angle_min) = {top!r}",
+            )
+
+    def _check_line(self) -> None:
+        """A line on the drum (``[winch.line]``) that its elements can follow from start to end."""
+        line, mesh = self.winch.line, self.winch.line.mesh
+        least = self.cable.length - line.haul_in_max
+        if least < mesh.shortest_line:
+            raise line._fail(
+                "haul_in_max",
+                f"<= cable.length - {mesh.shortest_line!r} = "
+                f"{self.cable.length - mesh.shortest_line!r} (the line left must fill three "
+                "elements: 3/2 winch.line.element_length + the shortest top element)",
+            )
+        most = self.cable.length + line.pay_out_max
+        elements = mesh.starting_elements(most)
+        if elements > MAX_LINE_ELEMENTS:
+            raise line._fail(
+                "pay_out_max",
+                f"<= {mesh.below_top(MAX_LINE_ELEMENTS) - self.cable.length:.6g} (at most "
+                f"{MAX_LINE_ELEMENTS} elements of winch.line.element_length out; or longer "
+                "elements)",
+            )
+        if self.model.torsion:
+            raise SceneError(
+                "model.torsion", " = true: a line on the drum ([winch.line]) needs 5-DOF elements"
             )
 
     def updated(self, overrides: Mapping[str, Any]) -> Scene:

@@ -31,6 +31,8 @@ OUTPUT_BLOCK = 500
 # Times per block of the top-length check: the inputs of a block are 120 B a time, so a run of
 # 3.6e7 steps is checked in 4 MB blocks, not one 4.3 GB array.
 TIME_BLOCK = 32_768
+# Largest share of the line out that the graded mesh's top element may carry (check_top_length).
+TOP_SHARE = 1 / 3
 
 
 def winch_function(scene, winch: WinchSpec) -> winch_angles.WinchAngleFunction:
@@ -85,8 +87,10 @@ def check_top_length(scene, drive: Drive, times: np.ndarray) -> None:
 def _check_top_length(scene, drive: Drive, times: np.ndarray) -> None:
     length = drive.inputs(times)[INPUTS.top_length]
     low, high = scene.winch.top_length_min, scene.winch.top_length_max
-    high = np.inf if high is None else high
     tolerance = scene.winch.drum_radius * BOUND_TOLERANCE
+    if high is None:
+        _check_rod(scene, drive, length, times, tolerance)
+        high = np.inf
     outside = (length < low - tolerance) | (length > high + tolerance)
     if outside.any():
         k = int(np.argmax(outside))
@@ -94,6 +98,26 @@ def _check_top_length(scene, drive: Drive, times: np.ndarray) -> None:
             f"the winch sets the top-element length to {length[k]:.4g} m at t = {times[k]:.6g} s, "
             f"outside [winch.top_length_min, winch.top_length_max] = [{low}, {high}] m by more "
             f"than the tolerance {tolerance:.3g} m"
+        )
+
+
+def _check_rod(scene, drive: Drive, length, times, tolerance) -> None:
+    """Refuse a graded top element paid out to more than :data:`TOP_SHARE` of the line out.
+
+    Without ``winch.top_length_max`` the graded mesh's top element grows by all the drum pays
+    out: a rigid rod, not a rope, once it carries a large share of the line (measured: 300 m of
+    drum range on ``paper_hill`` gave a 210 m rod, silently).
+    """
+    line = scene.cable.length + length - drive.top_length
+    over = length > TOP_SHARE * line + tolerance
+    if over.any():
+        k = int(np.argmax(over))
+        raise ValueError(
+            f"the winch pays the top element out to {length[k]:.4g} m at t = {times[k]:.6g} s, "
+            f"{length[k] / line[k]:.0%} of the {line[k]:.4g} m of line out: one rigid rod, not a "
+            f"rope (the graded mesh's top element may carry at most {TOP_SHARE:.0%} of the line). "
+            "Pay out through [winch.line] (elements split off at the drum), or narrow "
+            "winch.angle_max / set winch.top_length_max"
         )
 
 
@@ -232,6 +256,8 @@ def checked_simulation(
         A :class:`~cable_ocp.simulation.integrate.SimulationError`: the end starts off the
         bathymetry grid or under the seabed (before integrating), or leaves the grid.
     """
+    if scene.winch.line is not None:
+        return _line_simulation(scene, winch, model, initial_state, quiet, compiled)
     numerics = scene.numerics
     check_simulation_memory(scene, model.spec.elements if model is not None else None)
     angle = winch_function(scene, winch)
@@ -273,3 +299,16 @@ def checked_simulation(
         state_names=model.state_names,
     )
     return trajectory, run.bond_residual
+
+
+def _line_simulation(scene, winch, model, initial_state, quiet, compiled):
+    """A scene with ``[winch.line]``: :func:`cable_ocp.simulation.line_run.simulate_line`."""
+    from cable_ocp.simulation.line_run import simulate_line  # it imports this module
+
+    if model is not None or initial_state is not None:
+        raise ValueError(
+            "a scene with [winch.line] builds its models for every n itself: model and "
+            "initial_state are not taken"
+        )
+    trajectory = simulate_line(scene, winch, quiet=quiet, compiled=compiled)
+    return trajectory, trajectory.bond_residual

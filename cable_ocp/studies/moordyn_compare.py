@@ -156,6 +156,7 @@ def moordyn_input(
     internal_step: float,
     shift: float,
     time_scheme: str = MOORDYN_SCHEME,
+    longest: float | None = None,
 ) -> str:
     """Text of a MoorDyn v2 input file for the scene's cable hanging from its initial top point.
 
@@ -170,6 +171,9 @@ def moordyn_input(
         The frame is moved down by this depth (see :func:`frame_shift`).
     time_scheme : str
         MoorDyn's ``tScheme`` (MoorDyn's own default is RK2).
+    longest : float, m, optional
+        The longest the line becomes (a pay-out); the cable's length by default. The seabed is
+        laid twice that below the frame's top.
     """
     cable, water, hydro = scene.cable, scene.environment, scene.hydrodynamics
     x, y, z = (float(c) for c in np.asarray(scene.top.start, dtype=float) - [0.0, 0.0, shift])
@@ -179,7 +183,8 @@ def moordyn_input(
     added_axial = hydro.added_mass_axial if hydro.added_mass else 0.0
     bending = cable.bending_stiffness if scene.model.bending else 0.0
     axial = cable.youngs_modulus * cable.cross_section_area
-    depth = shift + 2 * cable.length  # the seabed stays a cable length below the lowest end
+    longest = cable.length if longest is None else longest
+    depth = shift + 2 * longest  # the seabed stays a line's length below the lowest end
     return "\n".join(
         [
             "--------------------- MoorDyn Input File ------------------------------------",

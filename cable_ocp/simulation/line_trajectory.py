@@ -1,0 +1,186 @@
+"""A run whose number of elements changes: one :class:`Trajectory` per segment of constant ``n``.
+
+Each segment is an ordinary trajectory (its own ``element`` and ``joint`` dimensions); where
+``n`` changes, the instant of the change ends one segment (the state before) and starts the
+next (the state after), so a jump across a split or a merge reads off the two. The whole-run
+views (:attr:`LineTrajectory.time`, :attr:`end`, ...) take each instant once, after the change.
+Saved as one netCDF file: the whole-run views at its root, each segment in a group
+``segment_K`` as :meth:`Trajectory.to_xarray` writes it (CONVENTIONS.md §2).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+import xarray as xr
+
+from cable_ocp.model.layout import INPUTS
+from cable_ocp.simulation import labelled
+from cable_ocp.simulation.trajectory import Trajectory
+
+KIND = "LineTrajectory"
+
+
+@dataclass(frozen=True, eq=False)
+class LineTrajectory:
+    """A run of a line on the drum (``[winch.line]``), segment by segment.
+
+    Attributes
+    ----------
+    segments : list of Trajectory
+        In time order; segment ``k + 1`` starts at the time segment ``k`` ends.
+    element_length : float, m
+        ``Delta`` of the line's mesh.
+    bond_residual : float, m
+        Largest bond residual of the run's states after the first, as integration checked them
+        (NaN when loaded from a file).
+    """
+
+    segments: list[Trajectory]
+    element_length: float
+    bond_residual: float = float("nan")
+
+    def _whole(self, values) -> np.ndarray:
+        """One array over the whole run: each segment's first sample (after a change) kept."""
+        parts = [values(s) for s in self.segments]
+        return np.concatenate([p[:-1] for p in parts[:-1]] + [parts[-1]])
+
+    @property
+    def time(self) -> np.ndarray:
+        """Output times (k,), s, each once."""
+        return self._whole(lambda s: s.time)
+
+    @property
+    def element_count(self) -> np.ndarray:
+        """``n`` at each output (k,): the model has ``n + 1`` elements."""
+        return self._whole(lambda s: np.full(s.time.size, s.tensions.shape[1] - 1))
+
+    @property
+    def top_length(self) -> np.ndarray:
+        """Length of the top element (k,), m."""
+        return self._whole(lambda s: s.top_length)
+
+    @property
+    def line_out(self) -> np.ndarray:
+        """The modelled line out ``(n - 1/2) Delta + l_n`` (k,), m."""
+        return (self.element_count - 0.5) * self.element_length + self.top_length
+
+    @property
+    def end(self) -> np.ndarray:
+        """Position of the end E (k, 3), m."""
+        return self._whole(lambda s: s.end)
+
+    @property
+    def joints(self) -> np.ndarray:
+        """Joint positions ``A_0 .. A_{n+1}`` (k, 3, largest n + 2), m, NaN past each top.
+
+        A sample of fewer elements than the largest is padded after its top joint, so that
+        plotting a sample draws its own joints and nothing else.
+        """
+        width = max(s.joints.shape[2] for s in self.segments)
+
+        def padded(s: Trajectory) -> np.ndarray:
+            out = np.full((s.time.size, 3, width), np.nan)
+            out[:, :, : s.joints.shape[2]] = s.joints
+            return out
+
+        return self._whole(padded)
+
+    @property
+    def scene_name(self) -> str:
+        """The scene's name."""
+        return self.segments[0].scene_name
+
+    @property
+    def top(self) -> np.ndarray:
+        """Position of the top point (k, 3), m."""
+        return self._whole(lambda s: s.top)
+
+    @property
+    def top_tension(self) -> np.ndarray:
+        """Tension at the top (k,), N."""
+        return self._whole(lambda s: s.top_tension)
+
+    @property
+    def winch_angle(self) -> np.ndarray:
+        """Drum angle (k,), rad."""
+        return self._whole(lambda s: s.winch_angle)
+
+    @property
+    def clearance_error(self) -> np.ndarray:
+        """``e(t)`` of eq. 39 (k,), m."""
+        return self._whole(lambda s: s.clearance_error)
+
+    @property
+    def omega(self) -> float:
+        """``Omega`` of eq. 39 over the whole run, m."""
+        return self.segments[0].omega
+
+    @property
+    def scene(self):
+        """The scene that ran."""
+        return self.segments[0].scene
+
+    def element_lengths(self, segment: int) -> np.ndarray:
+        """Lengths ``l_0 .. l_n`` (k, n+1) of the elements of a segment over its times, m."""
+        s = self.segments[segment]
+        n = s.tensions.shape[1] - 1
+        lengths = np.full((s.time.size, n + 1), self.element_length)
+        lengths[:, 0] = self.element_length / 2
+        lengths[:, -1] = s.inputs[:, INPUTS.top_length]
+        return lengths
+
+    def to_xarray(self) -> xr.Dataset:
+        """The whole-run views over ``time`` (the segments are in :meth:`save`'s groups)."""
+        whole = xr.Dataset(
+            {
+                "element_count": ("time", self.element_count, {"long_name": "n, elements 0..n"}),
+                "line_out": ("time", self.line_out, {"units": "m", "long_name": "line out"}),
+                "top_length": ("time", self.top_length, {"units": "m"}),
+                "end": (("time", "component"), self.end, {"units": "m"}),
+                "top_tension": ("time", self.top_tension, {"units": "N"}),
+            },
+            coords={"time": ("time", self.time, {"units": "s"}), "component": ["x", "y", "z"]},
+            attrs={
+                "cable_ocp_kind": KIND,
+                "segments": len(self.segments),
+                "element_length": self.element_length,
+            },  # fmt: skip
+        )
+        return whole
+
+    def save(self, path: str | Path) -> Path:
+        """Write ``path.nc``: the whole-run views at its root, segment ``K`` in group ``segment_K``.
+
+        Returns the path.
+        """
+        path = Path(path).with_suffix(".nc")
+        self.to_xarray().to_netcdf(path, mode="w", format="NETCDF4")
+        for k, segment in enumerate(self.segments):
+            segment.to_xarray().to_netcdf(path, mode="a", group=f"segment_{k}")
+        return path
+
+    @classmethod
+    def load(cls, path: str | Path) -> LineTrajectory:
+        """Read a file written by :meth:`save`.
+
+        Raises
+        ------
+        ValueError
+            Naming the file, if it is not a line trajectory.
+        """
+        path = Path(path).with_suffix(".nc")
+        try:
+            with xr.open_dataset(path) as root:
+                if root.attrs.get("cable_ocp_kind") != KIND:
+                    raise ValueError(f"not a {KIND}")
+                count, length = int(root.attrs["segments"]), float(root.attrs["element_length"])
+            segments = []
+            for k in range(count):
+                with xr.open_dataset(path, group=f"segment_{k}") as group:
+                    segments.append(Trajectory(**labelled.from_dataset(group.load())))
+        except (OSError, KeyError, ValueError, TypeError) as error:
+            raise ValueError(f"{path}: not a readable line trajectory ({error})") from None
+        return cls(segments, length)
