@@ -516,3 +516,13 @@ def test_outputs_that_cannot_fit_in_memory_are_refused_before_integrating(monkey
     scene = line_scene({"cable.length": 50.0, "numerics.duration": 300.0}, pay_out_max=100.0)
     with pytest.raises(ValueError, match="over the limit of 0.0008 GB"):
         co.simulate(scene, winch=ramped_pay_out(0.3, 5.0, 0.5))
+
+
+def test_optimize_and_mpc_refuse_a_line_paid_out_by_elements_by_name():
+    """The winch problem keeps one model of fixed n: a [winch.line] scene is refused before any
+    work, naming the section, instead of failing inside a transcription."""
+    scene = line_scene({"numerics.duration": 20.0})
+    with pytest.raises(ValueError, match=r"winch.line: optimize works on a fixed number"):
+        co.optimize(scene, quiet=True)
+    with pytest.raises(ValueError, match=r"winch.line: mpc works on a fixed number"):
+        co.mpc(scene, quiet=True)

@@ -638,6 +638,7 @@ def optimize(
         Bad input (a solver, setting or scene field out of range), before any heavy work.
     """
     check_verbosity(quiet, verbose)
+    refuse_line_scene(scene, "optimize")
     solver, settings = chosen_solver(solver, settings)
     method = "nelder-mead" if solver == "nelder-mead" else "ipopt"
     chosen = METHODS[method]
@@ -660,6 +661,20 @@ def optimize(
     notes = "; ".join(text for text in (result.notes, derived) if text)
     ran = result.trajectory.scene_record if result.trajectory is not None else scene.to_dict()
     return replace(result, notes=notes, scene_record=ran)
+
+
+def refuse_line_scene(scene, what: str) -> None:
+    """Refuse a scene whose line is paid out by elements (``[winch.line]``), by name.
+
+    Its element count changes as the drum turns; the winch problem's transcriptions and the
+    closed loop keep one model of fixed n.
+    """
+    if scene.winch.line is not None:
+        raise ValueError(
+            f"winch.line: {what} works on a fixed number of elements; a line paid out by "
+            "elements ([winch.line]) is simulated only (co.simulate): leave [winch.line] out, "
+            "and the winch's reach stays in its top element"
+        )
 
 
 def chosen_solver(

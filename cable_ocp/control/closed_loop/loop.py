@@ -27,7 +27,7 @@ from cable_ocp.control.closed_loop.result import MpcResult
 from cable_ocp.control.closed_loop.settings import MpcSettings
 from cable_ocp.control.interrupts import interrupt_here
 from cable_ocp.control.ocp import compile_ahead, make_control, resolved
-from cable_ocp.control.optimization import METHODS, optimize
+from cable_ocp.control.optimization import METHODS, optimize, refuse_line_scene
 from cable_ocp.control.verification import lowest_clearance
 from cable_ocp.drive.bounds import angle_bounds
 from cable_ocp.drive.drive import Drive
@@ -93,6 +93,7 @@ def loop_parts(scene, settings: MpcSettings) -> LoopParts:
 
     Raises ValueError for a setting that does not fit the scene, before any heavy work.
     """
+    refuse_line_scene(scene, "mpc")
     settings, derived = settings.resolved(scene)
     compile_ahead(scene, settings.elements, settings.solver == "gauss-newton")
     controller = RecedingHorizon(scene, settings)
