@@ -74,6 +74,7 @@ BAD_ARGUMENTS = [
     (["compare", HANGING, "missing.toml", "--out", "o"], "missing.toml: scene file not found"),
     (["study", "step", "--out", "o"], "study step needs a scene file"),
     (["study", "stability", HANGING, "--out", "o"], "study stability takes no scene"),
+    (["study", "payout", HANGING, "--out", "o"], "study payout takes no scene"),
 ]  # fmt: skip
 
 

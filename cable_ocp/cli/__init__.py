@@ -470,6 +470,8 @@ def _bench_mpc(models: Path, quick: bool = False, out: Path | None = None) -> No
 def _study(args) -> int:
     from cable_ocp.studies import convergence as studies
 
+    if args.name == "payout":
+        return _payout_study(args)
     if args.name in ("speed-accuracy", "stability"):
         if args.scene is not None:
             raise ValueError(f"study {args.name} takes no scene: it runs its own (see --help)")
@@ -495,6 +497,36 @@ def _study(args) -> int:
             )
         text = result.table()
         (folder / f"{args.name}.md").write_text(f"# {args.name} study of {scene.name}\n\n{text}\n")
+    print(text)
+    print(f"written to {Path(args.out).resolve()}")
+    return 0
+
+
+def _payout_study(args) -> int:
+    """Acceptance 4 of the line on the drum: the top tension at the splits, figure and table."""
+    from cable_ocp.studies import payout_validation as pv
+
+    if args.scene is not None:
+        raise ValueError("study payout takes no scene: it runs paper_flat's rope (see --help)")
+    runs, finest = pv.insertion_runs(
+        pv.TRANSIENT_LENGTHS[:1] if args.quick else pv.TRANSIENT_LENGTHS
+    )
+    rows = ["| Delta [m] | new top [m] | splits | largest jump | against the finest |",
+            "|---:|---:|---:|---:|---:|"]  # fmt: skip
+    for delta, run in runs.items():
+        t = pv.transient(run, finest)
+        rows.append(
+            f"| {delta:g} | {t.new_top_length:.3g} | {t.changes} | {100 * t.jump:.3f} % "
+            f"| {100 * t.against_finest:.3f} % |"
+        )
+    text = "\n".join(rows)
+    with results_folder(args.out) as folder:
+        pv.transient_chart(runs, finest, folder / "payout_transients.png")
+        (folder / "payout.md").write_text(
+            "# Top tension at the splits: pay-out 100 -> 200 m at 0.5 m/s under the tow\n\n"
+            f"Jumps relative to the static top tension; reference Delta = "
+            f"{pv.FINEST_TRANSIENT} m.\n\n{text}\n"
+        )
     print(text)
     print(f"written to {Path(args.out).resolve()}")
     return 0
@@ -583,11 +615,12 @@ def build_parser() -> argparse.ArgumentParser:
         help="convergence, validation, speed-accuracy and stability studies",
         description="step, elements, end-force: studies of SCENE. speed-accuracy: error vs CPU "
         "time on paper_flat and end_force, and the OCP's Omega vs wall time. stability: largest "
-        "stable step vs n, Baumgarte gains, Nelder-Mead vs IPOPT as the knots grow.",
+        "stable step vs n, Baumgarte gains, Nelder-Mead vs IPOPT as the knots grow. payout: the "
+        "top tension where a line paid out by elements splits one off, against element length.",
     )
     study.add_argument(
         "name",
-        choices=["step", "elements", "end-force", "speed-accuracy", "stability"],
+        choices=["step", "elements", "end-force", "speed-accuracy", "stability", "payout"],
         help="the study (see above)",
     )
     study.add_argument("scene", type=scene_argument, nargs="?",
@@ -599,7 +632,7 @@ def build_parser() -> argparse.ArgumentParser:
     study.add_argument("--quiet", action="store_true", help="no progress bars")
     study.add_argument("--compiled", action="store_true", help="end-force: model compiled to C")
     study.add_argument(
-        "--quick", action="store_true", help="speed-accuracy, stability: a small version"
+        "--quick", action="store_true", help="speed-accuracy, stability, payout: a small version"
     )
     study.set_defaults(run=_study)
 

@@ -26,6 +26,9 @@ SHEARED_CURRENT = [
     {"z": -800.0, "u": 0.0, "v": 0.0},
 ]
 SAMPLE = 1.0  # s, the grid on which end trajectories are compared
+# Acceptance 4: element lengths (m) of the insertion runs, and of the finest, their reference.
+TRANSIENT_LENGTHS = (10.0, 5.0, 2.5)
+FINEST_TRANSIENT = 1.25
 STEP_PER_LENGTH = 0.004  # s/m: the RK4 step scales with the element length (its wave crossing)
 LARGEST_STEP = 0.05  # s
 
@@ -221,3 +224,43 @@ def transient(run: LineTrajectory, finest: LineTrajectory) -> Transient:
 def _views(run: LineTrajectory) -> list[LineTrajectory]:
     """Each segment of ``run`` as a one-segment run (its line out and top tension)."""
     return [LineTrajectory([s], run.element_length) for s in run.segments]
+
+
+def insertion_runs(
+    lengths: tuple[float, ...] = TRANSIENT_LENGTHS,
+) -> tuple[dict[float, LineTrajectory], LineTrajectory]:
+    """Acceptance 4's runs: 0.5 m/s from 100 m to 200 m under the tow, the shortest top 5 cm.
+
+    Returns the runs by element length (m) and the finest (:data:`FINEST_TRANSIENT`).
+    """
+    finest = tow_run(100.0, 100.0, FINEST_TRANSIENT, 0.5, top_length_min=0.05)
+    return {d: tow_run(100.0, 100.0, d, 0.5, top_length_min=0.05) for d in lengths}, finest
+
+
+def transient_chart(runs: dict[float, LineTrajectory], finest: LineTrajectory, path=None):
+    """The top tension's departure from the static one (% of it) against time, per run.
+
+    One line per element length (its new top element's length after a split in the legend),
+    the finest run's dashed, the splits of each run marked; saved to ``path`` when given.
+    """
+    import matplotlib.pyplot as plt
+
+    fig, ax = plt.subplots(figsize=(9, 4.5))
+    for delta, run in [*runs.items(), (FINEST_TRANSIENT, finest)]:
+        static = static_top_tension(run.scene, run.line_out)
+        share = 100 * (run.top_tension - static) / static
+        style = "--" if run is finest else "-"
+        label = f"Delta = {delta:g} m (new top {run.segments[-1].top_length[0]:.2g} m)"
+        (line,) = ax.plot(run.time, share, style, lw=1, label=label)
+        for segment in run.segments[1:]:
+            ax.axvline(segment.time[0], color=line.get_color(), lw=0.3, alpha=0.4)
+    ax.axhline(1.0, color="k", lw=0.8, ls=":", label="1 % of the static tension")
+    ax.axhline(-1.0, color="k", lw=0.8, ls=":")
+    ax.set_xlabel("time [s]")
+    ax.set_ylabel("top tension - static [% of static]")
+    ax.set_title("pay-out 100 -> 200 m at 0.5 m/s under the tow: top tension at the splits")
+    ax.legend(fontsize=8)
+    fig.tight_layout()
+    if path is not None:
+        fig.savefig(path, dpi=120)
+    return fig
