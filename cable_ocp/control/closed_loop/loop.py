@@ -86,8 +86,9 @@ def loop_parts(scene, settings: MpcSettings) -> LoopParts:
         measured = parts.start()
         for k in range(samples):
             now = k * parts.settings.sample
-            estimate = parts.estimator.make_step(measured, *parts.command.winch(now))
-            solve = parts.controller.make_step(now, estimate, *parts.command.winch(now))
+            winch = parts.command.winch(now)  # the plan's angle and rate now
+            estimate = parts.estimator.make_step(measured, *winch)
+            solve = parts.controller.make_step(now, estimate, *winch)
             angle = parts.command.make_step(now, solve, estimate)
             measured = parts.plant.make_step(angle, now + parts.settings.sample)
 
@@ -156,8 +157,9 @@ def mpc(scene, settings: MpcSettings | None = None, quiet: bool = False, **field
     progress = Progress("mpc", duration, quiet)
     for k in range(samples):
         now = k * settings.sample
-        estimate = estimator.make_step(measured, *command.winch(now))
-        solve = controller.make_step(now, estimate, *command.winch(now))
+        winch = command.winch(now)
+        estimate = estimator.make_step(measured, *winch)
+        solve = controller.make_step(now, estimate, *winch)
         solves.append(solve)
         if not solve.success:
             failures.append(f"t = {now:g} s: {solve.status}")
