@@ -80,10 +80,6 @@ def _replay(args) -> int:
             f"{args.result}: holds a {type(result).__name__}; replay takes what optimize saved "
             "(result.nc), whose profile it drives"
         )
-    if not result.scene_record:
-        raise ValueError(
-            f"{args.result}: written before results kept their scene; run optimize again"
-        )
     scene = result.scene.updated(parse_overrides(args.set)) if args.set else result.scene
     trajectory = simulate(scene, winch=result, quiet=args.quiet)
     _write_run(trajectory, scene, Path(args.out), args.animate, {"saved_omega_m": result.omega})

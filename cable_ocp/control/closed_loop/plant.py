@@ -132,7 +132,6 @@ class Plant:
         self.top = LastCall(top_motion(scene.top))
         self.radius = scene.winch.drum_radius
         self.top_length = scene.top_element_length
-        self.low, self.high = angle_range
         self.angle_range = angle_range
         self.band = band
         self.projections = 0  # samples started from a state moved onto its bonds
@@ -176,7 +175,8 @@ class Plant:
         phi, rate, acceleration = (np.array(v, dtype=float) for v in with_left(angle)(t, left))
         limited = np.zeros(phi.shape, dtype=bool)
         band = self.band
-        for sign, edge in ((1.0, self.high - band), (-1.0, self.low + band)):
+        low, high = self.angle_range
+        for sign, edge in ((1.0, high - band), (-1.0, low + band)):
             over = sign * (phi - edge)
             active = over > 0
             limited |= active
