@@ -19,10 +19,13 @@ if TYPE_CHECKING:  # what __getattr__ imports, for type checkers and the import 
     from cable_ocp.control.closed_loop.loop import mpc
     from cable_ocp.control.closed_loop.result import MpcResult
     from cable_ocp.control.closed_loop.settings import MpcSettings
+    from cable_ocp.control.gauss_newton import GaussNewtonSettings
     from cable_ocp.control.nelder_mead import NelderMeadSettings
     from cable_ocp.control.ocp import IpoptSettings
     from cable_ocp.control.optimization import OcpResult, optimize
     from cable_ocp.control.results import load_result
+    from cable_ocp.control.settings import GridSettings, ModelSettings, TranscriptionSettings
+    from cable_ocp.control.solvers import SOLVERS
     from cable_ocp.drive.drive import Drive
     from cable_ocp.model.cable import INPUT_NAMES, CableModel
     from cable_ocp.scene.schema import Scene, load_scene
@@ -38,7 +41,12 @@ if TYPE_CHECKING:  # what __getattr__ imports, for type checkers and the import 
 _SOURCES = {
     "INPUT_NAMES": "cable_ocp.model.cable",
     "CableModel": "cable_ocp.model.cable",
+    "GaussNewtonSettings": "cable_ocp.control.gauss_newton",
+    "GridSettings": "cable_ocp.control.settings",
     "IpoptSettings": "cable_ocp.control.ocp",
+    "ModelSettings": "cable_ocp.control.settings",
+    "SOLVERS": "cable_ocp.control.solvers",
+    "TranscriptionSettings": "cable_ocp.control.settings",
     "MpcResult": "cable_ocp.control.closed_loop.result",
     "MpcSettings": "cable_ocp.control.closed_loop.settings",
     "NelderMeadSettings": "cable_ocp.control.nelder_mead",
@@ -65,7 +73,12 @@ _SOURCES = {
 __all__ = [
     "INPUT_NAMES",
     "CableModel",
+    "GaussNewtonSettings",
+    "GridSettings",
     "IpoptSettings",
+    "ModelSettings",
+    "SOLVERS",
+    "TranscriptionSettings",
     "MpcResult",
     "MpcSettings",
     "NelderMeadSettings",

@@ -8,8 +8,8 @@ import pytest
 
 from cable_ocp.control import verification as verification_module
 from cable_ocp.control.nelder_mead import NelderMeadSettings
-from cable_ocp.control.ocp import IpoptSettings
 from cable_ocp.control.optimization import optimize
+from cable_ocp.control.settings import GridSettings, ModelSettings
 from cable_ocp.drive.bounds import (
     BOUND_TOLERANCE,
     LinearBounds,
@@ -80,8 +80,8 @@ def test_top_length_check_accepts_the_tolerance(short):
 def on_the_bound(short):
     """IPOPT on a scene whose angle bound (0.5 rad) is too tight for the winch it wants (~1 rad)."""
     scene = short.updated({"winch.angle_max": 0.5, "winch.rate_max": 0.05})
-    settings = IpoptSettings(intervals=4)
-    return scene, settings, optimize(scene, settings=settings, quiet=True)
+    settings = GridSettings(intervals=4)
+    return scene, settings, optimize(scene, grid=settings, quiet=True)
 
 
 def test_ipopt_on_the_angle_bound_returns_a_result_within_tolerance(on_the_bound):
@@ -104,7 +104,11 @@ def test_nelder_mead_respects_the_rate_bound(models_dir):
     """
     scene = load_scene(models_dir / "small_tow.toml").updated({"winch.rate_max": 0.05})
     result = optimize(
-        scene, "nelder-mead", NelderMeadSettings(step=0.5, max_evaluations=600), quiet=True
+        scene,
+        "nelder-mead",
+        NelderMeadSettings(max_evaluations=600),
+        model=ModelSettings(step=0.5),
+        quiet=True,
     )
     rate = KnotSpline(40.0, scene.winch.knots).angle_function(result.parameters)(
         np.linspace(0.0, 40.0, 400_001)
@@ -128,7 +132,7 @@ def test_verification_failure_is_a_failed_result(short, monkeypatch):
         raise SimulationError("the bonds tore at t = 3 s")
 
     monkeypatch.setattr(verification_module, "checked_simulation", broken)
-    result = optimize(short, settings=IpoptSettings(intervals=2), quiet=True)
+    result = optimize(short, grid=GridSettings(intervals=2), quiet=True)
     assert not result.success
     assert "; verification failed: no trustworthy simulation of the full model" in result.status
     assert result.status.startswith("Gauss-Newton converged")

@@ -122,11 +122,12 @@ def test_simulate_writes_a_marked_folder_and_replaces_it(tmp_path, capsys):
 def test_hessian_exact_runs_the_interpreted_model(capsys):
     parser = cli.build_parser()
     args = parser.parse_args(["optimize", HANGING, "--out", "o", "--hessian", "exact"])
-    settings = cli._ipopt_settings(args)
-    assert settings.hessian == "exact" and settings.compiled is False
+    options = cli._optimize_options(args)
+    assert options["solver"] == "ipopt" and options["settings"].hessian == "exact"
+    assert options["transcription"].compiled is False
     assert "--hessian exact runs the interpreted model" in capsys.readouterr().err
     args = parser.parse_args(["optimize", HANGING, "--out", "o"])
-    assert cli._ipopt_settings(args).compiled is True
+    assert cli._optimize_options(args)["transcription"].compiled is True
 
 
 @pytest.mark.parametrize(
@@ -186,8 +187,8 @@ def test_simulate_animates_when_asked(tmp_path, monkeypatch, capsys):
 def test_shooting_option_reaches_the_ipopt_settings(tmp_path, monkeypatch, capsys, shooting):
     calls = []
 
-    def record(scene, solver=None, settings=None, **kwargs):
-        calls.append(settings)
+    def record(scene, solver=None, settings=None, transcription=None, **kwargs):
+        calls.append(transcription)
         raise ValueError("stopped by the test")
 
     monkeypatch.setattr(optimization, "optimize", record)
@@ -389,23 +390,25 @@ def test_mpc_rate_weight_must_be_finite(tmp_path, monkeypatch, capsys, no_heavy_
     assert not (tmp_path / "o").exists()
 
 
-def test_optimiser_defaults_are_the_methods_table(monkeypatch):
+def test_optimiser_defaults_are_the_registrys(monkeypatch):
     """Unset options are optimize()'s defaults: the CLI keeps no copy of them."""
-    from dataclasses import replace
+    from cable_ocp.control.settings import GridSettings, ModelSettings, TranscriptionSettings
+    from cable_ocp.control.solvers import SOLVERS, ocp_settings
 
     parser = cli.build_parser()
     args = parser.parse_args(["optimize", HANGING, "--out", "o"])
-    assert cli._ipopt_settings(args) == optimization.METHODS["ipopt"].default
-    assert cli._nelder_mead_settings(args) == optimization.METHODS["nelder-mead"].default
+    assert ocp_settings(**cli._optimize_options(args)) == ocp_settings()
+    simplex = parser.parse_args(["optimize", HANGING, "--out", "o", "--method", "nelder-mead"])
+    assert ocp_settings(**cli._optimize_options(simplex)) == ocp_settings("nelder-mead")
     given = parser.parse_args(["optimize", HANGING, "--out", "o", "--elements", "5", "--step",
-                               "0.25", "--max-iter", "7"])  # fmt: skip
-    assert cli._ipopt_settings(given) == replace(
-        optimization.METHODS["ipopt"].default, elements=5, step=0.25, max_iter=7
-    )
-    ipopt = optimization.METHODS["ipopt"]
-    monkeypatch.setitem(optimization.METHODS, "ipopt",
-                        replace(ipopt, default=replace(ipopt.default, intervals=6)))  # fmt: skip
-    assert cli._ipopt_settings(args).intervals == 6
+                               "0.25", "--max-iter", "7", "--solver", "ipopt"])  # fmt: skip
+    options = cli._optimize_options(given)
+    assert options["model"] == ModelSettings(5, 0.25)
+    assert options["settings"] == SOLVERS["ipopt"].settings(max_iter=7)
+    assert options["grid"] == GridSettings() and options["transcription"] == TranscriptionSettings()
+    with pytest.raises(ValueError, match="solver = 'sqp': must be one of 'gauss-newton'"):
+        cli._optimize_options(parser.parse_args(["optimize", HANGING, "--out", "o",
+                                                 "--solver", "sqp"]))  # fmt: skip
 
 
 def _sweep_file(tmp_path) -> Path:

@@ -252,7 +252,8 @@ def test_the_iterations_per_solve_follow_the_solver():
     assert settings() == MpcSettings()
     scene = load_scene(SMALL_TOW)  # unset, it follows the solver when the loop resolves it
     ipopt = settings("--solver", "ipopt").resolved(scene)[0]
-    assert ipopt.max_iter == IpoptSettings().max_iter
-    assert settings().resolved(scene)[0].max_iter == 1
-    assert settings("--solver", "ipopt", "--max-iter", "7").max_iter == 7
-    assert settings("--max-iter", "2").max_iter == 2
+    assert ipopt.solver_settings.max_iter == IpoptSettings().max_iter
+    assert settings().resolved(scene)[0].solver_settings.max_iter == 1
+    assert settings("--solver", "ipopt", "--max-iter", "7").solver_settings.max_iter == 7
+    rti = settings("--max-iter", "2").solver_settings
+    assert rti.max_iter == 2 and rti.real_time

@@ -13,6 +13,8 @@ from cable_ocp.control.closed_loop import MpcSettings, mpc
 from cable_ocp.control.closed_loop.forecast import BlendedHeight, HeightFilter, TopForecast
 from cable_ocp.control.closed_loop.projection import project_state
 from cable_ocp.control.closed_loop.result import MpcResult
+from cable_ocp.control.ocp import IpoptSettings
+from cable_ocp.control.settings import ModelSettings
 from cable_ocp.drive.bounds import BOUND_TOLERANCE
 from cable_ocp.drive.controls import HermiteIntervals
 from cable_ocp.drive.drive import Drive
@@ -23,7 +25,7 @@ from cable_ocp.scene.schema import load_scene
 from cable_ocp.simulation.statics import equilibrium
 
 HEAVE = {"top.heave.amplitude": 1.0, "top.heave.period": 8.0}
-SHORT = dict(horizon=20.0, sample=5.0, elements=2, step=1.0)
+SHORT = dict(horizon=20.0, sample=5.0, model=ModelSettings(2, 1.0))
 
 
 @pytest.fixture(scope="module")
@@ -45,16 +47,19 @@ def closed_loop(short_hill):
         ({"horizon": 22.0}, "horizon = 22.0 s must be a whole multiple of sample"),
         ({"sample": 3.0, "horizon": 30.0}, "sample = 3.0 s must divide numerics.duration"),
         ({"sample": 0.0}, "sample = 0.0 s: must be > 0"),
-        ({"sample": 5.02, "horizon": 10.04, "interval": 5.02, "step": 0.02}, "sample = 5.02 s"),
+        (
+            {"sample": 5.02, "horizon": 10.04, "interval": 5.02, "model": ModelSettings(2, 0.02)},
+            "sample = 5.02 s",
+        ),
         ({"interval": 3.0}, "interval = 3.0 s: must divide horizon = 20.0 s"),
         ({"solver": "sqp"}, "solver = 'sqp': must be one of gauss-newton, ipopt"),
         ({"rate_weight": float("nan")}, "rate_weight = nan s.2: must be finite"),
-        ({"elements": 16}, "elements = 16: the reduced model needs 1 .. model.elements = 15"),
-        ({"step": 0.3}, "step = 0.3 s: must divide sample"),
+        ({"model": ModelSettings(16, 1.0)}, "model.elements = 16: the controller's model needs"),
+        ({"model": ModelSettings(2, 0.3)}, "step = 0.3 s: must divide sample"),
         ({"heave_margin": 2.0}, "heave_margin = 2.0: must be <= 1"),
         ({"heave_filter": -1.0}, "heave_filter = -1.0 s"),
         ({"references": ("perfect",)}, "references"),
-        ({"max_iter": 0}, "max_iter = 0: must be >= 1"),
+        ({"solver_settings": IpoptSettings()}, "IpoptSettings given for solver 'gauss-newton'"),
     ],
 )
 def test_arguments_are_checked_with_their_range(short_hill, change, named):
@@ -278,7 +283,9 @@ def test_closed_loop_result_round_trip(closed_loop, tmp_path):
 
 def test_quiet_prints_nothing(models_dir, capfd):
     scene = load_scene(models_dir / "paper_hill.toml", {"numerics.duration": 10.0})
-    result = mpc(scene, horizon=10.0, sample=5.0, elements=2, step=1.0, references=(), quiet=True)
+    result = mpc(
+        scene, horizon=10.0, sample=5.0, model=ModelSettings(2, 1.0), references=(), quiet=True
+    )
     out, err = capfd.readouterr()
     assert out == "" and err == ""
     assert result.success and result.sample_times.tolist() == [0.0, 5.0]
@@ -290,7 +297,9 @@ def test_failed_solves_keep_the_previous_plan_and_are_reported(models_dir):
     (IPOPT is the closed loop's baseline solver; the default real-time iteration takes one step
     by design.)"""
     scene = load_scene(models_dir / "paper_hill.toml", {"numerics.duration": 10.0})
-    settings = {**SHORT, "horizon": 10.0, "solver": "ipopt", "max_iter": 1, "references": ()}
+    one_iteration = IpoptSettings(max_iter=1, tolerance=1e-6)
+    settings = {**SHORT, "horizon": 10.0, "solver": "ipopt", "solver_settings": one_iteration,
+                "references": ()}  # fmt: skip
     result = mpc(scene, quiet=True, **settings)
     assert not result.success
     assert len(result.failures) == 2 and result.failures[0].startswith("t = 0 s: Maximum_Iter")
@@ -331,7 +340,7 @@ def test_the_plan_holds_the_winch_bounds_between_samples(short_hill):
     result = mpc(scene, quiet=True, references=(), heave_margin=0.0, **SHORT)
     low, high = result.angle_range
     assert result.success, result.status
-    band = result.settings["limiter_band_rad"]
+    band = result.settings["limiter_band"]
     assert result.planned_angle.max() > high - band - 0.05  # it rides the bound
     assert result.planned_angle.max() <= high + BOUND_TOLERANCE
     assert result.planned_angle.min() >= low - BOUND_TOLERANCE
@@ -341,7 +350,14 @@ def test_the_plan_holds_the_winch_bounds_between_samples(short_hill):
 def test_real_time_iteration_and_ipopt_solve_one_transcription(short_hill, closed_loop):
     """The same receding-horizon problem solved by IPOPT to convergence: the same loop Omega
     (the real-time iteration: one Gauss-Newton step per sample), within 2 %."""
-    converged = mpc(short_hill, quiet=True, references=(), solver="ipopt", max_iter=100, **SHORT)
+    converged = mpc(
+        short_hill,
+        quiet=True,
+        references=(),
+        solver="ipopt",
+        solver_settings=IpoptSettings(max_iter=100, tolerance=1e-6),
+        **SHORT,
+    )
     assert converged.success, converged.status
     assert closed_loop.omega == pytest.approx(converged.omega, rel=0.02)
 

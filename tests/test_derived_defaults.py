@@ -16,8 +16,10 @@ from cable_ocp.control.closed_loop.loop import mpc
 from cable_ocp.control.closed_loop.settings import MpcSettings
 from cable_ocp.control.gauss_newton import GaussNewton, GaussNewtonSettings
 from cable_ocp.control.nelder_mead import NelderMeadSettings
-from cable_ocp.control.ocp import IpoptSettings, ipopt_problem, resolved
+from cable_ocp.control.ocp import IpoptSettings, resolved, shooting_problem
 from cable_ocp.control.optimization import optimize
+from cable_ocp.control.settings import GridSettings, ModelSettings, TranscriptionSettings
+from cable_ocp.control.solvers import ocp_settings
 from cable_ocp.drive.controls import HermiteIntervals
 from cable_ocp.scene.schema import SceneError, load_scene
 from cable_ocp.simulation.run import simulate
@@ -87,7 +89,7 @@ def test_reduced_step_follows_the_limit_along_the_run(models_dir):
     """The thin rope's reduced step is within 0.7 of its limit along the locked run, which is
     below its limit at rest (drag grows with speed), and the default optimize succeeds."""
     scene = load_scene(models_dir / "small_tow.toml", THIN)
-    settings, note = resolved(scene, IpoptSettings())
+    settings, note = resolved(scene, ocp_settings())
     limit, _ = defaults.run_limit(scene, settings.elements, scene.numerics.duration)
     assert settings.step <= defaults.STABLE_SHARE * limit * (1 + 1e-12)
     assert settings.step < defaults.STEP_CAP
@@ -101,11 +103,12 @@ def test_reduced_step_follows_the_limit_along_the_run(models_dir):
 def test_a_fixed_step_above_the_limit_is_refused(models_dir):
     scene = load_scene(models_dir / "small_tow.toml", THIN)
     with pytest.raises(ValueError, match=r"step = 2 s is above the RK4 limit"):
-        optimize(scene, settings=IpoptSettings(step=2.0), quiet=True)
+        optimize(scene, model=ModelSettings(step=2.0), quiet=True)
     with pytest.raises(ValueError, match=r"step = 2 s is above the RK4 limit"):
-        optimize(scene, "nelder-mead", NelderMeadSettings(step=2.0), quiet=True)
-    with pytest.raises(ValueError, match=r"step = 1.5 s is above the RK4 limit"):
-        mpc(scene, MpcSettings(step=1.5, sample=1.5, interval=6.0, horizon=12.0), quiet=True)
+        optimize(scene, "nelder-mead", model=ModelSettings(step=2.0), quiet=True)
+    with pytest.raises(ValueError, match=r"model.step = 1.5 s is above the RK4 limit"):
+        timing = {"sample": 1.5, "interval": 6.0, "horizon": 12.0}
+        mpc(scene, MpcSettings(model=ModelSettings(step=1.5), **timing), quiet=True)
 
 
 def test_a_failure_names_the_model_that_failed(models_dir, monkeypatch):
@@ -130,7 +133,7 @@ def test_controller_model_derived_for_a_thin_heaving_rope(models_dir):
     scene = load_scene(models_dir / "small_tow.toml", {**THIN, **heave})
     result = mpc(scene, quiet=True)
     assert result.success, result.status
-    assert result.settings["step_s"] < 1.0
+    assert result.settings["model"]["step"] < 1.0
     assert "controller of 2 elements" in result.settings["derived"]
 
 
@@ -179,8 +182,8 @@ def test_soft_clearance_rows_keep_the_closed_loop_qp_feasible(models_dir):
     how much it gave way."""
     tight = {"seabed.minimum_clearance": 5.0, "winch.acceleration_max": 0.004}
     scene = load_scene(models_dir / "small_tow.toml", tight)
-    settings, _ = resolved(scene, IpoptSettings(intervals=8))
-    problem = ipopt_problem(scene, settings)
+    settings, _ = resolved(scene, ocp_settings(grid=GridSettings(intervals=8)))
+    problem = shooting_problem(scene, settings)
     values, guess = problem.parameter_values(), np.zeros(problem.control.size)
     hard = GaussNewton(problem, GaussNewtonSettings(max_iter=1, real_time=False)).solve(
         values, guess
@@ -229,7 +232,7 @@ def test_closed_loop_in_a_narrow_winch_range(models_dir):
     scene = load_scene(models_dir / "small_tow.toml", narrow)
     result = mpc(scene, quiet=True)
     assert "LBA" not in result.status and "Ill-posed" not in result.status
-    assert result.settings["limiter_band_rad"] == pytest.approx(0.15)
+    assert result.settings["limiter_band"] == pytest.approx(0.15)
     with pytest.raises(ValueError, match=r"limiter_band = 100 rad: must be at most half"):
         mpc(scene, MpcSettings(limiter_band=100.0), quiet=True)
 
@@ -237,15 +240,20 @@ def test_closed_loop_in_a_narrow_winch_range(models_dir):
 @pytest.mark.parametrize(
     ("make", "match"),
     [
-        (lambda: IpoptSettings(elements=2.5), r"IpoptSettings.elements = 2.5: must be an integer"),
+        (lambda: ModelSettings(elements=2.5), r"ModelSettings.elements = 2.5: must be an integer"),
         (lambda: IpoptSettings(max_iter=True), r"max_iter = True: must be an integer"),
+        (lambda: GaussNewtonSettings(max_iter=2.0), r"max_iter = 2.0: must be an integer"),
         (lambda: IpoptSettings(tolerance=math.nan), r"tolerance = nan: must be finite"),
-        (lambda: IpoptSettings(step=-0.1), r"step = -0.1 s: must be > 0"),
-        (lambda: IpoptSettings(solver="sqp"), r"solver = 'sqp': must be one of"),
+        (lambda: ModelSettings(step=-0.1), r"step = -0.1 s: must be > 0"),
+        (lambda: GridSettings(control="bezier"), r"control = 'bezier': must be one of"),
+        (lambda: TranscriptionSettings(compiled=1), r"compiled = 1: must be true or false"),
+        (lambda: MpcSettings(solver="sqp"), r"solver = 'sqp': must be one of"),
+        (lambda: MpcSettings(solver="nelder-mead"), r"solver = 'nelder-mead': must be one of"),
+        (lambda: MpcSettings(heave_feedback="yes"), r"heave_feedback = 'yes': must be true"),
         (lambda: MpcSettings(sample="1"), r"MpcSettings.sample = '1' s: must be a number"),
         (lambda: MpcSettings(heave_margin=math.inf), r"heave_margin = inf: must be finite"),
         (lambda: NelderMeadSettings(fatol=math.nan), r"fatol = nan m: must be finite"),
-        (lambda: GaussNewtonSettings(rate_weight=-1.0), r"rate_weight = -1.0 s\^2: must be >="),
+        (lambda: MpcSettings(rate_weight=-1.0), r"rate_weight = -1.0 s\^2: must be >="),
     ],
 )
 def test_settings_are_checked_one_way(make, match):
@@ -256,7 +264,7 @@ def test_settings_are_checked_one_way(make, match):
 def test_unknown_ipopt_option_refused_before_the_problem_is_built(small):
     with pytest.raises(ValueError, match=r"IPOPT refuses them \(No such IPOPT option: colour\)"):
         check_ipopt_options({"colour": "blue"})
-    settings = IpoptSettings(solver="ipopt", ipopt_options={"max_cpu_time": -3.0})
+    settings = IpoptSettings(ipopt_options={"max_cpu_time": -3.0})
     with pytest.raises(ValueError, match=r"ipopt_options"):
         optimize(small, settings=settings, quiet=True)
 
@@ -267,8 +275,8 @@ def test_the_optimisation_models_runs_may_leave_the_grid(models_dir):
     from cable_ocp.simulation.seabed import OffGridError, clearance_error
 
     scene = load_scene(models_dir / "survey.toml", {"numerics.duration": 20.0})
-    settings, _ = resolved(scene, IpoptSettings())
-    problem = ipopt_problem(scene, settings)
+    settings, _ = resolved(scene, ocp_settings())
+    problem = shooting_problem(scene, settings)
     states = problem.simulate(np.zeros(problem.control.size), compiled=True).copy()
     states[-5:, 0] = 1e4  # far beyond the grid's x = 300 m
     with pytest.raises(OffGridError):

@@ -89,12 +89,10 @@ def held_scene(models_dir):
 
 
 def _minimum_clearance_solve(scene, solver: str):
-    from dataclasses import replace
+    from cable_ocp.control.optimization import optimize
+    from cable_ocp.control.settings import GridSettings
 
-    from cable_ocp.control.optimization import METHODS, optimize
-
-    settings = replace(METHODS["ipopt"].default, intervals=12, solver=solver)
-    return optimize(scene, settings=settings, quiet=True)
+    return optimize(scene, solver, grid=GridSettings(intervals=12), quiet=True)
 
 
 def test_the_minimum_clearance_holds_on_the_verified_run(held_scene):

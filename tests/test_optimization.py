@@ -9,9 +9,11 @@ import pytest
 import xarray as xr
 from legacy_results import write_ocp_result
 
+from cable_ocp.control.gauss_newton import GaussNewtonSettings
 from cable_ocp.control.nelder_mead import NelderMeadSettings
 from cable_ocp.control.ocp import IpoptSettings
 from cable_ocp.control.optimization import OcpResult, optimize
+from cable_ocp.control.settings import GridSettings, ModelSettings, TranscriptionSettings
 from cable_ocp.drive.bounds import angle_bounds
 from cable_ocp.drive.controls import HermiteIntervals, KnotSpline
 from cable_ocp.drive.winch import spline_angle
@@ -20,7 +22,7 @@ from cable_ocp.scene.schema import load_scene
 from cable_ocp.simulation.run import simulate
 
 # small_tow: 100 m cable, n = 4, 40 s; the same model for optimisation and verification.
-SETTINGS = IpoptSettings(elements=4, step=0.25, intervals=8)
+SETTINGS = {"model": ModelSettings(4, 0.25), "grid": GridSettings(intervals=8)}
 
 
 @pytest.fixture(scope="module")
@@ -30,7 +32,7 @@ def small(models_dir):
 
 @pytest.fixture(scope="module")
 def solved(small):
-    return optimize(small, settings=SETTINGS, quiet=True), simulate(small)
+    return optimize(small, quiet=True, **SETTINGS), simulate(small)
 
 
 def test_ipopt_beats_locked_winch(solved, small):
@@ -40,7 +42,7 @@ def test_ipopt_beats_locked_winch(solved, small):
     assert locked.omega > 0.3
     assert result.omega < 0.02 * locked.omega
     # Omega is the verified one: it equals a fresh simulation of the scene with that winch.
-    control = HermiteIntervals(40.0, SETTINGS.intervals)
+    control = HermiteIntervals(40.0, SETTINGS["grid"].intervals)
     again = simulate(small, winch=control.angle_function(result.parameters))
     assert again.omega == pytest.approx(result.omega, rel=1e-12)
 
@@ -93,14 +95,18 @@ def test_infeasible_bounds_fail_loudly(small):
             "winch.rate_max": 0.1,
         }
     )
-    result = optimize(scene, settings=SETTINGS, quiet=True)
+    result = optimize(scene, quiet=True, **SETTINGS)
     assert not result.success
     assert "Infeasible" in result.status
 
 
 def test_nelder_mead_at_its_evaluation_limit_is_not_a_success(small):
     result = optimize(
-        small, "nelder-mead", NelderMeadSettings(step=0.5, max_evaluations=20), quiet=True
+        small,
+        "nelder-mead",
+        NelderMeadSettings(max_evaluations=20),
+        model=ModelSettings(step=0.5),
+        quiet=True,
     )
     assert not result.success
     assert result.evaluations <= 21
@@ -111,8 +117,8 @@ def test_gauss_newton_and_ipopt_find_the_same_winch(solved, small):
     """Two solvers of one transcription: the verified Omega agrees within 0.1 % (measured
     2.2322025e-4 m and 2.2322025e-4 m; 2 against 17 iterations)."""
     gauss_newton, _ = solved
-    assert SETTINGS.solver == "gauss-newton"
-    ipopt = optimize(small, "ipopt", SETTINGS, quiet=True)
+    assert gauss_newton.solver == "gauss-newton"
+    ipopt = optimize(small, "ipopt", quiet=True, **SETTINGS)
     assert gauss_newton.success and ipopt.success, (gauss_newton.status, ipopt.status)
     assert gauss_newton.omega == pytest.approx(ipopt.omega, rel=1e-3)
     assert gauss_newton.iterations < ipopt.iterations
@@ -123,9 +129,9 @@ def test_single_and_multiple_shooting_find_the_same_winch(solved, small):
     """Two formulations of one NLP: the optimum's verified Omega agrees within 1e-5 m (measured
     2.218e-4 m both), and both hold the bounds."""
     single, _ = solved
-    assert SETTINGS.shooting == "single"
-    ipopt_multiple = replace(SETTINGS, shooting="multiple", solver="ipopt")
-    multiple = optimize(small, settings=ipopt_multiple, quiet=True)
+    multiple = optimize(
+        small, "ipopt", transcription=TranscriptionSettings("multiple"), quiet=True, **SETTINGS
+    )
     assert single.success and multiple.success, (single.status, multiple.status)
     assert abs(single.omega - multiple.omega) < 1e-5
 
@@ -139,7 +145,7 @@ def test_single_shooting_reports_its_phases(solved):
 
 def test_unknown_shooting_is_rejected():
     with pytest.raises(ValueError, match="shooting = 'double'"):
-        IpoptSettings(shooting="double")
+        TranscriptionSettings(shooting="double")
 
 
 def test_a_result_saved_without_the_phase_times_loads(solved, tmp_path):
@@ -157,9 +163,9 @@ def test_a_result_saved_without_the_phase_times_loads(solved, tmp_path):
     assert back.omega == result.omega
 
 
-def test_exact_hessian_needs_the_interpreted_model():
+def test_exact_hessian_needs_the_interpreted_model(small):
     with pytest.raises(ValueError, match="second derivatives"):
-        IpoptSettings(solver="ipopt", hessian="exact", compiled=True)
+        optimize(small, "ipopt", IpoptSettings(hessian="exact"))
 
 
 def test_spline_basis_matches_the_winch_spline():
@@ -184,7 +190,7 @@ def test_hermite_basis_interpolates_its_nodes():
 
 # Output modes: small_tow over 20 s at h = 0.5 s, two Hermite intervals (a solve takes about 1 s).
 SHORT = {"numerics.duration": 20.0, "numerics.step": 0.5}
-TINY = IpoptSettings(elements=4, step=0.5, intervals=2)  # the scene's own model
+TINY = {"model": ModelSettings(4, 0.5), "grid": GridSettings(intervals=2)}  # the scene's model
 # IPOPT's banner ("This program contains Ipopt") prints once per process at most, so the tests
 # look for the log's header line.
 BANNER = "This is Ipopt version"
@@ -196,16 +202,16 @@ def short(small):
 
 
 def test_quiet_prints_nothing_at_all(short, capfd):
-    optimize(short, settings=TINY, quiet=True)  # a first run may compile the model
+    optimize(short, quiet=True, **TINY)  # a first run may compile the model
     capfd.readouterr()
-    result = optimize(short, settings=TINY, quiet=True)
+    result = optimize(short, quiet=True, **TINY)
     out, err = capfd.readouterr()
     assert result.success, result.status
     assert out == "" and err == ""
 
 
 def test_default_prints_one_line_per_iteration_and_no_ipopt_log(short, capfd):
-    result = optimize(short, settings=TINY)
+    result = optimize(short, **TINY)
     out, err = capfd.readouterr()
     assert BANNER not in out + err and "EXIT:" not in out + err
     lines = [line for line in err.splitlines() if line.startswith("gauss-newton iter")]
@@ -216,7 +222,7 @@ def test_default_prints_one_line_per_iteration_and_no_ipopt_log(short, capfd):
 
 
 def test_verbose_prints_the_ipopt_log(short, capfd):
-    optimize(short, "ipopt", TINY, verbose=True)
+    optimize(short, "ipopt", verbose=True, **TINY)
     out, err = capfd.readouterr()
     assert BANNER in out and "EXIT:" in out
     assert "ipopt iter" not in err
@@ -230,10 +236,10 @@ def test_quiet_and_verbose_together_are_rejected(short):
 
 def test_the_result_names_the_solver_that_ran_and_keeps_it_in_its_files(short, tmp_path):
     """``solver`` chooses, and the result, its summary and its file say which one ran: the
-    settings' solver without the argument, the argument's over the settings'."""
-    by_settings = optimize(short, settings=TINY, quiet=True)
-    assert by_settings.solver == TINY.solver == "gauss-newton"
-    ipopt = optimize(short, "ipopt", TINY, quiet=True)
+    default without the argument, the settings' owner without a name."""
+    by_default = optimize(short, quiet=True, **TINY)
+    assert by_default.solver == "gauss-newton"
+    ipopt = optimize(short, settings=IpoptSettings(), quiet=True, **TINY)
     assert ipopt.solver == "ipopt" and ipopt.success, ipopt.status
     assert ipopt.summary()["solver"] == "ipopt"
     ipopt.save(tmp_path / "run")
@@ -248,7 +254,13 @@ def test_a_solver_that_does_not_fit_its_settings_is_refused_before_any_work(shor
     with pytest.raises(ValueError, match="NelderMeadSettings given for solver 'ipopt'"):
         optimize(short, "ipopt", NelderMeadSettings())
     with pytest.raises(ValueError, match="IpoptSettings given for solver 'nelder-mead'"):
-        optimize(short, "nelder-mead", TINY)
+        optimize(short, "nelder-mead", IpoptSettings())
+    with pytest.raises(ValueError, match="Nelder-Mead searches the spline through winch.knots"):
+        optimize(short, "nelder-mead", grid=GridSettings(intervals=2))
+    with pytest.raises(ValueError, match="Nelder-Mead takes no shooting"):
+        optimize(short, "nelder-mead", transcription=TranscriptionSettings("multiple"))
+    with pytest.raises(ValueError, match="Gauss-Newton takes 'single' shooting"):
+        optimize(short, transcription=TranscriptionSettings("multiple"))
 
 
 def test_nelder_mead_quiet_prints_nothing(short, capfd):
@@ -258,7 +270,9 @@ def test_nelder_mead_quiet_prints_nothing(short, capfd):
 
 
 def test_failed_result_saves_nan_as_null_and_loads_back(short, tmp_path):
-    result = optimize(short, settings=IpoptSettings(intervals=2, max_iter=1), quiet=True)
+    result = optimize(
+        short, settings=GaussNewtonSettings(max_iter=1), grid=GridSettings(intervals=2), quiet=True
+    )
     # A failed solve is still simulated on the scene's model (where it got to), never a success.
     assert not result.success and result.trajectory is not None
     result = replace(result, trajectory=None, omega=float("nan"), history=[1.0, float("nan")])
@@ -316,4 +330,4 @@ def test_intervals_that_do_not_divide_the_steps_are_refused_before_any_model(
     monkeypatch.setattr(WinchProblem, "from_scene", forbidden)
     scene = load_scene(models_dir / "small_tow.toml")  # 40 s at h = 0.5 s: 80 steps
     with pytest.raises(ValueError, match=r"intervals = 42 must divide the 80 RK4 steps"):
-        optimize(scene, settings=IpoptSettings(step=0.5, intervals=42), quiet=True)
+        optimize(scene, model=ModelSettings(step=0.5), grid=GridSettings(intervals=42), quiet=True)

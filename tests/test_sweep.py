@@ -144,23 +144,27 @@ def test_bad_sweep_file_names_the_key(tmp_path, body, message):
         ('scene = "nowhere.toml"', "scene = 'nowhere.toml': file not found"),
         ('scene = "hanging"\ntask = "solve"', "task = 'solve': must be one of simulate, optimize"),
         ('scene = "hanging"\ntask = "optimize"\n[optimizer]\nsteps = 1',
-         "optimizer.steps: unknown key for method = 'ipopt'"),
+         "optimizer: steps: unknown setting for solver 'gauss-newton'; allowed: solver, elements"),
         ('scene = "hanging"\ntask = "optimize"\n[optimizer]\nmax_iter = 0',
-         "optimizer: IpoptSettings.max_iter = 0: must be >= 1"),
+         "optimizer: GaussNewtonSettings.max_iter = 0: must be >= 1"),
         ('scene = "small_tow"\ntask = "optimize"\n[optimizer]\nstep = 0.25\nintervals = 7',
          "optimizer.intervals = 7 (case 0): must divide the 160 RK4 steps"),
         ('scene = "hanging"\n[set]\n"model.elements" = 0',
          "set.model.elements: model.elements = 0 is out of range: must be >= 1"),
         ('scene = "hanging"\ntask = "optimize"\n[optimizer]\nstep = "abc"',
-         "optimizer.step = 'abc': expected a finite number"),
+         "optimizer: ModelSettings.step = 'abc' s: must be a number"),
         ('scene = "hanging"\ntask = "optimize"\n[optimizer]\nelements = 2.5',
-         "optimizer.elements = 2.5: expected an integer"),
+         "optimizer: ModelSettings.elements = 2.5: must be an integer"),
         ('scene = "hanging"\ntask = "optimize"\n[optimizer]\nmax_iter = true',
-         "optimizer.max_iter = True: expected an integer"),
+         "optimizer: GaussNewtonSettings.max_iter = True: must be an integer"),
         ('scene = "hanging"\ntask = "optimize"\n[optimizer]\ncompiled = 1',
-         "optimizer.compiled = 1: expected true or false"),
+         "optimizer: TranscriptionSettings.compiled = 1: must be true or false"),
         ('scene = "hanging"\ntask = "optimize"\nmethod = "nelder-mead"\n[optimizer]\nxatol = nan',
-         "optimizer.xatol = nan: expected a finite number"),
+         "optimizer: NelderMeadSettings.xatol = nan rad: must be finite"),
+        ('scene = "hanging"\ntask = "optimize"\nmethod = "nelder-mead"\n[optimizer]\nintervals = 4',
+         "optimizer: intervals: unknown setting for solver 'nelder-mead'"),
+        ('scene = "hanging"\ntask = "optimize"\n[optimizer]\nsolver = "ipopt"\nhessian = "exact"',
+         "optimizer: IpoptSettings.hessian = 'exact' needs second derivatives"),
     ],
 )  # fmt: skip
 def test_bad_sweep_header_names_the_key(tmp_path, text, message):
@@ -406,30 +410,22 @@ def test_bundled_example_sweeps_load_by_name():
         load_sweep("no_such_sweep")
 
 
-def test_sweep_defaults_are_the_methods_table(tmp_path, monkeypatch):
-    """No [optimizer]: optimize()'s settings (METHODS), not the scene's full model."""
-    from dataclasses import replace
-
-    from cable_ocp.control.optimization import METHODS
+def test_sweep_defaults_are_the_registrys(tmp_path, monkeypatch):
+    """No [optimizer]: optimize()'s settings (the registry's), not the scene's full model."""
+    from cable_ocp.control.settings import ModelSettings
+    from cable_ocp.control.solvers import ocp_settings
 
     base = f'scene = "{MODELS / "small_tow.toml"}"\ntask = "optimize"\n'  # 21 s: 42 steps of 0.5 s
     duration = '[set]\n"numerics.duration" = 21.0\n'
-    for method in ("ipopt", "nelder-mead"):
+    for method, solver in (("ipopt", "gauss-newton"), ("nelder-mead", "nelder-mead")):
         spec = load_sweep(write(tmp_path, base + f'method = "{method}"\n' + duration))
-        assert spec.settings == METHODS[method].default
+        assert spec.settings == ocp_settings(solver)
         assert spec.settings.elements is None  # derived from each case's scene, as optimize()
         options = f'method = "{method}"\n[optimizer]\nelements = 4\n' + duration
         spec = load_sweep(write(tmp_path, base + options))
-        assert spec.settings == replace(METHODS[method].default, elements=4)
-    # One place: a changed default reaches the sweep.
-    monkeypatch.setitem(
-        METHODS,
-        "ipopt",
-        replace(
-            METHODS["ipopt"], default=replace(METHODS["ipopt"].default, elements=2)
-        ),  # fmt: skip
-    )
-    assert load_sweep(write(tmp_path, base + duration)).settings.elements == 2
+        assert spec.settings == ocp_settings(solver, model=ModelSettings(elements=4))
+    spec = load_sweep(write(tmp_path, base + '[optimizer]\nsolver = "ipopt"\n' + duration))
+    assert spec.settings == ocp_settings("ipopt")
 
 
 @pytest.mark.parametrize("content", ["[1, 2]", "copied"])

@@ -121,19 +121,30 @@ def _given(args, names: tuple[str, ...]) -> dict:
     return {name: getattr(args, name) for name in names if getattr(args, name) is not None}
 
 
-def _ipopt_settings(args):
-    """IPOPT settings: optimize()'s defaults (``METHODS``) with the options given.
+def _optimize_options(args, solver: str | None = None) -> dict:
+    """``optimize``'s solver and settings from the options given; unset ones are its own.
 
-    ``--hessian exact`` needs the interpreted model; it and ``--shooting multiple`` are IPOPT's,
-    refused beside ``--solver gauss-newton``.
+    The solver is ``solver``, else ``--solver``, else ``--method nelder-mead``'s, else IPOPT
+    when an IPOPT option (``--hessian``, ``--shooting multiple``) is given, else the registry's
+    default. ``--hessian exact`` needs the interpreted model; IPOPT's options are refused beside
+    ``--solver gauss-newton``.
     """
-    from dataclasses import replace
-
-    from cable_ocp.control.optimization import METHODS
+    from cable_ocp.control.settings import GridSettings, ModelSettings, TranscriptionSettings
+    from cable_ocp.control.solvers import DEFAULT_SOLVER, solver_named
 
     ipopt_only = {"--hessian exact": args.hessian == "exact",
                   "--shooting multiple": args.shooting == "multiple"}  # fmt: skip
-    if args.solver == "gauss-newton" and any(ipopt_only.values()):
+    method = getattr(args, "method", None)
+    if method == "nelder-mead" and args.solver not in (None, "nelder-mead"):
+        raise ValueError(
+            f"--method nelder-mead with --solver {args.solver}: the paper's method is solver "
+            "nelder-mead; give one of them"
+        )
+    solver = solver or args.solver or ("nelder-mead" if method == "nelder-mead" else None)
+    if solver is None and (args.hessian is not None or args.shooting == "multiple"):
+        solver = "ipopt"
+    solver = solver or DEFAULT_SOLVER
+    if solver == "gauss-newton" and any(ipopt_only.values()):
         option = next(name for name, given in ipopt_only.items() if given)
         raise ValueError(
             f"{option} is an option of IPOPT (the Gauss-Newton solver works on single shooting "
@@ -146,31 +157,21 @@ def _ipopt_settings(args):
             "(compiled = False): the compiled step carries no second derivatives",
             file=sys.stderr,
         )
-    names = (
-        "elements",
-        "step",
-        "intervals",
-        "shooting",
-        "control",
-        "hessian",
-        "max_iter",
-        "solver",
-    )
-    given = _given(args, names) | ({"compiled": False} if exact else {})
-    # An IPOPT option (its Hessian, multiple shooting) asks for IPOPT unless a solver is named.
-    if "solver" not in given and (args.hessian is not None or args.shooting == "multiple"):
-        given["solver"] = "ipopt"
-    return replace(METHODS["ipopt"].default, **given)
-
-
-def _nelder_mead_settings(args):
-    """Nelder-Mead settings: optimize()'s defaults (``METHODS``) with the options given."""
-    from dataclasses import replace
-
-    from cable_ocp.control.optimization import METHODS
-
-    given = _given(args, ("elements", "step", "max_evaluations"))
-    return replace(METHODS["nelder-mead"].default, **given)
+    entry = solver_named(solver)
+    own = set(entry.settings.__dataclass_fields__)
+    options = {
+        "solver": solver,
+        "settings": entry.settings(
+            **_given(args, own & {"hessian", "max_iter", "max_evaluations"})
+        ),
+        "model": ModelSettings(**_given(args, ("elements", "step"))),
+        "transcription": TranscriptionSettings(
+            **_given(args, ("shooting",)), **({"compiled": False} if exact else {})
+        ),
+    }
+    if entry.shootings:  # the paper's Nelder-Mead takes the scene's knots, no grid
+        options["grid"] = GridSettings(**_given(args, ("control", "intervals")))
+    return options
 
 
 def _locked_reference(scene):
@@ -228,11 +229,10 @@ def _optimize(args) -> int:
     _check_step(scene, args.step)
     _check_start(scene)
     output = {"quiet": args.quiet, "verbose": args.verbose}
-    if args.method == "ipopt":
-        settings = _ipopt_settings(args)
-        result = optimize(scene, settings=settings, refinements=args.refinements, **output)
-    else:
-        result = optimize(scene, "nelder-mead", _nelder_mead_settings(args), **output)
+    options = _optimize_options(args)
+    if options["solver"] != "nelder-mead":
+        output["refinements"] = args.refinements
+    result = optimize(scene, **options, **output)
     locked, locked_failure = _locked_reference(scene)
     seabed, bounds = scene.seabed, (scene.winch.angle_min, scene.winch.angle_max)
     runs = [("locked winch", locked), (f"optimised ({result.solver})", result.trajectory)]
@@ -287,17 +287,22 @@ def _compare(args) -> int:
     for scene in scenes:
         _check_step(scene, args.step)
         _check_start(scene)
-    base, simplex = _ipopt_settings(args), _nelder_mead_settings(args)
+    if args.solver == "nelder-mead":
+        raise ValueError(
+            "--solver nelder-mead: compare runs Nelder-Mead anyway, beside a shooting solver; "
+            "give --solver gauss-newton or ipopt"
+        )
+    shooting = _optimize_options(args)
+    simplex = _optimize_options(args, "nelder-mead")
+    spline = {**shooting, "grid": replace(shooting["grid"], control="spline")}
+    name = shooting["solver"]
     output = {"quiet": args.quiet, "verbose": args.verbose}
     rows = []
     for scene in scenes:
         runs = [
-            (f"{base.solver}, hermite", optimize(scene, settings=base, **output)),
-            (
-                f"{base.solver}, spline",
-                optimize(scene, settings=replace(base, control="spline"), **output),
-            ),
-            ("nelder-mead, spline", optimize(scene, "nelder-mead", simplex, **output)),
+            (f"{name}, hermite", optimize(scene, **shooting, **output)),
+            (f"{name}, spline", optimize(scene, **spline, **output)),
+            ("nelder-mead, spline", optimize(scene, **simplex, **output)),
         ]
         rows += [(scene.name, label, r) for label, r in runs]
     lines = [
@@ -340,7 +345,7 @@ def _knots(text: str) -> list[float]:
 
 
 def _add_optimiser_options(parser) -> None:
-    # No defaults here: unset options keep optimize()'s (cable_ocp.control.optimization.METHODS).
+    # No defaults here: unset options keep optimize()'s (cable_ocp.control.solvers.SOLVERS).
     parser.add_argument(
         "--elements",
         type=integer(1, 1000),
@@ -357,9 +362,9 @@ def _add_optimiser_options(parser) -> None:
     )
     parser.add_argument(
         "--solver",
-        choices=["gauss-newton", "ipopt"],
-        help="the shooting NLP's solver (default: gauss-newton; ipopt when --hessian or "
-        "--shooting multiple is given)",
+        help="a solver of the registry (cable_ocp.control.solvers.SOLVERS): gauss-newton or "
+        "ipopt on the shooting NLP, or the paper's nelder-mead (default: gauss-newton; ipopt "
+        "when --hessian or --shooting multiple is given)",
     )
     parser.add_argument(
         "--shooting",
@@ -586,8 +591,8 @@ def build_parser() -> argparse.ArgumentParser:
     opt.add_argument("scene", type=scene_argument, help=SCENE_HELP)
     opt.add_argument("--method", choices=["ipopt", "nelder-mead"], default="ipopt",
                      help="ipopt: direct shooting on the winch parameters, solved by --solver "
-                     "(Gauss-Newton SQP or IPOPT) and refined by model correction; nelder-mead: "
-                     "the paper's simplex search on winch.knots")  # fmt: skip
+                     "(Gauss-Newton SQP or IPOPT), refined by model correction; nelder-mead: "
+                     "the paper's simplex on winch.knots (as --solver nelder-mead)")  # fmt: skip
     opt.add_argument("--out", type=Path, required=True, help=OUT_HELP)
     opt.add_argument("--refinements", type=integer(0, 100), default=3,
                      help="model-correction solves")  # fmt: skip
@@ -595,7 +600,9 @@ def build_parser() -> argparse.ArgumentParser:
     opt.add_argument("--animate", action="store_true", help=ANIMATE_HELP)
     opt.set_defaults(run=_optimize)
 
-    cmp = commands.add_parser("compare", **shown, help="IPOPT against Nelder-Mead in one table")
+    cmp = commands.add_parser(
+        "compare", **shown, help="a shooting solver against Nelder-Mead in one table"
+    )
     cmp.add_argument("scenes", type=scene_argument, nargs="+",
                      help="scene files (TOML) or bundled scenes' names")  # fmt: skip
     cmp.add_argument("--out", type=Path, required=True, help=OUT_HELP)

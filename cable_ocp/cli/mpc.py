@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import argparse
 import sys
+from dataclasses import replace
 from pathlib import Path
 
 from cable_ocp.cli.arguments import (
@@ -15,7 +16,8 @@ from cable_ocp.cli.arguments import (
     positive,
     weight,
 )
-from cable_ocp.control.closed_loop.settings import SOLVERS, MpcSettings
+from cable_ocp.control.closed_loop.settings import CLOSED_LOOP_SOLVERS, MpcSettings
+from cable_ocp.control.settings import ModelSettings
 from cable_ocp.scene.bundled import scene_argument
 
 
@@ -56,20 +58,18 @@ def add_mpc_command(subparsers) -> None:
     parser.add_argument(
         "--elements",
         type=integer(1, 1000),
-        default=defaults.elements,
-        help="elements of the reduced model",
+        help="elements of the controller's reduced model (default: 2)",
     )
     parser.add_argument(
         "--step",
         type=positive,
-        default=defaults.step,
         help="RK4 step of the reduced model [s] (default: the largest whole fraction of --sample "
         "within 0.7 of the reduced model's RK4 limit along the locked run, at most 1 s)",
     )
     parser.add_argument(
         "--solver",
-        choices=SOLVERS,
-        default=defaults.solver,
+        choices=tuple(CLOSED_LOOP_SOLVERS),
+        default="gauss-newton",
         help="gauss-newton: one Gauss-Newton step per sample (real-time iteration); ipopt: IPOPT",
     )
     parser.add_argument(
@@ -131,20 +131,21 @@ def settings_from(args: argparse.Namespace) -> MpcSettings:
     Gauss-Newton step (the real-time iteration) or IPOPT's own default, since one IPOPT
     iteration never converges.
     """
-    max_iter = args.max_iter
+    solver_settings = None
+    if args.max_iter is not None:
+        solver_settings = replace(CLOSED_LOOP_SOLVERS[args.solver], max_iter=args.max_iter)
     return MpcSettings(
         horizon=args.horizon,
         sample=args.sample,
         interval=args.interval,
-        elements=args.elements,
-        step=args.step,
+        model=ModelSettings(args.elements, args.step),
         solver=args.solver,
+        solver_settings=solver_settings,
         heave_feedback=not args.no_heave_feedback,
         heave_filter=args.heave_filter,
         heave_margin=args.heave_margin,
         limiter_band=args.limiter_band,
         rate_weight=args.rate_weight,
-        max_iter=max_iter,
         references=("locked", "open-loop") if args.open_loop else ("locked",),
     )
 

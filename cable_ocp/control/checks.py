@@ -1,10 +1,11 @@
 """One way to check the fields of a settings class: declared rules, one message per failure.
 
-Every settings class of the optimisers and the closed loop (``IpoptSettings``,
-``GaussNewtonSettings``, ``NelderMeadSettings``, ``MpcSettings``) lists its numeric and choice
-fields with a :class:`Rule` and calls :func:`check_fields` from ``__post_init__``: a value of the
-wrong type (a bool for an integer, a string for a number), NaN, infinity or one out of range is
-a ``ValueError`` naming the field, its value and what it must be, before anything is built.
+Every settings class of the optimisers and the closed loop (``ModelSettings``, ``GridSettings``,
+``TranscriptionSettings``, ``IpoptSettings``, ``GaussNewtonSettings``, ``NelderMeadSettings``,
+``MpcSettings``) lists its numeric, choice and flag fields with a :class:`Rule` and calls
+:func:`check_fields` from ``__post_init__``: a value of the wrong type (a bool for an integer,
+a string for a number), NaN, infinity or one out of range is a ``ValueError`` naming the field,
+its value and what it must be, before anything is built.
 """
 
 from __future__ import annotations
@@ -24,7 +25,7 @@ class Rule:
     Attributes
     ----------
     kind : str
-        ``"integer"``, ``"number"`` (a finite real) or ``"choice"``.
+        ``"integer"``, ``"number"`` (a finite real), ``"choice"`` or ``"flag"`` (a bool).
     low : float or None
         Smallest value allowed (inclusive), or None.
     above : float or None
@@ -50,6 +51,8 @@ class Rule:
             return None if self.optional else "must be set"
         if self.kind == "choice":
             return None if value in self.choices else f"must be one of {', '.join(self.choices)}"
+        if self.kind == "flag":
+            return None if isinstance(value, bool) else "must be true or false"
         if isinstance(value, bool) or not isinstance(value, numbers.Real):
             return f"must be {'an integer' if self.kind == 'integer' else 'a number'}"
         if self.kind == "integer" and not isinstance(value, numbers.Integral):

@@ -92,7 +92,7 @@ class GaussNewtonSettings:
     Attributes
     ----------
     max_iter : int
-        Iterations (one linearisation and one QP each).
+        Iterations (one linearisation and one QP each; 300, IPOPT's count, in the open loop).
     real_time : bool
         Take ``max_iter`` full steps without a line search or a convergence test (a closed
         loop's real-time iteration, warm-started from its previous plan); its result is the last
@@ -100,17 +100,14 @@ class GaussNewtonSettings:
     tolerance : float
         Stop when the QP predicts a decrease of Omega^2 below ``tolerance`` times Omega^2 (and
         below ``tolerance`` times (1 mm)^2, so that an Omega near zero stops too).
-    rate_weight : float, s^2
-        Weight of the pay-out speed ``(r_D phi')^2`` against ``e^2`` (0 in the open loop).
     stage_jacobians : {"every", "ends"}
         Where the sensitivities take the model's Jacobian: at every RK4 stage (exact), or at
         the step ends only (a closed loop's real-time iteration,
         :mod:`cable_ocp.control.linearisation`).
     """
 
-    max_iter: int = 30
+    max_iter: int = 300
     tolerance: float = 1e-6
-    rate_weight: float = 0.0
     real_time: bool = False
     stage_jacobians: str = "every"
 
@@ -120,7 +117,6 @@ class GaussNewtonSettings:
             {
                 "max_iter": Rule("integer", low=1),
                 "tolerance": Rule("number", above=0),
-                "rate_weight": Rule("number", low=0, unit="s^2"),
                 "stage_jacobians": Rule("choice", choices=STAGE_JACOBIANS),
             },
         )
@@ -135,10 +131,16 @@ class GaussNewton:
     settings : GaussNewtonSettings
     log : IterationLog, optional
         One line per iteration (None: nothing).
+    rate_weight : float, s^2
+        Weight of the pay-out speed ``(r_D phi')^2`` against ``e^2`` (0 in the open loop).
     """
 
     def __init__(
-        self, problem: WinchProblem, settings: GaussNewtonSettings, log: IterationLog | None = None
+        self,
+        problem: WinchProblem,
+        settings: GaussNewtonSettings,
+        log: IterationLog | None = None,
+        rate_weight: float = 0.0,
     ):
         started = time.perf_counter()
         self.problem, self.settings, self.log = problem, settings, log
@@ -154,7 +156,7 @@ class GaussNewton:
         span = problem.grid[-1] - problem.grid[0]
         self.weights = np.sqrt(trapezoid_weights(problem.step, problem.grid.size) / span)
         rates = radius * problem.control.basis(problem.grid)[1]
-        self.rate_rows = np.sqrt(settings.rate_weight) * self.weights[:, None] * rates
+        self.rate_rows = np.sqrt(rate_weight) * self.weights[:, None] * rates
         bounds, seabed = problem.bounds, problem.scene.seabed
         size = problem.control.size
         # The hard minimum clearance: delta + e >= c_min (+ a back-off) at every RK4 point after

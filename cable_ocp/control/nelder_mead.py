@@ -17,7 +17,9 @@ from scipy.optimize import minimize
 
 from cable_ocp.control import defaults
 from cable_ocp.control.checks import Rule, check_fields
+from cable_ocp.control.parameters import ProblemParameters
 from cable_ocp.control.problem import SolverOutcome, WinchProblem
+from cable_ocp.control.settings import ModelSettings, OcpSettings
 from cable_ocp.drive.bounds import violation
 from cable_ocp.drive.controls import KnotSpline
 from cable_ocp.simulation.integrate import SimulationError
@@ -32,36 +34,23 @@ INFEASIBLE_OBJECTIVE = 2 * FAILED_RUN_OBJECTIVE
 
 @dataclass(frozen=True)
 class NelderMeadSettings:
-    """Settings of the Nelder-Mead search.
+    """Settings of the Nelder-Mead search (its model and step are ``ModelSettings``).
 
     Attributes
     ----------
-    elements : int or None
-        Elements of the model each evaluation simulates (None: derived from the scene, as for
-        the shooting solvers, :mod:`cable_ocp.control.defaults`).
-    step : float or None, s
-        RK4 step of the evaluations (None: derived from that model's RK4 limit along its locked
-        run); a step above that limit is refused.
     max_evaluations : int
     xatol : float, rad
     fatol : float, m
-    compiled : bool
-        Simulate with the RK4 step compiled to C (cached on disk).
     """
 
-    elements: int | None = None
-    step: float | None = None
     max_evaluations: int = 3000
     xatol: float = 1e-3
     fatol: float = 1e-5
-    compiled: bool = True
 
     def __post_init__(self):
         check_fields(
             self,
             {
-                "elements": Rule("integer", low=1, optional=True),
-                "step": Rule("number", above=0, unit="s", optional=True),
                 "max_evaluations": Rule("integer", low=1),
                 "xatol": Rule("number", above=0, unit="rad"),
                 "fatol": Rule("number", above=0, unit="m"),
@@ -69,11 +58,17 @@ class NelderMeadSettings:
         )
 
 
-def resolved_nelder_mead(scene, settings: NelderMeadSettings, compiled: bool | None = None):
+def resolved_nelder_mead(scene, settings: OcpSettings, compiled: bool | None = None):
     """The settings with the elements and step left unset derived from the scene, and how.
 
-    As :func:`cable_ocp.control.ocp.resolved`, the step a whole fraction of the duration.
+    As :func:`cable_ocp.control.ocp.resolved`, the step a whole fraction of the duration. The
+    paper's method takes the spline through the scene's knots, and no shooting intervals.
     """
+    if settings.control != "spline" or settings.intervals is not None:
+        raise ValueError(
+            "grid: Nelder-Mead searches the spline through winch.knots of the scene; leave "
+            "GridSettings.control and intervals unset (or take a shooting solver)"
+        )
     compiled = settings.compiled if compiled is None else compiled
     duration = scene.numerics.duration
     notes = []
@@ -91,24 +86,73 @@ def resolved_nelder_mead(scene, settings: NelderMeadSettings, compiled: bool | N
         step = defaults.step_within(limit, duration, defaults.STEP_CAP)
         notes.append(defaults.StepChoice(step, limit, at).describe("at"))
     text = "derived settings: " + ", ".join(notes) if notes else ""
-    return replace(settings, elements=elements, step=step), text
+    return replace(settings, model=ModelSettings(elements, step)), text
 
 
-def nelder_mead_problem(scene, settings: NelderMeadSettings) -> WinchProblem:
+def nelder_mead_problem(scene, settings: OcpSettings) -> WinchProblem:
     """The scene's problem as the paper states it: the winch angle a spline through its knots."""
     control = KnotSpline(scene.numerics.duration, scene.winch.knots)
     return WinchProblem.from_scene(scene, control, settings.elements, settings.step)
 
 
-def solve_nelder_mead(
-    problem: WinchProblem, settings: NelderMeadSettings, quiet: bool = False
-) -> SolverOutcome:
-    """Minimise Omega over the parameters of ``problem`` with SciPy's bounded Nelder-Mead.
+class NelderMead:
+    """SciPy's bounded Nelder-Mead on a winch problem (in :mod:`cable_ocp.control.solvers`).
 
-    ``success`` is False, with the reason in ``status``, when SciPy reports a failure (e.g. the
-    evaluation limit), when no evaluated profile both kept the winch bounds and simulated, or when
-    the returned profile breaks a bound by more than :data:`cable_ocp.drive.bounds.BOUND_TOLERANCE`.
+    Parameters
+    ----------
+    problem : WinchProblem
+        Its control the spline through the scene's knots.
+    settings : NelderMeadSettings
+    compiled : bool
+        Simulate with the RK4 step compiled to C (cached on disk).
+    quiet : bool
+        No progress bar.
     """
+
+    build_time = compile_time = 0.0
+
+    def __init__(
+        self,
+        problem: WinchProblem,
+        settings: NelderMeadSettings,
+        compiled: bool = True,
+        quiet: bool = False,
+    ):
+        self.problem, self.settings, self.compiled, self.quiet = problem, settings, compiled, quiet
+
+    def solve(
+        self,
+        values: ProblemParameters,
+        guess: np.ndarray,
+        fixed: dict[int, float] | None = None,
+        lower: np.ndarray | None = None,
+        upper: np.ndarray | None = None,
+    ) -> SolverOutcome:
+        """Minimise Omega over the knots from ``guess`` (rad), moved into the winch bounds.
+
+        The search takes the problem's own parameter values only (the open loop's, with no
+        model-correction bias) and no fixed parameters or narrowed bounds: it is the paper's
+        open-loop method, not a closed loop's solver. ``success`` is False, with the reason in
+        ``status``, when SciPy reports a failure (e.g. the evaluation limit), when no evaluated
+        profile both kept the winch bounds and simulated, or when the returned profile breaks a
+        bound by more than :data:`cable_ocp.drive.bounds.BOUND_TOLERANCE`.
+        """
+        if fixed or lower is not None or upper is not None or np.any(values.bias):
+            raise ValueError(
+                "Nelder-Mead solves the open-loop problem only: no fixed parameters, narrowed "
+                "bounds or model-correction bias"
+            )
+        return _search(self.problem, self.settings, self.compiled, self.quiet, guess)
+
+
+def _search(
+    problem: WinchProblem,
+    settings: NelderMeadSettings,
+    compiled: bool,
+    quiet: bool,
+    start: np.ndarray,
+) -> SolverOutcome:
+    """The bounded search of :meth:`NelderMead.solve` from ``start``."""
     started = time.perf_counter()
     constraints, low, high = problem.bounds, problem.low, problem.high
 
@@ -117,11 +161,11 @@ def solve_nelder_mead(
         if excess > 0:
             return INFEASIBLE_OBJECTIVE + FAILED_RUN_OBJECTIVE * excess
         try:
-            return problem.omega(problem.simulate(parameters, compiled=settings.compiled))
+            return problem.omega(problem.simulate(parameters, compiled=compiled))
         except SimulationError:
             return FAILED_RUN_OBJECTIVE
 
-    guess = constraints.scale_into(np.clip(problem.first_guess(settings.compiled), low, high))
+    guess = constraints.scale_into(np.clip(start, low, high))
     history: list[float] = []
     progress = Progress("nelder-mead", settings.max_evaluations, quiet)
 

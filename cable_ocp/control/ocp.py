@@ -31,6 +31,7 @@ from cable_ocp.control.linearisation import (
 )
 from cable_ocp.control.parameters import ProblemParameters, symbols
 from cable_ocp.control.problem import SolverOutcome, WinchProblem
+from cable_ocp.control.settings import ModelSettings, OcpSettings
 from cable_ocp.drive.controls import HermiteIntervals, KnotSpline
 from cable_ocp.drive.drive import stage_times
 from cable_ocp.model import structured
@@ -63,98 +64,36 @@ def interrupted_solve(solver: ca.Function, **arguments) -> dict:
 
 @dataclass(frozen=True)
 class IpoptSettings:
-    """How the shooting NLP is built and solved.
+    """IPOPT's own settings (the problem's and the transcription's: :mod:`.settings`).
 
     Attributes
     ----------
-    elements : int or None
-        Elements of the optimisation model (None: derived from the scene,
-        :func:`cable_ocp.control.defaults.reduced_elements`; the scene's ``model.elements`` asks
-        for its own model). Fewer elements make a cheaper model; Omega is always verified on the
-        scene's own model.
-    step : float or None, s
-        RK4 step inside the intervals (None: derived from the model's RK4 limit along its locked
-        run, :mod:`cable_ocp.control.defaults`). A step above that limit is refused.
-    shooting : str
-        ``"single"`` (only the winch parameters are variables) or ``"multiple"`` (the states at
-        the interval ends too, joined by continuity constraints).
-    intervals : int or None
-        Shooting intervals (None: about one per 5 s of the duration,
-        :func:`cable_ocp.control.defaults.control_intervals`); the number of RK4 steps must be a
-        multiple of it (a derived step is chosen so; with a fixed step, derived intervals are the
-        nearest count that divides its steps). With single shooting they only cut the chain of
-        RK4 steps (and set the Hermite control's intervals).
-    control : str
-        ``"hermite"`` (piecewise cubic per control interval) or ``"spline"`` (the paper's knots).
-    control_intervals : int or None
-        Intervals of the Hermite control (None: as many as shooting intervals).
-    solver : str
-        ``"gauss-newton"``: Omega^2 is a least-squares, so a Gauss-Newton SQP
-        (:mod:`cable_ocp.control.gauss_newton`: exact first derivatives, QPs by DAQP) solves
-        the single-shooting NLP in a few iterations; ``"ipopt"``: IPOPT with ``hessian``.
     hessian : str
-        IPOPT's Hessian: ``"limited-memory"`` (L-BFGS) or ``"exact"``.
+        IPOPT's Hessian: ``"limited-memory"`` (L-BFGS) or ``"exact"`` (second derivatives, which
+        the compiled step does not carry: ``TranscriptionSettings(compiled=False)``).
     max_iter : int
     tolerance : float
-        IPOPT's ``tol`` (Gauss-Newton stops on its own relative test,
-        :class:`cable_ocp.control.gauss_newton.GaussNewtonSettings`).
-    threads : int
-        Shooting intervals evaluated in parallel (multiple shooting only).
-    compiled : bool
-        Compile the model's right-hand side and its first derivatives to C (cached on disk,
-        one library per model structure), and verify on the compiled full model.
+        IPOPT's ``tol``.
     ipopt_options : dict
-        Further IPOPT options, passed as they are.
+        Further IPOPT options, passed as they are (checked by IPOPT before any solve).
     """
 
-    elements: int | None = None
-    step: float | None = None
-    shooting: str = "single"
-    intervals: int | None = None
-    control: str = "hermite"
-    control_intervals: int | None = None
-    solver: str = "gauss-newton"
     hessian: str = "limited-memory"
     max_iter: int = 300
     tolerance: float = 1e-8
-    threads: int = 1
-    compiled: bool = True
     ipopt_options: dict = field(default_factory=dict)
 
     def __post_init__(self):
-        check_fields(self, _IPOPT_RULES)
+        check_fields(
+            self,
+            {
+                "hessian": Rule("choice", choices=("limited-memory", "exact")),
+                "max_iter": Rule("integer", low=1),
+                "tolerance": Rule("number", above=0),
+            },
+        )
         if not isinstance(self.ipopt_options, dict):
             raise ValueError(f"IpoptSettings.ipopt_options = {self.ipopt_options!r}: a dict")
-        if self.solver == "gauss-newton" and (self.shooting != "single" or not self.compiled):
-            raise ValueError(
-                "solver = 'gauss-newton' works on the compiled single-shooting transcription: "
-                "set shooting='single' and compiled=True, or solver='ipopt'"
-            )
-        if self.solver == "gauss-newton" and self.hessian != "limited-memory":
-            raise ValueError(
-                f"hessian = {self.hessian!r} is IPOPT's (the Gauss-Newton solver uses 2 J^T J, "
-                "first derivatives only, not second derivatives): set solver='ipopt'"
-            )
-        if self.solver == "ipopt" and self.hessian == "exact" and self.compiled:
-            raise ValueError(
-                "hessian = 'exact' needs second derivatives, which the compiled step does not "
-                "carry: set compiled=False (interpreted) or hessian='limited-memory'"
-            )
-
-
-_IPOPT_RULES = {
-    "elements": Rule("integer", low=1, optional=True),
-    "step": Rule("number", above=0, unit="s", optional=True),
-    "shooting": Rule("choice", choices=("single", "multiple")),
-    "intervals": Rule("integer", low=1, optional=True),
-    "control": Rule("choice", choices=("hermite", "spline")),
-    "control_intervals": Rule("integer", low=1, optional=True),
-    "solver": Rule("choice", choices=("gauss-newton", "ipopt")),
-    "hessian": Rule("choice", choices=("limited-memory", "exact")),
-    "max_iter": Rule("integer", low=1),
-    "tolerance": Rule("number", above=0),
-    "threads": Rule("integer", low=1),
-}
 
 
 def ipopt_options(
@@ -190,12 +129,12 @@ def ipopt_options(
     }
 
 
-def make_control(scene, settings: IpoptSettings) -> KnotSpline | HermiteIntervals:
+def make_control(scene, settings: OcpSettings) -> KnotSpline | HermiteIntervals:
     """The control parametrisation the settings ask for."""
     duration = scene.numerics.duration
     if settings.control == "spline":
         return KnotSpline(duration, scene.winch.knots)
-    return HermiteIntervals(duration, settings.control_intervals or settings.intervals)
+    return HermiteIntervals(duration, settings.control_intervals)
 
 
 def control_of(label: str, duration: float) -> KnotSpline | HermiteIntervals:
@@ -206,7 +145,7 @@ def control_of(label: str, duration: float) -> KnotSpline | HermiteIntervals:
     return HermiteIntervals(duration, size // 2)
 
 
-def full_model_scene(scene, settings):
+def full_model_scene(scene, settings: OcpSettings):
     """The scene that the full model's runs take under resolved settings, and what changed.
 
     Its step is shortened where the Hermite nodes would fall inside the scene's steps
@@ -218,7 +157,7 @@ def full_model_scene(scene, settings):
     """
     if settings.control == "spline":
         return scene, ""
-    return defaults.on_nodes(scene, settings.control_intervals or settings.intervals)
+    return defaults.on_nodes(scene, settings.control_intervals)
 
 
 def steps_per_interval(duration: float, step: float, intervals: int) -> int:
@@ -237,7 +176,7 @@ def steps_per_interval(duration: float, step: float, intervals: int) -> int:
     return total_steps // intervals
 
 
-def resolved(scene, settings: IpoptSettings, compiled: bool | None = None):
+def resolved(scene, settings: OcpSettings, compiled: bool | None = None):
     """The settings with every number left unset derived from the scene, and how (a phrase).
 
     Elements, RK4 step and intervals follow :mod:`cable_ocp.control.defaults`; a step the user
@@ -246,7 +185,7 @@ def resolved(scene, settings: IpoptSettings, compiled: bool | None = None):
 
     Returns
     -------
-    (IpoptSettings, str)
+    (OcpSettings, str)
 
     Raises
     ------
@@ -256,7 +195,7 @@ def resolved(scene, settings: IpoptSettings, compiled: bool | None = None):
     """
     compiled = settings.compiled if compiled is None else compiled
     if settings.solver == "ipopt":
-        check_ipopt_options(settings.ipopt_options)
+        check_ipopt_options(settings.solver_settings.ipopt_options)
     duration = scene.numerics.duration
     notes = []
     elements = settings.elements or defaults.reduced_elements(scene)
@@ -292,12 +231,16 @@ def resolved(scene, settings: IpoptSettings, compiled: bool | None = None):
     if settings.intervals is None:
         notes.append(f"{intervals} intervals of {duration / intervals:.3g} s")
     _check_memory(scene, settings, elements, step, intervals)
-    chosen = replace(settings, elements=elements, step=step, intervals=intervals)
+    chosen = replace(
+        settings,
+        model=ModelSettings(elements, step),
+        grid=replace(settings.grid, control=settings.control, intervals=intervals),
+    )
     text = "derived settings: " + ", ".join(notes) if notes else ""
     return chosen, text
 
 
-def _check_memory(scene, settings: IpoptSettings, elements: int, step: float, intervals) -> None:
+def _check_memory(scene, settings: OcpSettings, elements: int, step: float, intervals) -> None:
     """Refuse a transcription whose arrays cannot fit in memory, naming the step."""
     intervals = intervals or defaults.control_intervals(scene.numerics.duration)
     size = scene.winch.knots if settings.control == "spline" else 2 * intervals
@@ -309,7 +252,7 @@ def _check_memory(scene, settings: IpoptSettings, elements: int, step: float, in
     )
 
 
-def ipopt_problem(scene, settings: IpoptSettings) -> WinchProblem:
+def shooting_problem(scene, settings: OcpSettings) -> WinchProblem:
     """The scene's winch problem with the control, model and step of resolved settings.
 
     ``settings`` come from :func:`resolved` (every number set); with compiled models, the
@@ -388,7 +331,8 @@ class ShootingProblem:
     Parameters
     ----------
     problem : WinchProblem
-    settings : IpoptSettings
+    settings : OcpSettings
+        Resolved (every number set); its solver settings are IPOPT's.
     quiet : bool
         Print nothing.
     verbose : bool
@@ -400,7 +344,7 @@ class ShootingProblem:
     def __init__(
         self,
         problem: WinchProblem,
-        settings: IpoptSettings,
+        settings: OcpSettings,
         quiet: bool = False,
         verbose: bool = False,
         rate_weight: float = 0.0,
@@ -408,6 +352,7 @@ class ShootingProblem:
         check_verbosity(quiet, verbose)
         started = time.perf_counter()
         self.problem, self.settings = problem, settings
+        ipopt = settings.solver_settings
         duration, step = problem.duration, problem.step
         model, control = problem.model, problem.control
         self.per_interval = per_interval = steps_per_interval(duration, step, settings.intervals)
@@ -426,14 +371,14 @@ class ShootingProblem:
         self.compile_time = report.compile_time if report is not None else 0.0
         interval = _interval_function(step_function, step, per_interval, problem.scene.seabed)
         arguments = (inputs, bias_rows, named["end_offset"], named["reference"])
-        if settings.shooting == "single":
+        if settings.transcription.shooting == "single":
             run = interval.mapaccum(settings.intervals)
             _, costs, errors = run(named["initial_state"], *arguments)
             nodes, continuity = ca.MX(model.state_size, 0), ca.MX(0, 1)
         else:
             nodes = ca.MX.sym("nodes", model.state_size, settings.intervals)
             starts = ca.horzcat(named["initial_state"], nodes[:, :-1])
-            mapped = interval.map(settings.intervals, "thread", settings.threads)
+            mapped = interval.map(settings.intervals, "thread", settings.transcription.threads)
             ends, costs, errors = mapped(starts, *arguments)
             continuity = ca.vec(ends - nodes)
             states = step_function.mapaccum(total_steps)(named["initial_state"], inputs)
@@ -469,11 +414,7 @@ class ShootingProblem:
         )
         options = {
             "ipopt": ipopt_options(
-                settings.hessian,
-                settings.max_iter,
-                settings.tolerance,
-                verbose,
-                settings.ipopt_options,
+                ipopt.hessian, ipopt.max_iter, ipopt.tolerance, verbose, ipopt.ipopt_options
             ),
             "print_time": verbose,
             "iteration_callback": self._callback,

@@ -1,8 +1,9 @@
 """The front door for optimal winch control: ``optimize(scene, solver=...)``.
 
-``solver`` is ``"gauss-newton"`` (the default), ``"ipopt"`` (both on the direct-shooting
-transcription, :class:`~cable_ocp.control.ocp.IpoptSettings`) or ``"nelder-mead"`` (the paper's
-method over spline knots, :class:`~cable_ocp.control.nelder_mead.NelderMeadSettings`).
+``solver`` is ``"gauss-newton"`` (the default) or ``"ipopt"`` (both on the direct-shooting
+transcription), or ``"nelder-mead"`` (the paper's method over spline knots): the registry of
+:mod:`cable_ocp.control.solvers`. The model, the control grid and the transcription are
+separate settings (:mod:`cable_ocp.control.settings`), the solver's own beside them.
 
 Whatever model the optimiser works on, the result's Omega comes from a simulation of the scene's
 own model with the optimised winch angle. With a reduced optimisation model, IPOPT's answer is
@@ -23,27 +24,21 @@ import numpy as np
 import xarray as xr
 
 from cable_ocp.control import labelled
-from cable_ocp.control.gauss_newton import GaussNewton, GaussNewtonSettings
-from cable_ocp.control.nelder_mead import (
-    NelderMeadSettings,
-    nelder_mead_problem,
-    resolved_nelder_mead,
-    solve_nelder_mead,
-)
-from cable_ocp.control.ocp import (
-    IpoptSettings,
-    ShootingProblem,
-    control_of,
-    full_model_scene,
-    ipopt_problem,
-    resolved,
-)
+from cable_ocp.control.nelder_mead import nelder_mead_problem, resolved_nelder_mead
+from cable_ocp.control.ocp import control_of, full_model_scene, resolved, shooting_problem
 from cable_ocp.control.problem import SolverOutcome, WinchProblem
+from cable_ocp.control.settings import (
+    GridSettings,
+    ModelSettings,
+    OcpSettings,
+    TranscriptionSettings,
+)
+from cable_ocp.control.solvers import SOLVERS, ocp_settings
 from cable_ocp.control.verification import Verification, correction_step
 from cable_ocp.drive.drive import Drive
 from cable_ocp.scene import labelled as results
 from cable_ocp.scene.schema import scene_of
-from cable_ocp.simulation.progress import IterationLog, check_verbosity
+from cable_ocp.simulation.progress import check_verbosity
 from cable_ocp.simulation.trajectory import Trajectory
 
 # Model correction stops once a solve improves the verified Omega by less than this factor.
@@ -308,28 +303,9 @@ def _timed_verify(problem: WinchProblem, quiet: bool, compiled: bool):
     return verify, lambda: elapsed[0]
 
 
-def shooting_solver(
+def solve_shooting(
     problem: WinchProblem,
-    settings: IpoptSettings,
-    quiet: bool = False,
-    verbose: bool = False,
-    rate_weight: float = 0.0,
-) -> GaussNewton | ShootingProblem:
-    """The transcription of a problem with the solver the settings ask for, built once.
-
-    Both take the problem's named parameters and solve with
-    ``solve(values, guess, fixed=, lower=, upper=)``.
-    """
-    if settings.solver == "gauss-newton":
-        log = IterationLog("gauss-newton", quiet=quiet)
-        gauss_newton = GaussNewtonSettings(max_iter=settings.max_iter, rate_weight=rate_weight)
-        return GaussNewton(problem, gauss_newton, log)
-    return ShootingProblem(problem, settings, quiet=quiet, verbose=verbose, rate_weight=rate_weight)
-
-
-def solve_ipopt(
-    problem: WinchProblem,
-    settings: IpoptSettings,
+    settings: OcpSettings,
     refinements: int = 3,
     quiet: bool = False,
     verbose: bool = False,
@@ -339,7 +315,8 @@ def solve_ipopt(
     Parameters
     ----------
     problem : WinchProblem
-    settings : IpoptSettings
+    settings : OcpSettings
+        Resolved, for Gauss-Newton or IPOPT.
     refinements : int
         Model-correction solves after the first (0 disables them); they stop early when the
         verified Omega stops improving. Ignored when the optimisation model is the scene's own.
@@ -356,14 +333,15 @@ def solve_ipopt(
         then holds the best verified profile, if any.
     """
     started = time.perf_counter()
-    nlp = shooting_solver(problem, settings, quiet=quiet, verbose=verbose)
+    solver = SOLVERS[settings.solver]
+    nlp = solver.build(problem, settings, quiet, verbose, 0.0)
     verify, verification_time = _timed_verify(problem, quiet, settings.compiled)
     outcomes: list[SolverOutcome] = []
     verified: list[float] = []
     best_outcome, best, checked, failure = None, None, None, None
     values = problem.parameter_values()
     parameters = problem.first_guess(compiled=settings.compiled)
-    solver_name = "Gauss-Newton" if settings.solver == "gauss-newton" else "IPOPT"
+    solver_name = solver.label
     solves = 1 + (refinements if problem.reduced else 0)
     # Full-model runs that only steer the model correction take a coarser step; the profile
     # reported is verified at the scene's.
@@ -508,7 +486,7 @@ def _nelder_mead_status(outcome: SolverOutcome, reason: str | None) -> str:
 
 def solve_nelder_mead_verified(
     problem: WinchProblem,
-    settings: NelderMeadSettings,
+    settings: OcpSettings,
     quiet: bool = False,
     verbose: bool = False,
 ) -> OcpResult:
@@ -517,7 +495,8 @@ def solve_nelder_mead_verified(
     Parameters
     ----------
     problem : WinchProblem
-    settings : NelderMeadSettings
+    settings : OcpSettings
+        Resolved, for Nelder-Mead.
     quiet : bool
         No progress bar.
     verbose : bool
@@ -525,7 +504,8 @@ def solve_nelder_mead_verified(
     """
     check_verbosity(quiet, verbose)
     started = time.perf_counter()
-    outcome = solve_nelder_mead(problem, settings, quiet=quiet)
+    search = SOLVERS["nelder-mead"].build(problem, settings, quiet, verbose, 0.0)
+    outcome = search.solve(problem.parameter_values(), problem.first_guess(settings.compiled))
     # A capped search is verified too (the paper's method usually stops at its cap); it stays
     # success = False.
     verify, verification_time = _timed_verify(problem, quiet, compiled=False)
@@ -557,12 +537,10 @@ def solve_nelder_mead_verified(
 
 @dataclass(frozen=True)
 class Method:
-    """How ``optimize`` states and solves a problem with one method.
+    """How ``optimize`` states a problem for one transcription and solves it, verified.
 
     Attributes
     ----------
-    default : IpoptSettings or NelderMeadSettings
-        Settings when none are given.
     resolve : callable
         ``(scene, settings) -> (settings, str)``: every number left unset derived from the scene
         (:mod:`cable_ocp.control.defaults`), and how.
@@ -572,51 +550,61 @@ class Method:
         ``(problem, settings, quiet=, verbose=, **kwargs) -> OcpResult``.
     """
 
-    default: IpoptSettings | NelderMeadSettings
     resolve: Callable[..., tuple]
     problem: Callable[..., WinchProblem]
     solve: Callable[..., OcpResult]
 
 
-# The solvers optimize() runs: two on the direct-shooting transcription, and the paper's.
-SOLVERS = ("gauss-newton", "ipopt", "nelder-mead")
-# A reduced model derived from the scene optimises; the scene's own model verifies.
+# The transcriptions (OcpResult.method): direct shooting for Gauss-Newton and IPOPT, the paper's
+# knots for Nelder-Mead. A reduced model derived from the scene optimises; the scene's own model
+# verifies.
 METHODS = {
-    "ipopt": Method(IpoptSettings(), resolved, ipopt_problem, solve_ipopt),
-    "nelder-mead": Method(
-        NelderMeadSettings(), resolved_nelder_mead, nelder_mead_problem, solve_nelder_mead_verified
-    ),
+    "ipopt": Method(resolved, shooting_problem, solve_shooting),
+    "nelder-mead": Method(resolved_nelder_mead, nelder_mead_problem, solve_nelder_mead_verified),
 }
+
+
+def method_of(solver: str) -> str:
+    """The transcription (``OcpResult.method``) that a solver of the registry runs on."""
+    return "nelder-mead" if solver == "nelder-mead" else "ipopt"
 
 
 def optimize(
     scene,
     solver: str | None = None,
-    settings: IpoptSettings | NelderMeadSettings | None = None,
+    settings=None,
+    *,
+    model: ModelSettings | None = None,
+    grid: GridSettings | None = None,
+    transcription: TranscriptionSettings | None = None,
     quiet: bool = False,
     verbose: bool = False,
     **kwargs,
 ) -> OcpResult:
     """Optimise the winch angle of a scene.
 
-    States the scene's :class:`~cable_ocp.control.problem.WinchProblem` once (with the control,
-    model and step of the settings), solves it with the solver, and verifies the result on the
-    scene's own model.
+    States the scene's :class:`~cable_ocp.control.problem.WinchProblem` once (with the model and
+    control grid asked for), solves it with the solver, and verifies the result on the scene's
+    own model.
 
     Parameters
     ----------
     scene : Scene
     solver : {"gauss-newton", "ipopt", "nelder-mead"}, optional
         Gauss-Newton SQP or IPOPT on the direct-shooting transcription, or the paper's
-        Nelder-Mead over spline knots. None: the settings' (``IpoptSettings.solver``;
-        ``"nelder-mead"`` for :class:`NelderMeadSettings`), or ``"gauss-newton"`` without
-        settings. Given with ``IpoptSettings``, it replaces their ``solver``.
-    settings : IpoptSettings or NelderMeadSettings, optional
-        Defaults: a reduced model derived from the scene (3 elements, more on a long rope; its
-        RK4 step from its limit along the locked run, at most 0.5 s:
-        :mod:`cable_ocp.control.defaults`); single shooting with a Hermite control of about
-        5 s intervals, or Nelder-Mead over the scene's spline knots. The result's ``notes`` say
-        what was derived.
+        Nelder-Mead over spline knots (:data:`cable_ocp.control.solvers.SOLVERS`). None: the
+        one whose settings are given, else ``"gauss-newton"``.
+    settings : GaussNewtonSettings, IpoptSettings or NelderMeadSettings, optional
+        The solver's own settings (default: its class's defaults).
+    model : ModelSettings, optional
+        The optimisation model; unset fields derived from the scene (3 elements, more on a long
+        rope; its RK4 step from its limit along the locked run, at most 0.5 s:
+        :mod:`cable_ocp.control.defaults`).
+    grid : GridSettings, optional
+        The control: a Hermite control of about 5 s intervals by default, or Nelder-Mead's
+        spline over the scene's knots.
+    transcription : TranscriptionSettings, optional
+        Single shooting, compiled, by default. The result's ``notes`` say what was derived.
     quiet : bool
         Print nothing at all.
     verbose : bool
@@ -635,29 +623,30 @@ def optimize(
     Raises
     ------
     ValueError
-        Bad input (a solver, setting or scene field out of range), before any heavy work.
+        Bad input (a solver, setting or scene field out of range, settings that do not fit
+        together), before any heavy work.
     """
     check_verbosity(quiet, verbose)
     refuse_line_scene(scene, "optimize")
-    solver, settings = chosen_solver(solver, settings)
-    method = "nelder-mead" if solver == "nelder-mead" else "ipopt"
+    settings = ocp_settings(solver, settings, model, grid, transcription)
+    method = method_of(settings.solver)
     chosen = METHODS[method]
     started = time.perf_counter()
-    model = "the optimisation model"
+    model_text = "the optimisation model"
     try:
         settings, derived = chosen.resolve(scene, settings)
-        if isinstance(settings, IpoptSettings):
+        if method == "ipopt":
             scene, fitted = full_model_scene(scene, settings)
             derived = "; ".join(text for text in (derived, fitted) if text)
-        model = (
+        model_text = (
             f"the optimisation model ({settings.elements} elements at h = {settings.step:.4g} s"
             f"{'; ' + derived if derived else ''})"
         )
         problem = chosen.problem(scene, settings)
         result = chosen.solve(problem, settings, quiet=quiet, verbose=verbose, **kwargs)
     except RuntimeError as error:  # SimulationError, EquilibriumError, CasADi's errors
-        failed = failed_result(method, settings, error, time.perf_counter() - started, model)
-        return replace(failed, solver=solver)
+        elapsed = time.perf_counter() - started
+        return failed_result(method, settings, error, elapsed, model_text)
     notes = "; ".join(text for text in (result.notes, derived) if text)
     ran = result.trajectory.scene_record if result.trajectory is not None else scene.to_dict()
     return replace(result, notes=notes, scene_record=ran)
@@ -677,32 +666,9 @@ def refuse_line_scene(scene, what: str) -> None:
         )
 
 
-def chosen_solver(
-    solver: str | None, settings: IpoptSettings | NelderMeadSettings | None
-) -> tuple[str, IpoptSettings | NelderMeadSettings]:
-    """The solver :func:`optimize` runs and its settings (ValueError naming a misfit)."""
-    if solver is not None and solver not in SOLVERS:
-        raise ValueError(f"solver = {solver!r}: must be one of {', '.join(map(repr, SOLVERS))}")
-    if settings is None:
-        solver = solver or "gauss-newton"
-        if solver == "nelder-mead":
-            return solver, METHODS["nelder-mead"].default
-        return solver, replace(METHODS["ipopt"].default, solver=solver)
-    if isinstance(settings, NelderMeadSettings) and solver in (None, "nelder-mead"):
-        return "nelder-mead", settings
-    if isinstance(settings, IpoptSettings) and solver != "nelder-mead":
-        if solver is not None and solver != settings.solver:
-            settings = replace(settings, solver=solver)
-        return settings.solver, settings
-    takes = "NelderMeadSettings" if solver == "nelder-mead" else "IpoptSettings"
-    raise ValueError(
-        f"settings: {type(settings).__name__} given for solver {solver!r}, which takes {takes}"
-    )
-
-
 def failed_result(
     method: str,
-    settings: IpoptSettings | NelderMeadSettings,
+    settings: OcpSettings,
     error: Exception,
     wall_time: float,
     model: str = "the optimisation model",
@@ -715,7 +681,7 @@ def failed_result(
     return OcpResult(
         method=method,
         parameters=np.zeros(0),
-        control=f"{getattr(settings, 'control', 'spline')}(0)",  # no profile: no parameters
+        control=f"{settings.control}(0)",  # no profile: no parameters
         trajectory=None,
         omega=float("nan"),
         omega_model=float("nan"),
@@ -727,4 +693,5 @@ def failed_result(
         build_time=0.0,
         solve_time=0.0,
         function_time=0.0,
+        solver=settings.solver,
     )

@@ -68,7 +68,8 @@ def solve_times(
 ) -> Figure:
     """Wall time and iterations of each solve, against the sample time (real time)."""
     fig, ax = plt.subplots(figsize=(10, 4.2))
-    sample = result.settings["sample_s"]
+    times = result.sample_times
+    sample = times[1] - times[0] if times.size > 1 else result.time[-1] - result.time[0]
     ax.bar(
         result.sample_times, 1e3 * result.solve_times, width=0.8 * sample, align="edge",
         label="solve",

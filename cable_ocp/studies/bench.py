@@ -33,9 +33,9 @@ from pathlib import Path
 
 import numpy as np
 
-from cable_ocp.control.nelder_mead import NelderMeadSettings
-from cable_ocp.control.ocp import IpoptSettings, make_control
+from cable_ocp.control.ocp import IpoptSettings, control_of
 from cable_ocp.control.optimization import OcpResult, optimize
+from cable_ocp.control.settings import GridSettings, ModelSettings, TranscriptionSettings
 from cable_ocp.drive.drive import Drive
 from cable_ocp.model.cable import CableModel
 from cable_ocp.scene.schema import load_scene
@@ -227,18 +227,18 @@ def ocp_report(models_dir: Path, quick: bool = False) -> list[tuple[str, OcpResu
     if quick:
         scene = load_scene(models_dir / "small_tow.toml")
         cases = [
-            (None, "Gauss-Newton, Hermite", IpoptSettings(step=0.25, intervals=8)),
-            ("nelder-mead", "Nelder-Mead, knots", NelderMeadSettings(step=0.25)),
+            (None, "Gauss-Newton, Hermite", QUICK_OCP_SETTINGS),
+            ("nelder-mead", "Nelder-Mead, knots", {"model": ModelSettings(step=0.25)}),
         ]
     else:
         scene = load_scene(models_dir / "paper_flat.toml")
-        spline = IpoptSettings(elements=3, step=0.5, control="spline")
+        spline = {"model": ModelSettings(3, 0.5), "grid": GridSettings(control="spline")}
         cases = [
-            (None, "Gauss-Newton, Hermite", None),
+            (None, "Gauss-Newton, Hermite", {}),
             (None, "Gauss-Newton, 14-knot spline", spline),
-            ("nelder-mead", "Nelder-Mead, 14 knots", None),
+            ("nelder-mead", "Nelder-Mead, 14 knots", {}),
         ]
-    rows = [(label, optimize(scene, solver, s, quiet=True)) for solver, label, s in cases]
+    rows = [(label, optimize(scene, solver, quiet=True, **parts)) for solver, label, parts in cases]
     print(f"Winch optimisation on {scene.name} (Omega verified on the scene's n = "
           f"{scene.model.elements} model), same run")  # fmt: skip
     print(f"{'method':<24}{'Omega [m]':>11}{'success':>9}{'iter.':>7}{'evals':>7}{'solve [s]':>11}"
@@ -270,10 +270,14 @@ def hessian_report(models_dir: Path) -> None:
     print(f"{'hessian':<16}{'compiled':>9}{'iterations':>12}{'Omega [m]':>12}{'solve [s]':>11}"
           f"{'s/iteration':>13}{'build [s]':>11}")  # fmt: skip
     for hessian, compiled in cases:
-        settings = IpoptSettings(
-            step=0.25, intervals=8, solver="ipopt", hessian=hessian, compiled=compiled
+        r = optimize(
+            scene,
+            "ipopt",
+            IpoptSettings(hessian=hessian),
+            transcription=TranscriptionSettings(compiled=compiled),
+            quiet=True,
+            **QUICK_OCP_SETTINGS,
         )
-        r = optimize(scene, settings=settings, quiet=True)
         print(
             f"{hessian:<16}{str(compiled):>9}{r.iterations:>12}{r.omega:>12.3e}"
             f"{r.solve_time:>11.1f}{r.solve_time / max(r.iterations, 1):>13.2f}"
@@ -284,7 +288,7 @@ def hessian_report(models_dir: Path) -> None:
 # The open-loop goals of the default optimize of paper_hill (wall time of optimize(), s).
 WARM_GOAL, COLD_GOAL = 1.5, 10.0
 # The quick ocp-speed runs: small_tow as in the quick ocp part (n = 4, h = 0.25 s, 8 intervals).
-QUICK_OCP_SETTINGS = {"step": 0.25, "intervals": 8}
+QUICK_OCP_SETTINGS = {"model": ModelSettings(step=0.25), "grid": GridSettings(intervals=8)}
 
 
 def ocp_speed_case(scene_path: str, solver: str, quick: bool) -> dict:
@@ -297,12 +301,11 @@ def ocp_speed_case(scene_path: str, solver: str, quick: bool) -> dict:
     from cable_ocp.drive.bounds import violation
 
     scene = load_scene(scene_path)
-    base = QUICK_OCP_SETTINGS if quick else {"elements": 3, "step": 0.5}
-    settings = IpoptSettings(**base, solver=solver)
+    parts = QUICK_OCP_SETTINGS if quick else {"model": ModelSettings(3, 0.5)}
     started = time.perf_counter()
-    result = optimize(scene, settings=settings, quiet=True)
+    result = optimize(scene, solver, quiet=True, **parts)
     wall = time.perf_counter() - started
-    control = make_control(scene, settings)
+    control = control_of(result.control, result.scene.numerics.duration)
     return {
         "wall": wall,
         "build": result.build_time - result.compile_time,

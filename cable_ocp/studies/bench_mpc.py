@@ -19,6 +19,8 @@ import numpy as np
 from cable_ocp.control.closed_loop.loop import mpc
 from cable_ocp.control.closed_loop.result import MpcResult
 from cable_ocp.control.closed_loop.settings import MpcSettings
+from cable_ocp.control.ocp import IpoptSettings
+from cable_ocp.control.settings import ModelSettings
 from cable_ocp.scene.schema import load_scene
 
 HEAVE = {"top.heave.amplitude": 1.0, "top.heave.period": 8.0}
@@ -26,15 +28,18 @@ HEAVE = {"top.heave.amplitude": 1.0, "top.heave.period": 8.0}
 BASELINE = MpcSettings(
     sample=5.0,
     interval=5.0,
-    step=1.0,
+    model=ModelSettings(step=1.0),
     solver="ipopt",
+    solver_settings=IpoptSettings(max_iter=100, tolerance=1e-6),
     heave_margin=1.0,
-    max_iter=100,
     limiter_band=0.2,
 )
 CASES = (
     ("IPOPT L-BFGS, 5 s sample (baseline)", BASELINE),
-    ("Gauss-Newton RTI, 5 s sample", replace(BASELINE, solver="gauss-newton", max_iter=1)),
+    (
+        "Gauss-Newton RTI, 5 s sample",
+        replace(BASELINE, solver="gauss-newton", solver_settings=None),
+    ),
     ("Gauss-Newton RTI, 1 s sample (default)", MpcSettings()),
 )
 QUICK_DURATION = 40.0  # s of the scene with --quick

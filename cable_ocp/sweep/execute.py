@@ -48,7 +48,8 @@ def run_case(scene: Scene, task: str, method: str, settings: Any) -> dict[str, A
         ``"simulate"`` (locked winch) or ``"optimize"``.
     method : str
         ``"ipopt"`` or ``"nelder-mead"`` (optimize).
-    settings : IpoptSettings, NelderMeadSettings or None
+    settings : OcpSettings or None
+        The optimiser's settings (``SweepSpec.settings``; None: optimize()'s defaults).
 
     Returns
     -------
@@ -68,9 +69,8 @@ def run_case(scene: Scene, task: str, method: str, settings: Any) -> dict[str, A
             trajectory = simulate(scene, quiet=True)
             record.update(success=True, status="ok")
         else:
-            result = optimize(
-                scene, "nelder-mead" if method == "nelder-mead" else None, settings, quiet=True
-            )
+            solver = "nelder-mead" if method == "nelder-mead" and settings is None else None
+            result = optimize(scene, solver, settings, quiet=True)
             trajectory = result.trajectory
             record.update(
                 success=bool(result.success),

@@ -5,8 +5,8 @@ A sweep file names a scene, a task and the overrides of each case::
     scene = "../paper_flat.toml"   # relative to the sweep file, or a bundled scene name
     task = "optimize"              # or "simulate"
     method = "ipopt"               # optimize only: "ipopt" or "nelder-mead"
-    [optimizer]                    # optimize only: IpoptSettings / NelderMeadSettings fields;
-                                   # unset ones are optimize()'s (METHODS: a reduced model)
+    [optimizer]                    # optimize only: the fields of the model, grid, transcription
+                                   # and solver settings (and solver); unset ones are optimize()'s
     elements = 3
     [set]                          # dotted-key overrides shared by every case
     "numerics.duration" = 60.0
@@ -40,17 +40,15 @@ import itertools
 import json
 import math
 import numbers
-import types
-import typing
-from dataclasses import asdict, dataclass, fields, replace
+from dataclasses import asdict, dataclass, fields
 from pathlib import Path
 from typing import Any
 
 import numpy as np
 
-from cable_ocp.control.nelder_mead import NelderMeadSettings
-from cable_ocp.control.ocp import IpoptSettings
-from cable_ocp.control.optimization import METHODS as DEFAULTS
+from cable_ocp.control.optimization import METHODS as TRANSCRIPTIONS
+from cable_ocp.control.settings import OcpSettings
+from cable_ocp.control.solvers import ocp_settings_from
 from cable_ocp.scene.bundled import models_dir
 from cable_ocp.scene.schema import Scene, SceneError, load_scene
 from cable_ocp.simulation.budget import check_memory, check_simulation_memory, optimisation_memory
@@ -63,7 +61,7 @@ except ModuleNotFoundError:  # Python 3.10
 
 TOP_KEYS = ("scene", "description", "task", "method", "optimizer", "set", "grid", "sample")
 TASKS = ("simulate", "optimize")
-METHODS = tuple(DEFAULTS)
+METHODS = tuple(TRANSCRIPTIONS)
 DESIGNS = ("latin-hypercube", "uniform")
 SAMPLE_KEYS = ("n", "seed", "design", "ranges")
 MAX_CASES = 100_000
@@ -106,7 +104,7 @@ class SweepSpec:
         ``"simulate"`` or ``"optimize"``.
     method : str
         ``"ipopt"`` or ``"nelder-mead"`` (used by ``optimize``).
-    settings : IpoptSettings, NelderMeadSettings or None
+    settings : OcpSettings or None
         Optimiser settings (None for ``simulate``).
     fixed : dict
         The ``[set]`` overrides.
@@ -123,7 +121,7 @@ class SweepSpec:
     scene_path: Path
     task: str
     method: str
-    settings: IpoptSettings | NelderMeadSettings | None
+    settings: OcpSettings | None
     fixed: dict
     swept: tuple[str, ...]
     design: str
@@ -211,53 +209,21 @@ def _find_sweep(path: Path) -> Path:
     )
 
 
-# What a value of each type of an optimiser field must be, said in the error.
-_KINDS = {bool: "true or false", int: "an integer", float: "a finite number", str: "a string",
-          dict: "a table"}  # fmt: skip
-
-
-def _option_fits(value: Any, allowed: tuple) -> bool:
-    if isinstance(value, bool):
-        return bool in allowed
-    if int in allowed and isinstance(value, int):
-        return True
-    if float in allowed and isinstance(value, int | float):
-        return math.isfinite(value)
-    return any(isinstance(value, kind) for kind in allowed if kind in (str, dict))
-
-
-def _check_options(cls: type, options: dict) -> None:
-    """Each ``[optimizer]`` value of the type its settings field declares."""
-    hints = typing.get_type_hints(cls)
-    for name, value in options.items():
-        hint = hints[name]
-        union = typing.get_origin(hint) in (typing.Union, types.UnionType)
-        allowed = tuple(a for a in (typing.get_args(hint) if union else (hint,)) if a in _KINDS)
-        if allowed and not _option_fits(value, allowed):
-            expected = " or ".join(_KINDS[a] for a in allowed)
-            raise _fail(f"optimizer.{name}", f" = {value!r:.60}: expected {expected}")
-
-
-def _settings(data: dict, task: str, method: str) -> IpoptSettings | NelderMeadSettings | None:
+def _settings(data: dict, task: str, method: str) -> OcpSettings | None:
+    """The ``[optimizer]`` table as one optimize's settings (each field checked by its class)."""
     options = _table(data, "optimizer")
     if task == "simulate":
         if options or "method" in data:
             key = "optimizer" if options else "method"
             raise _fail(key, ": only allowed with task = 'optimize'")
         return None
-    cls = type(DEFAULTS[method].default)
-    allowed = [f.name for f in fields(cls)]
-    for name in options:
-        if name not in allowed:
-            raise _fail(
-                f"optimizer.{name}",
-                f": unknown key for method = {method!r}; allowed keys: {', '.join(allowed)}",
-            )
-    _check_options(cls, options)
+    solver = options.get("solver")
+    if method == "nelder-mead" and solver not in (None, "nelder-mead"):
+        raise _fail("optimizer.solver", f" = {solver!r}: method = 'nelder-mead' is its own solver")
     try:
-        # Unset fields keep optimize()'s defaults (METHODS): a reduced model, not the scene's.
-        return replace(DEFAULTS[method].default, **options)
-    except (TypeError, ValueError) as error:
+        # Unset fields keep optimize()'s defaults: a reduced model derived from the scene.
+        return ocp_settings_from(options, "nelder-mead" if method == "nelder-mead" else None)
+    except ValueError as error:
         raise _fail("optimizer", f": {error}") from None
 
 
@@ -410,7 +376,7 @@ def _check_intervals(scene: Scene, settings: Any, case: int) -> None:
 
     Intervals left to the optimiser (None) are derived so that they divide them.
     """
-    if not isinstance(settings, IpoptSettings) or settings.intervals is None:
+    if settings is None or settings.intervals is None:
         return
     step = settings.step or scene.numerics.step
     try:
@@ -429,7 +395,7 @@ def _check_memory(scene: Scene, settings: Any, case: int) -> None:
     """Each case's runs must fit in memory: the scene's simulation, and an optimiser's horizon."""
     try:
         check_simulation_memory(scene)
-        if isinstance(settings, IpoptSettings):
+        if settings is not None and settings.solver != "nelder-mead":
             step = settings.step or scene.numerics.step
             estimate = optimisation_memory(scene, step, elements=settings.elements)
             check_memory(estimate, f"optimizer.step = {step} s", "give a longer optimizer.step")

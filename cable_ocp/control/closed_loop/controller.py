@@ -24,15 +24,16 @@ import numpy as np
 
 from cable_ocp.control.closed_loop.forecast import TopForecast
 from cable_ocp.control.closed_loop.settings import MpcSettings
-from cable_ocp.control.gauss_newton import DAQP_INFEASIBLE, GaussNewton, GaussNewtonSettings
-from cable_ocp.control.ocp import IpoptSettings, ShootingProblem
+from cable_ocp.control.gauss_newton import DAQP_INFEASIBLE
+from cable_ocp.control.ocp import IpoptSettings
 from cable_ocp.control.parameters import ProblemParameters
 from cable_ocp.control.problem import WinchProblem
+from cable_ocp.control.settings import GridSettings, OcpSettings, TranscriptionSettings
+from cable_ocp.control.solvers import SOLVERS
 from cable_ocp.drive.drive import end_force, stage_times
 
 # IPOPT's options for the closed loop (the baseline): warm-started from the shifted plan.
 IPOPT_WARM_START = {"warm_start_init_point": "yes", "mu_init": 1e-3}
-IPOPT_TOLERANCE = 1e-6
 # In a solve's status when it ran on the winch's own range, its narrowed one being infeasible.
 WIDENED = "on the winch's own range: the room for the heave feedback left no feasible plan"
 
@@ -82,6 +83,13 @@ class Solve:
     solve_time: float
 
 
+def _warm_started(settings):
+    """IPOPT's settings with the closed loop's warm start (the user's options win)."""
+    if not isinstance(settings, IpoptSettings):
+        return settings
+    return replace(settings, ipopt_options={**IPOPT_WARM_START, **settings.ipopt_options})
+
+
 class RecedingHorizon:
     """The receding-horizon controller of a scene (see the module docstring).
 
@@ -97,28 +105,16 @@ class RecedingHorizon:
             scene, settings.horizon, settings.interval, settings.elements, settings.step
         )
         self.model, self.control = problem.model, problem.control
-        if settings.solver == "gauss-newton":
-            rti = GaussNewtonSettings(
-                settings.max_iter,
-                rate_weight=settings.rate_weight,
-                real_time=True,
-                stage_jacobians="ends",
-            )
-            self.solver = GaussNewton(problem, rti)
-        else:
-            ipopt = IpoptSettings(
-                elements=settings.elements,
-                step=settings.step,
-                shooting="multiple",
-                intervals=settings.intervals,
-                solver="ipopt",
-                max_iter=settings.max_iter,
-                tolerance=IPOPT_TOLERANCE,
-                ipopt_options=IPOPT_WARM_START,
-            )
-            self.solver = ShootingProblem(
-                problem, ipopt, quiet=True, rate_weight=settings.rate_weight
-            )
+        transcription = OcpSettings(
+            settings.solver,
+            _warm_started(settings.solver_settings),
+            settings.model,
+            GridSettings(intervals=settings.intervals),
+            TranscriptionSettings(shooting="multiple" if settings.solver == "ipopt" else "single"),
+        )
+        self.solver = SOLVERS[settings.solver].build(
+            problem, transcription, True, False, settings.rate_weight
+        )
         self.build_time, self.compile_time = self.solver.build_time, self.solver.compile_time
         self.stage_times = stage_times(problem.grid[:-1], problem.step)[0]
         self.plan, self.plan_start = np.zeros(self.control.size), 0.0

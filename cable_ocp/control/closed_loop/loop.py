@@ -27,7 +27,8 @@ from cable_ocp.control.closed_loop.result import MpcResult
 from cable_ocp.control.closed_loop.settings import MpcSettings
 from cable_ocp.control.interrupts import interrupt_here
 from cable_ocp.control.ocp import compile_ahead, make_control, resolved
-from cable_ocp.control.optimization import METHODS, optimize, refuse_line_scene
+from cable_ocp.control.optimization import optimize, refuse_line_scene
+from cable_ocp.control.solvers import ocp_settings
 from cable_ocp.control.verification import lowest_clearance
 from cable_ocp.drive.bounds import angle_bounds
 from cable_ocp.drive.drive import Drive
@@ -218,7 +219,7 @@ def mpc(scene, settings: MpcSettings | None = None, quiet: bool = False, **field
             **settings.record(),
             "derived": parts.derived,
             "plant_elements": scene.model.elements,
-            "plant_step_s": h,
+            "plant_step": h,
         },
         references=ref_errors,
         reference_omegas={k: rms_objective(time_grid, v) for k, v in ref_errors.items()},
@@ -282,8 +283,8 @@ def _references(scene, plant: Plant, names, time_grid) -> tuple[dict[str, np.nda
         calm = scene.updated({"top.heave": None})
         try:
             # The settings optimize() derives, fixed here: the profile's control needs them.
-            settings, _ = resolved(calm, METHODS["ipopt"].default)
-            result = optimize(calm, settings=settings, quiet=True)
+            settings, _ = resolved(calm, ocp_settings())
+            result = optimize(calm, model=settings.model, grid=settings.grid, quiet=True)
         except (ValueError, RuntimeError) as error:  # the derivation's locked run, say
             missing.append(f"reference 'open-loop' left out: {error}")
             return out, missing

@@ -61,8 +61,9 @@ class MpcResult:
     build_time : float, s
         Building the controller's transcription (compiling or loading its libraries).
     settings : dict
-        The fields of :class:`.settings.MpcSettings`, plant_elements and plant_step (with their
-        units in the keys, :meth:`.settings.MpcSettings.record`).
+        The fields of :class:`.settings.MpcSettings` (:meth:`.settings.MpcSettings.record`; the
+        model's and the solver's as tables), ``derived``, ``plant_elements`` and ``plant_step``
+        (s). Files written before the settings were split keep their units in the keys.
     references : dict of str to array (k,)
         Clearance errors of reference runs on the same plant and time grid (``"locked"``,
         ``"open-loop"``, ``"open-loop + heave feedback"``), m.

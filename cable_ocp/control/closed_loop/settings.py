@@ -3,11 +3,14 @@
 from __future__ import annotations
 
 import math
-from dataclasses import asdict, dataclass, replace
+from dataclasses import asdict, dataclass, field, replace
 
 from cable_ocp.control import defaults
 from cable_ocp.control.checks import Rule, check_fields
+from cable_ocp.control.gauss_newton import GaussNewtonSettings
 from cable_ocp.control.ocp import IpoptSettings
+from cable_ocp.control.settings import ModelSettings
+from cable_ocp.control.solvers import solver_of
 from cable_ocp.drive.bounds import angle_bounds
 
 REFERENCES = ("locked", "open-loop")
@@ -19,7 +22,13 @@ SAMPLE, INTERVAL, HORIZON = 1.0, defaults.CONTROL_INTERVAL, 20.0
 CONTROLLER_ELEMENTS, CONTROLLER_STEP_CAP = 2, 1.0
 # rad: the plant's soft limiter band when the range allows (``limiter_band`` below).
 LIMITER_BAND = 0.5
-SOLVERS = ("gauss-newton", "ipopt")
+# The closed loop's solver settings when none are given: one Gauss-Newton step per sample from
+# the shifted plan, its sensitivities from the Jacobian at the step ends (the real-time
+# iteration); IPOPT to convergence (its 300 iterations) at a tolerance of 1e-6.
+CLOSED_LOOP_SOLVERS = {
+    "gauss-newton": GaussNewtonSettings(max_iter=1, real_time=True, stage_jacobians="ends"),
+    "ipopt": IpoptSettings(tolerance=1e-6),
+}
 
 
 def _multiple(value: float, unit: float) -> bool:
@@ -32,14 +41,12 @@ _RULES = {
     "horizon": Rule("number", above=0, unit="s", optional=True),
     "sample": Rule("number", above=0, unit="s", optional=True),
     "interval": Rule("number", above=0, unit="s", optional=True),
-    "elements": Rule("integer", low=1),
-    "step": Rule("number", above=0, unit="s", optional=True),
-    "solver": Rule("choice", choices=SOLVERS),
+    "solver": Rule("choice", choices=tuple(CLOSED_LOOP_SOLVERS)),
+    "heave_feedback": Rule("flag"),
     "heave_filter": Rule("number", above=0, unit="s"),
     "heave_margin": Rule("number", low=0),
     "limiter_band": Rule("number", above=0, unit="rad", optional=True),
     "rate_weight": Rule("number", low=0, unit="s^2"),
-    "max_iter": Rule("integer", low=1, optional=True),
 }
 
 
@@ -61,17 +68,18 @@ class MpcSettings:
         the reduced model's errors: on the README's heave case Omega was 0.168 m with 1 s
         intervals against 0.046 m with 5 s ones (a 1 s sample, h = 1 s, converged solves).
         None: the multiple of ``sample`` nearest 5 s.
-    elements : int
-        Elements of the controller's model.
-    step : float or None, s
-        Its RK4 step (None: the largest whole fraction of ``sample`` within 0.7 of the
-        controller model's RK4 limit along the scene's locked run, at most 1 s,
-        :mod:`cable_ocp.control.defaults`); a step above that limit is refused.
+    model : ModelSettings
+        The controller's model: its elements (None: 2) and RK4 step (None: the largest whole
+        fraction of ``sample`` within 0.7 of the controller model's RK4 limit along the scene's
+        locked run, at most 1 s, :mod:`cable_ocp.control.defaults`); a step above that limit is
+        refused.
     solver : str
-        ``"gauss-newton"``: one Gauss-Newton step per sample from the shifted previous plan (a
-        real-time iteration: one simulation with sensitivities and one QP); ``"ipopt"``: IPOPT
-        with a limited-memory Hessian on the multiple-shooting NLP, to convergence or
-        ``max_iter``.
+        ``"gauss-newton"``: Gauss-Newton steps from the shifted previous plan (by default one
+        per sample, a real-time iteration: one simulation with sensitivities and one QP);
+        ``"ipopt"``: IPOPT with a limited-memory Hessian on the multiple-shooting NLP,
+        warm-started.
+    solver_settings : GaussNewtonSettings or IpoptSettings or None
+        That solver's own settings (None: :data:`CLOSED_LOOP_SOLVERS`).
     heave_feedback : bool
         Add the measured top height's departure from the forecast to the plan (eq. 38 on the
         measured motion, :mod:`.plant`).
@@ -95,9 +103,6 @@ class MpcSettings:
         on 1.
     rate_weight : float, s^2
         Weight of the pay-out speed ``(r_D phi')^2`` against ``e^2`` in the objective.
-    max_iter : int or None
-        Iterations per solve: IPOPT's, or Gauss-Newton steps (None: 1 for Gauss-Newton, the
-        real-time iteration; 300 for IPOPT, so that ``solver="ipopt"`` alone converges).
     references : tuple of str
         Reference runs on the same plant: ``"locked"`` (winch locked), ``"open-loop"`` (the
         open-loop optimum of ``cable_ocp.optimize`` on the scene without its heave, applied as it
@@ -107,23 +112,23 @@ class MpcSettings:
     horizon: float | None = None
     sample: float | None = None
     interval: float | None = None
-    elements: int = CONTROLLER_ELEMENTS
-    step: float | None = None
+    model: ModelSettings = field(default_factory=ModelSettings)
     solver: str = "gauss-newton"
+    solver_settings: GaussNewtonSettings | IpoptSettings | None = None
     heave_feedback: bool = True
     heave_filter: float = 15.0
     heave_margin: float = 0.5
     limiter_band: float | None = None
     rate_weight: float = 1e-4
-    max_iter: int | None = None
     references: tuple[str, ...] = ("locked",)
 
     def __post_init__(self):
         check_fields(self, _RULES)
         if self.heave_margin > 1:
             raise ValueError(f"MpcSettings.heave_margin = {self.heave_margin}: must be <= 1")
-        if not isinstance(self.heave_feedback, bool):
-            raise ValueError(f"MpcSettings.heave_feedback = {self.heave_feedback!r}: a bool")
+        if not isinstance(self.model, ModelSettings):
+            raise ValueError(f"MpcSettings.model = {self.model!r:.60}: a ModelSettings")
+        solver_of(self.solver, self.solver_settings, closed_loop=True)
         if None not in (self.horizon, self.sample, self.interval, self.step):
             self._check_timing()
         unknown = set(self.references) - set(REFERENCES)
@@ -180,35 +185,46 @@ class MpcSettings:
             band = min(LIMITER_BAND, (high - low) / 4)
             if band < LIMITER_BAND:
                 notes.append(f"limiter band {band:.3g} rad (a quarter of the winch range)")
-        step = self.step
-        if self.elements > scene.model.elements:
+        step, elements = self.step, self.elements
+        if elements > scene.model.elements:
             raise ValueError(
-                f"elements = {self.elements}: the reduced model needs 1 .. model.elements = "
-                f"{scene.model.elements} elements"
+                f"model.elements = {elements}: the controller's model needs 1 .. "
+                f"model.elements = {scene.model.elements} elements of the scene"
             )
-        limit, at = defaults.run_limit(scene, self.elements, duration, compiled)
+        limit, at = defaults.run_limit(scene, elements, duration, compiled)
         if step is None:
             step = defaults.step_within(limit, sample, CONTROLLER_STEP_CAP)
             choice = defaults.StepChoice(step, limit, at)
-            notes.append(choice.describe(f"controller of {self.elements} elements at"))
+            notes.append(choice.describe(f"controller of {elements} elements at"))
         else:
             defaults.check_step(
-                step, limit, "step", "leave it unset to derive one, or give a smaller step"
+                step, limit, "model.step", "leave it unset to derive one, or give a smaller step"
             )
-        max_iter = self.max_iter
-        if max_iter is None:  # one Gauss-Newton step (the real-time iteration), or IPOPT's own
-            max_iter = 1 if self.solver == "gauss-newton" else IpoptSettings().max_iter
+        solver, solver_settings = solver_of(self.solver, self.solver_settings, closed_loop=True)
+        if self.solver_settings is None:
+            solver_settings = CLOSED_LOOP_SOLVERS[solver.name]
         chosen = replace(
             self,
             horizon=horizon,
             sample=sample,
             interval=interval,
-            step=step,
+            model=ModelSettings(elements, step),
             limiter_band=band,
-            max_iter=max_iter,
+            solver=solver.name,
+            solver_settings=solver_settings,
         )
         chosen.check(scene)
         return chosen, ("derived settings: " + ", ".join(notes)) if notes else ""
+
+    @property
+    def elements(self) -> int:
+        """Elements of the controller's model (``model.elements``, or 2)."""
+        return self.model.elements or CONTROLLER_ELEMENTS
+
+    @property
+    def step(self) -> float | None:
+        """The controller model's RK4 step, s (``model.step``)."""
+        return self.model.step
 
     @property
     def intervals(self) -> int:
@@ -235,8 +251,8 @@ class MpcSettings:
             )
         if self.elements > scene.model.elements:
             raise ValueError(
-                f"elements = {self.elements}: the reduced model needs 1 .. model.elements = "
-                f"{scene.model.elements} elements"
+                f"model.elements = {self.elements}: the controller's model needs 1 .. "
+                f"model.elements = {scene.model.elements} elements of the scene"
             )
         if scene.model.torsion:
             raise ValueError("model.torsion = true: the MPC supports 5-DOF models only")
@@ -255,10 +271,8 @@ class MpcSettings:
             )
 
     def record(self) -> dict:
-        """The settings as a result stores them (names with their units)."""
-        units = {"horizon": "_s", "sample": "_s", "interval": "_s", "step": "_s",
-                 "heave_filter": "_s", "rate_weight": "_s2", "limiter_band": "_rad"}  # fmt: skip
+        """The settings as a result stores them (nested tables; units as documented above)."""
         out = {}
         for name, value in asdict(self).items():
-            out[name + units.get(name, "")] = ",".join(value) if isinstance(value, tuple) else value
+            out[name] = ",".join(value) if isinstance(value, tuple) else value
         return out

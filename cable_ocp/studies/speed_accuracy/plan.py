@@ -6,6 +6,13 @@ from dataclasses import dataclass
 
 from cable_ocp.control.nelder_mead import NelderMeadSettings
 from cable_ocp.control.ocp import IpoptSettings
+from cable_ocp.control.settings import (
+    GridSettings,
+    ModelSettings,
+    OcpSettings,
+    TranscriptionSettings,
+)
+from cable_ocp.control.solvers import ocp_settings
 
 TOLERANCES = (0.01, 0.1)  # m, the accuracy targets named in the report
 
@@ -46,23 +53,16 @@ class OcpSetting:
         head = f"{self.method}, n = {self.elements}, h = {self.step:g} s"
         return f"{head}, <= {self.limit} {cap}{more}"
 
-    def settings(self, intervals: int) -> IpoptSettings | NelderMeadSettings:
-        """The optimiser's own settings (``intervals``: IPOPT's shooting intervals)."""
+    def settings(self, intervals: int) -> OcpSettings:
+        """The optimiser's settings (``intervals``: IPOPT's shooting intervals)."""
+        model = ModelSettings(self.elements, self.step)
+        transcription = TranscriptionSettings(compiled=self.compiled)
         if self.method == "ipopt":
-            return IpoptSettings(
-                elements=self.elements,
-                step=self.step,
-                intervals=intervals,
-                max_iter=self.limit,
-                compiled=self.compiled,
-                solver="ipopt",
-            )
-        return NelderMeadSettings(
-            elements=self.elements,
-            step=self.step,
-            max_evaluations=self.limit,
-            compiled=self.compiled,
-        )
+            grid = GridSettings(intervals=intervals)
+            return ocp_settings("ipopt", IpoptSettings(max_iter=self.limit), model, grid,
+                                transcription)  # fmt: skip
+        search = NelderMeadSettings(max_evaluations=self.limit)
+        return ocp_settings("nelder-mead", search, model, None, transcription)
 
 
 @dataclass(frozen=True)

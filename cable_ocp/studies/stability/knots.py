@@ -11,6 +11,8 @@ import numpy as np
 from cable_ocp.control.nelder_mead import NelderMeadSettings
 from cable_ocp.control.ocp import IpoptSettings
 from cable_ocp.control.optimization import optimize
+from cable_ocp.control.settings import GridSettings, ModelSettings, TranscriptionSettings
+from cable_ocp.control.solvers import ocp_settings
 from cable_ocp.studies.stability.markdown import table_cell
 
 
@@ -220,30 +222,25 @@ def knots_comparison(
     and so minimise the same objective (methods ``"ipopt"``, ``"nelder-mead"``). With
     ``refinements > 0`` IPOPT is also run with that many model-correction solves against the
     scene's model (``"ipopt + correction"``, see
-    :func:`cable_ocp.control.optimization.solve_ipopt`). ``compiled``: the optimisers simulate with
-    the RK4 step compiled to C (cached on disk). A
-    failed solve is kept with its status.
+    :func:`cable_ocp.control.optimization.solve_shooting`). ``compiled``: the optimisers
+    simulate with the RK4 step compiled to C (cached on disk). A failed solve is kept with its
+    status.
     """
     runs = []
     for p in knots:
         local = scene.updated({"winch.knots": p})
-        ipopt = IpoptSettings(
-            elements=elements,
-            step=step,
-            control="spline",
-            max_iter=max_iter,
-            compiled=compiled,
-            solver="ipopt",
-        )
+        model = ModelSettings(elements, step)
+        transcription = TranscriptionSettings(compiled=compiled)
+        ipopt = ocp_settings("ipopt", IpoptSettings(max_iter=max_iter), model,
+                             GridSettings(control="spline"), transcription)  # fmt: skip
         plain = optimize(local, settings=ipopt, refinements=0, quiet=quiet)
         runs.append(_knot_run(p, "ipopt", plain))
         if refinements > 0:
             corrected = optimize(local, settings=ipopt, refinements=refinements, quiet=quiet)
             runs.append(_knot_run(p, "ipopt + correction", corrected))
-        search = NelderMeadSettings(
-            elements=elements, step=step, max_evaluations=max_evaluations, compiled=compiled
-        )
-        searched = optimize(local, "nelder-mead", search, quiet=quiet)
+        search = NelderMeadSettings(max_evaluations=max_evaluations)
+        searched = optimize(local, "nelder-mead", search, model=model, transcription=transcription,
+                            quiet=quiet)  # fmt: skip
         runs.append(_knot_run(p, "nelder-mead", searched))
     return KnotsComparison(
         scene_name=scene.name,

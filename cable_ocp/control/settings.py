@@ -1,0 +1,181 @@
+"""The open loop's settings: what is optimised, how it is transcribed, and by which solver.
+
+Three separate choices, each a frozen dataclass checked once by its declared rules
+(:mod:`cable_ocp.control.checks`):
+
+- :class:`ModelSettings`: the optimisation model, a reduction of the scene's (elements, RK4
+  step); the closed loop's controller model is one too (``MpcSettings.model``);
+- :class:`GridSettings`: the control grid of the open loop (the winch parametrisation and its
+  intervals);
+- :class:`TranscriptionSettings`: how the problem becomes an NLP (single or multiple shooting,
+  compiled or interpreted).
+
+The solver's own settings are its module's (``GaussNewtonSettings``, ``IpoptSettings``,
+``NelderMeadSettings``, :mod:`cable_ocp.control.solvers`). :class:`OcpSettings` holds all four
+for one ``optimize`` and checks what they must agree on. Every field left None is derived from
+the scene (:mod:`cable_ocp.control.defaults`).
+"""
+
+from __future__ import annotations
+
+from dataclasses import asdict, dataclass, field
+
+from cable_ocp.control.checks import Rule, check_fields
+
+
+@dataclass(frozen=True)
+class ModelSettings:
+    """The reduced model an optimiser or controller steers (Omega is verified on the scene's).
+
+    Attributes
+    ----------
+    elements : int or None
+        Elements of the model (None: derived from the scene; in the open loop
+        :func:`cable_ocp.control.defaults.reduced_elements`, in the closed loop 2). The scene's
+        ``model.elements`` asks for its own model.
+    step : float or None, s
+        Its RK4 step (None: derived from the model's RK4 limit along its locked run,
+        :mod:`cable_ocp.control.defaults`). A step above that limit is refused.
+    """
+
+    elements: int | None = None
+    step: float | None = None
+
+    def __post_init__(self):
+        check_fields(
+            self,
+            {
+                "elements": Rule("integer", low=1, optional=True),
+                "step": Rule("number", above=0, unit="s", optional=True),
+            },
+        )
+
+
+@dataclass(frozen=True)
+class GridSettings:
+    """The winch parametrisation of the open loop.
+
+    Attributes
+    ----------
+    control : str or None
+        ``"hermite"`` (piecewise cubic per control interval) or ``"spline"`` (the paper's knots,
+        ``winch.knots`` of the scene). None: Hermite for the shooting solvers, the spline for
+        Nelder-Mead (which takes the spline only).
+    intervals : int or None
+        Shooting intervals (None: about one per 5 s of the duration,
+        :func:`cable_ocp.control.defaults.control_intervals`); the number of RK4 steps must be a
+        multiple of it (a derived step is chosen so; with a fixed step, derived intervals are the
+        nearest count that divides its steps). With single shooting they only cut the chain of
+        RK4 steps (and set the Hermite control's intervals). Not for Nelder-Mead.
+    control_intervals : int or None
+        Intervals of the Hermite control (None: as many as shooting intervals).
+    """
+
+    control: str | None = None
+    intervals: int | None = None
+    control_intervals: int | None = None
+
+    def __post_init__(self):
+        check_fields(
+            self,
+            {
+                "control": Rule("choice", choices=("hermite", "spline"), optional=True),
+                "intervals": Rule("integer", low=1, optional=True),
+                "control_intervals": Rule("integer", low=1, optional=True),
+            },
+        )
+
+
+@dataclass(frozen=True)
+class TranscriptionSettings:
+    """How the winch problem becomes an NLP.
+
+    Attributes
+    ----------
+    shooting : str
+        ``"single"`` (only the winch parameters are variables) or ``"multiple"`` (the states at
+        the interval ends too, joined by continuity constraints; IPOPT only).
+    threads : int
+        Shooting intervals evaluated in parallel (multiple shooting only).
+    compiled : bool
+        Compile the model's right-hand side and its first derivatives to C (cached on disk,
+        one library per model structure), and verify on the compiled full model.
+    """
+
+    shooting: str = "single"
+    threads: int = 1
+    compiled: bool = True
+
+    def __post_init__(self):
+        check_fields(
+            self,
+            {
+                "shooting": Rule("choice", choices=("single", "multiple")),
+                "threads": Rule("integer", low=1),
+                "compiled": Rule("flag"),
+            },
+        )
+
+
+@dataclass(frozen=True)
+class OcpSettings:
+    """Everything one ``optimize`` runs with: the problem, its transcription and its solver.
+
+    Attributes
+    ----------
+    solver : str
+        The solver's name in :data:`cable_ocp.control.solvers.SOLVERS`.
+    solver_settings : GaussNewtonSettings, IpoptSettings or NelderMeadSettings
+        That solver's own settings (its class is the registry's).
+    model : ModelSettings
+    grid : GridSettings
+    transcription : TranscriptionSettings
+    """
+
+    solver: str
+    solver_settings: object
+    model: ModelSettings = field(default_factory=ModelSettings)
+    grid: GridSettings = field(default_factory=GridSettings)
+    transcription: TranscriptionSettings = field(default_factory=TranscriptionSettings)
+
+    @property
+    def control(self) -> str:
+        """The winch parametrisation: the grid's, or the solver's own when the grid leaves it."""
+        if self.grid.control is not None:
+            return self.grid.control
+        return "spline" if self.solver == "nelder-mead" else "hermite"
+
+    @property
+    def elements(self) -> int | None:
+        """The model's elements (``model.elements``)."""
+        return self.model.elements
+
+    @property
+    def step(self) -> float | None:
+        """The model's RK4 step, s (``model.step``)."""
+        return self.model.step
+
+    @property
+    def intervals(self) -> int | None:
+        """The shooting intervals (``grid.intervals``)."""
+        return self.grid.intervals
+
+    @property
+    def control_intervals(self) -> int | None:
+        """The Hermite control's intervals (the shooting intervals unless set apart)."""
+        return self.grid.control_intervals or self.grid.intervals
+
+    @property
+    def compiled(self) -> bool:
+        """Whether the models run compiled (``transcription.compiled``)."""
+        return self.transcription.compiled
+
+    def record(self) -> dict:
+        """The settings as a result stores them: one table per object, the solver named."""
+        return {
+            "solver": self.solver,
+            "model": asdict(self.model),
+            "grid": asdict(self.grid),
+            "transcription": asdict(self.transcription),
+            "solver_settings": asdict(self.solver_settings),
+        }

@@ -1,0 +1,206 @@
+"""The solvers of the winch problem: one contract, one registry.
+
+Every solver of a :class:`~cable_ocp.control.problem.WinchProblem` keeps these rules (as
+SciPy's ``OdeSolver`` states its own), so that ``optimize``, ``mpc``, the sweep and the command
+line run any of them alike by its name in :data:`SOLVERS`:
+
+1. It is built once per problem, ``build(problem, settings, quiet, verbose, rate_weight)``, from
+   resolved :class:`~cable_ocp.control.settings.OcpSettings` (every number set). The building
+   (transcription, symbolic work, compiling C) is timed apart: ``build_time`` and, of it,
+   ``compile_time`` (s; 0 on a disk-cache hit).
+2. It solves as often as asked: ``solve(values, guess, fixed=None, lower=None, upper=None)``,
+   ``values`` the problem's named parameters
+   (:class:`~cable_ocp.control.parameters.ProblemParameters`), ``guess`` the winch parameters
+   (rad, rad/s) it starts from. ``fixed`` pins parameters (index to value) and ``lower``,
+   ``upper`` replace the bound rows' limits: a closed loop's needs. A solver that cannot take
+   them (``closed_loop=False``) refuses them with a ValueError.
+3. It returns a :class:`~cable_ocp.control.problem.SolverOutcome`, and never raises for a
+   solve that fails: ``success`` is False and ``status`` says why, in the solver's words.
+   A user's interrupt (Ctrl-C) is re-raised as KeyboardInterrupt, never a failure.
+4. The outcome's ``omega`` (m) is Omega on the problem's model, ``history`` its objective per
+   iteration (``SolverOutcome``), and its ``parameters`` keep the winch bounds to within
+   :data:`cable_ocp.drive.bounds.BOUND_TOLERANCE` when it succeeds.
+5. It prints nothing when ``quiet``; otherwise one line per iteration (or a progress bar), and
+   with ``verbose`` its own log where it has one.
+6. Its own settings are a frozen dataclass, checked field by field when made
+   (:mod:`cable_ocp.control.checks`); :func:`ocp_settings` checks what they must agree on with
+   the grid and the transcription, before any work.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+from dataclasses import dataclass
+
+from cable_ocp.control.gauss_newton import GaussNewton, GaussNewtonSettings
+from cable_ocp.control.nelder_mead import NelderMead, NelderMeadSettings
+from cable_ocp.control.ocp import IpoptSettings, ShootingProblem
+from cable_ocp.control.settings import (
+    GridSettings,
+    ModelSettings,
+    OcpSettings,
+    TranscriptionSettings,
+)
+from cable_ocp.simulation.progress import IterationLog
+
+
+@dataclass(frozen=True)
+class Solver:
+    """One entry of the registry.
+
+    Attributes
+    ----------
+    name : str
+        As ``optimize(solver=...)`` takes it.
+    label : str
+        As messages print it.
+    settings : type
+        Its settings class; an instance of it is the default.
+    build : callable
+        ``(problem, settings, quiet, verbose, rate_weight) -> solver`` (rule 1).
+    shootings : tuple of str
+        The ``TranscriptionSettings.shooting`` it takes (empty: the paper's knots, no shooting).
+    closed_loop : bool
+        It takes ``fixed``, ``lower`` and ``upper`` (rule 2), so ``mpc`` may run it.
+    """
+
+    name: str
+    label: str
+    settings: type
+    build: Callable
+    shootings: tuple[str, ...]
+    closed_loop: bool
+
+
+def _gauss_newton(problem, settings: OcpSettings, quiet, verbose, rate_weight) -> GaussNewton:
+    log = None if quiet else IterationLog("gauss-newton")
+    return GaussNewton(problem, settings.solver_settings, log, rate_weight)
+
+
+def _ipopt(problem, settings: OcpSettings, quiet, verbose, rate_weight) -> ShootingProblem:
+    return ShootingProblem(problem, settings, quiet=quiet, verbose=verbose, rate_weight=rate_weight)
+
+
+def _nelder_mead(problem, settings: OcpSettings, quiet, verbose, rate_weight) -> NelderMead:
+    return NelderMead(problem, settings.solver_settings, settings.compiled, quiet)
+
+
+SOLVERS: dict[str, Solver] = {
+    entry.name: entry
+    for entry in (
+        Solver(
+            "gauss-newton", "Gauss-Newton", GaussNewtonSettings, _gauss_newton, ("single",), True
+        ),
+        Solver("ipopt", "IPOPT", IpoptSettings, _ipopt, ("single", "multiple"), True),
+        Solver("nelder-mead", "Nelder-Mead", NelderMeadSettings, _nelder_mead, (), False),
+    )
+}
+DEFAULT_SOLVER = "gauss-newton"
+
+
+def solver_named(name: str, closed_loop: bool = False) -> Solver:
+    """The registry's entry (ValueError naming the choices for an unknown name)."""
+    names = [n for n, entry in SOLVERS.items() if entry.closed_loop or not closed_loop]
+    if name not in names:
+        raise ValueError(f"solver = {name!r}: must be one of {', '.join(map(repr, names))}")
+    return SOLVERS[name]
+
+
+def solver_of(solver: str | None, settings, closed_loop: bool = False) -> tuple[Solver, object]:
+    """The solver to run and its settings, from a name, settings, both or neither.
+
+    Neither: :data:`DEFAULT_SOLVER` with its defaults; settings alone: the solver they belong
+    to. A name and settings of another solver are refused (ValueError).
+    """
+    if settings is None:
+        entry = solver_named(solver or DEFAULT_SOLVER, closed_loop)
+        return entry, entry.settings()
+    owners = [entry for entry in SOLVERS.values() if isinstance(settings, entry.settings)]
+    if not owners:
+        raise ValueError(
+            f"settings: {type(settings).__name__} is no solver's settings (one of "
+            f"{', '.join(entry.settings.__name__ for entry in SOLVERS.values())})"
+        )
+    entry = solver_named(solver or owners[0].name, closed_loop)
+    if not isinstance(settings, entry.settings):
+        raise ValueError(
+            f"settings: {type(settings).__name__} given for solver {entry.name!r}, which takes "
+            f"{entry.settings.__name__}"
+        )
+    return entry, settings
+
+
+def ocp_settings(
+    solver: str | None = None,
+    settings=None,
+    model: ModelSettings | None = None,
+    grid: GridSettings | None = None,
+    transcription: TranscriptionSettings | None = None,
+) -> OcpSettings:
+    """The settings of one ``optimize``, their agreement checked (ValueError naming a misfit).
+
+    ``settings`` may be a whole :class:`OcpSettings` (nothing else given then).
+    """
+    if isinstance(settings, OcpSettings):
+        if any(part is not None for part in (solver, model, grid, transcription)):
+            raise ValueError(
+                "settings: an OcpSettings holds the solver, model, grid and transcription; give "
+                "them in it, not beside it"
+            )
+        solver, model, grid = settings.solver, settings.model, settings.grid
+        settings, transcription = settings.solver_settings, settings.transcription
+    entry, settings = solver_of(solver, settings)
+    grid, transcription = grid or GridSettings(), transcription or TranscriptionSettings()
+    if transcription.shooting not in (entry.shootings or ("single",)):
+        takes = (
+            " or ".join(map(repr, entry.shootings)) + " shooting"
+            if entry.shootings
+            else ("no shooting (the knots' spline, one run per evaluation)")
+        )
+        raise ValueError(
+            f"TranscriptionSettings.shooting = {transcription.shooting!r}: {entry.label} takes "
+            f"{takes}; solver='ipopt' takes both"
+        )
+    if entry.name == "gauss-newton" and not transcription.compiled:
+        raise ValueError(
+            "TranscriptionSettings.compiled = False: Gauss-Newton works on the compiled "
+            "single-shooting transcription; set compiled=True, or solver='ipopt'"
+        )
+    if entry.name == "ipopt" and settings.hessian == "exact" and transcription.compiled:
+        raise ValueError(
+            "IpoptSettings.hessian = 'exact' needs second derivatives, which the compiled step "
+            "does not carry: set TranscriptionSettings(compiled=False) or "
+            "hessian='limited-memory'"
+        )
+    return OcpSettings(entry.name, settings, model or ModelSettings(), grid, transcription)
+
+
+def ocp_settings_from(options: dict, solver: str | None = None) -> OcpSettings:
+    """One ``optimize``'s settings from a flat table of field names (a sweep's ``[optimizer]``).
+
+    Each name goes to the object that declares it (:class:`ModelSettings`, :class:`GridSettings`,
+    :class:`TranscriptionSettings`, the solver's settings); ``solver`` may be in the table too.
+    Unset fields keep their defaults (derived from the scene). ValueError names an unknown key
+    with the allowed ones, or a value a field refuses.
+    """
+    options = dict(options)
+    entry = solver_named(options.pop("solver", solver) or DEFAULT_SOLVER)
+    classes = [ModelSettings, TranscriptionSettings, entry.settings]
+    classes += [GridSettings] if entry.shootings else []
+    parts: dict[type, dict] = {cls: {} for cls in classes}
+    for name, value in options.items():
+        owner = next((cls for cls in classes if name in cls.__dataclass_fields__), None)
+        if owner is None:
+            allowed = ["solver"] + [name for cls in classes for name in cls.__dataclass_fields__]
+            raise ValueError(
+                f"{name}: unknown setting for solver {entry.name!r}; allowed: {', '.join(allowed)}"
+            )
+        parts[owner][name] = value
+    made = {cls: cls(**values) for cls, values in parts.items()}
+    return ocp_settings(
+        entry.name,
+        made[entry.settings],
+        made[ModelSettings],
+        made.get(GridSettings),
+        made[TranscriptionSettings],
+    )
