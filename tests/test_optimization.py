@@ -331,3 +331,21 @@ def test_intervals_that_do_not_divide_the_steps_are_refused_before_any_model(
     scene = load_scene(models_dir / "small_tow.toml")  # 40 s at h = 0.5 s: 80 steps
     with pytest.raises(ValueError, match=r"intervals = 42 must divide the 80 RK4 steps"):
         optimize(scene, model=ModelSettings(step=0.5), grid=GridSettings(intervals=42), quiet=True)
+
+
+def test_a_result_keeps_its_resolved_settings_and_solves_again_from_its_file(short, tmp_path):
+    """The file holds the scene and the settings, every number as derived: the same problem
+    solved again from them gives the same profile (to 1e-12 rad) and Omega (to 1e-12 m)."""
+    from cable_ocp.control.solvers import ocp_settings_from_record
+
+    first = optimize(short, "ipopt", IpoptSettings(max_iter=50), quiet=True)
+    assert first.settings["grid"]["intervals"] is not None  # derived, then kept
+    first.save(tmp_path / "run")
+    kept = OcpResult.load(tmp_path / "run")
+    settings = ocp_settings_from_record(kept.settings)
+    assert settings.solver == "ipopt" and settings.solver_settings.max_iter == 50
+    again = optimize(kept.scene, settings=settings, quiet=True)
+    np.testing.assert_allclose(again.parameters, first.parameters, rtol=0, atol=1e-12)
+    assert again.omega == pytest.approx(first.omega, rel=0, abs=1e-12)
+    with pytest.raises(ValueError, match="not a record of OcpSettings"):
+        ocp_settings_from_record({"solver": "ipopt"})

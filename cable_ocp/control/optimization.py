@@ -120,6 +120,13 @@ class OcpResult:
     solver : str
         The solver that ran: ``"gauss-newton"``, ``"ipopt"`` or ``"nelder-mead"`` (empty in
         files written before it was recorded).
+    settings : dict
+        The settings it ran with, every number as resolved from the scene
+        (:meth:`~cable_ocp.control.settings.OcpSettings.record`: the solver's name, the model,
+        grid, transcription and solver settings as tables);
+        :func:`cable_ocp.control.solvers.ocp_settings_from_record` rebuilds them, so that
+        ``optimize(result.scene, settings=...)`` solves the same problem again. Empty in files
+        written before it was kept, and when the settings could not be resolved.
     """
 
     method: str
@@ -149,6 +156,7 @@ class OcpResult:
     minimum_clearance_time: float = float("nan")
     scene_record: dict = field(default_factory=dict)
     solver: str = ""
+    settings: dict = field(default_factory=dict)
 
     @property
     def scene(self):
@@ -286,7 +294,7 @@ class OcpResult:
 _OPTIONAL_FIELDS = {
     "compile_time", "verification_time", "bound_time", "bond_residual", "verified_step",
     "heave_feedforward", "notes", "minimum_clearance", "minimum_clearance_time", "scene_record",
-    "solver",
+    "solver", "settings",
 }  # fmt: skip
 
 
@@ -649,7 +657,7 @@ def optimize(
         return failed_result(method, settings, error, elapsed, model_text)
     notes = "; ".join(text for text in (result.notes, derived) if text)
     ran = result.trajectory.scene_record if result.trajectory is not None else scene.to_dict()
-    return replace(result, notes=notes, scene_record=ran)
+    return replace(result, notes=notes, scene_record=ran, settings=settings.record())
 
 
 def refuse_line_scene(scene, what: str) -> None:

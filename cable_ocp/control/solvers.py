@@ -204,3 +204,20 @@ def ocp_settings_from(options: dict, solver: str | None = None) -> OcpSettings:
         made.get(GridSettings),
         made[TranscriptionSettings],
     )
+
+
+def ocp_settings_from_record(record: dict) -> OcpSettings:
+    """The settings a result kept (:meth:`OcpSettings.record`), rebuilt and checked again."""
+    try:
+        entry = solver_named(record["solver"])
+        return ocp_settings(
+            entry.name,
+            entry.settings(**record["solver_settings"]),
+            ModelSettings(**record["model"]),
+            GridSettings(**record["grid"]),
+            TranscriptionSettings(**record["transcription"]),
+        )
+    except (KeyError, TypeError) as error:
+        raise ValueError(
+            f"settings {record!r:.80}: not a record of OcpSettings ({error!r})"
+        ) from None

@@ -10,7 +10,7 @@ from cable_ocp.control.checks import Rule, check_fields
 from cable_ocp.control.gauss_newton import GaussNewtonSettings
 from cable_ocp.control.ocp import IpoptSettings
 from cable_ocp.control.settings import ModelSettings
-from cable_ocp.control.solvers import solver_of
+from cable_ocp.control.solvers import SOLVERS, solver_of
 from cable_ocp.drive.bounds import angle_bounds
 
 REFERENCES = ("locked", "open-loop")
@@ -276,3 +276,29 @@ class MpcSettings:
         for name, value in asdict(self).items():
             out[name] = ",".join(value) if isinstance(value, tuple) else value
         return out
+
+    @classmethod
+    def from_record(cls, record: dict) -> MpcSettings:
+        """The settings a result kept (:meth:`record`, with what the loop added), checked again.
+
+        Raises
+        ------
+        ValueError
+            Naming the record, when it is not one (files written before the settings were split
+            keep other keys: rerun those with the settings of their time).
+        """
+        names = [f for f in cls.__dataclass_fields__ if f in record]
+        try:
+            fields = {name: record[name] for name in names}
+            fields["model"] = ModelSettings(**record["model"])
+            solver = record["solver"]
+            if record.get("solver_settings") is not None:
+                fields["solver_settings"] = SOLVERS[solver].settings(**record["solver_settings"])
+            if isinstance(fields.get("references"), str):
+                fields["references"] = tuple(filter(None, fields["references"].split(",")))
+            return cls(**fields)
+        except (KeyError, TypeError) as error:
+            raise ValueError(
+                f"settings {record!r:.80}: not a record of MpcSettings ({type(error).__name__}: "
+                f"{error})"
+            ) from None
