@@ -28,6 +28,8 @@ class Rule:
         ``"integer"``, ``"number"`` (a finite real), ``"choice"`` or ``"flag"`` (a bool).
     low : float or None
         Smallest value allowed (inclusive), or None.
+    high : float or None
+        Largest value allowed (inclusive), or None.
     above : float or None
         A bound the value must be strictly above, or None.
     unit : str
@@ -40,6 +42,7 @@ class Rule:
 
     kind: str
     low: float | None = None
+    high: float | None = None
     above: float | None = None
     unit: str = ""
     optional: bool = False
@@ -59,6 +62,8 @@ class Rule:
             return "must be an integer"
         if not math.isfinite(value):
             return "must be finite"
+        if self.high is not None and value > self.high:
+            return f"must be <= {self.high:g}"
         if self.low is not None and value < self.low:
             return f"must be >= {self.low:g}"
         if self.above is not None and not value > self.above:

@@ -44,7 +44,7 @@ _RULES = {
     "solver": Rule("choice", choices=tuple(CLOSED_LOOP_SOLVERS)),
     "heave_feedback": Rule("flag"),
     "heave_filter": Rule("number", above=0, unit="s"),
-    "heave_margin": Rule("number", low=0),
+    "heave_margin": Rule("number", low=0, high=1),
     "limiter_band": Rule("number", above=0, unit="rad", optional=True),
     "rate_weight": Rule("number", low=0, unit="s^2"),
 }
@@ -124,8 +124,6 @@ class MpcSettings:
 
     def __post_init__(self):
         check_fields(self, _RULES)
-        if self.heave_margin > 1:
-            raise ValueError(f"MpcSettings.heave_margin = {self.heave_margin}: must be <= 1")
         if not isinstance(self.model, ModelSettings):
             raise ValueError(f"MpcSettings.model = {self.model!r:.60}: a ModelSettings")
         solver_of(self.solver, self.solver_settings, closed_loop=True)
