@@ -33,7 +33,7 @@ from cable_ocp.control.checks import Rule, check_fields
 from cable_ocp.control.interrupts import check, keeping_interrupts
 from cable_ocp.control.linearisation import STAGE_JACOBIANS, ErrorLinearisation, Linearised
 from cable_ocp.control.parameters import ProblemParameters
-from cable_ocp.control.problem import SolverOutcome, WinchProblem
+from cable_ocp.control.problem import ProblemSolver, SolverOutcome, WinchProblem
 from cable_ocp.drive.bounds import shrunk
 from cable_ocp.drive.drive import stage_times
 from cable_ocp.simulation.progress import IterationLog
@@ -122,7 +122,7 @@ class GaussNewtonSettings:
         )
 
 
-class GaussNewton:
+class GaussNewton(ProblemSolver):
     """The Gauss-Newton SQP of a :class:`WinchProblem`, built once and solved as often as needed.
 
     Parameters
@@ -283,20 +283,11 @@ class GaussNewton:
         rows = _padded(matrix, lba, uba, self.qp.size1_in(3))
         return _solved(self.qp, h=hessian, g=gradient, **rows, lbx=lbx, ubx=ubx)
 
-    def solve(
-        self,
-        values: ProblemParameters,
-        guess: np.ndarray,
-        fixed: dict[int, float] | None = None,
-        lower: np.ndarray | None = None,
-        upper: np.ndarray | None = None,
-    ) -> SolverOutcome:
-        """Iterate from ``guess`` (rad, rad/s) under the parameter values.
+    def run(self, values, guess, fixed, lower, upper) -> SolverOutcome:
+        """Iterate from ``guess`` (:meth:`ProblemSolver.solve`).
 
-        ``fixed`` pins parameters (index to value); ``lower``/``upper`` replace the bounds'
-        own (a closed loop narrows the angle range). The outcome's ``states`` are the model's run
-        under its parameters (None after a real-time iteration, which does not simulate its
-        result).
+        The outcome's ``states`` are the model's run under its parameters (None after a
+        real-time iteration, which does not simulate its result).
         """
         with keeping_interrupts() as seen:
             return self._solve(values, guess, fixed, lower, upper, seen)

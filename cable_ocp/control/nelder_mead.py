@@ -17,8 +17,7 @@ from scipy.optimize import minimize
 
 from cable_ocp.control import defaults
 from cable_ocp.control.checks import Rule, check_fields
-from cable_ocp.control.parameters import ProblemParameters
-from cable_ocp.control.problem import SolverOutcome, WinchProblem
+from cable_ocp.control.problem import ProblemSolver, SolverOutcome, WinchProblem
 from cable_ocp.control.settings import ModelSettings, OcpSettings
 from cable_ocp.drive.bounds import violation
 from cable_ocp.drive.controls import KnotSpline
@@ -95,7 +94,7 @@ def nelder_mead_problem(scene, settings: OcpSettings) -> WinchProblem:
     return WinchProblem.from_scene(scene, control, settings.elements, settings.step)
 
 
-class NelderMead:
+class NelderMead(ProblemSolver):
     """SciPy's bounded Nelder-Mead on a winch problem (in :mod:`cable_ocp.control.solvers`).
 
     Parameters
@@ -109,8 +108,6 @@ class NelderMead:
         No progress bar.
     """
 
-    build_time = compile_time = 0.0
-
     def __init__(
         self,
         problem: WinchProblem,
@@ -120,14 +117,7 @@ class NelderMead:
     ):
         self.problem, self.settings, self.compiled, self.quiet = problem, settings, compiled, quiet
 
-    def solve(
-        self,
-        values: ProblemParameters,
-        guess: np.ndarray,
-        fixed: dict[int, float] | None = None,
-        lower: np.ndarray | None = None,
-        upper: np.ndarray | None = None,
-    ) -> SolverOutcome:
+    def run(self, values, guess, fixed, lower, upper) -> SolverOutcome:
         """Minimise Omega over the knots from ``guess`` (rad), moved into the winch bounds.
 
         The search takes the problem's own parameter values only (the open loop's, with no

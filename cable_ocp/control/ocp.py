@@ -29,8 +29,8 @@ from cable_ocp.control.linearisation import (
     clearance_error_function,
     compile_rhs_jacobian_in_background,
 )
-from cable_ocp.control.parameters import ProblemParameters, symbols
-from cable_ocp.control.problem import SolverOutcome, WinchProblem
+from cable_ocp.control.parameters import symbols
+from cable_ocp.control.problem import ProblemSolver, SolverOutcome, WinchProblem
 from cable_ocp.control.settings import ModelSettings, OcpSettings
 from cable_ocp.drive.controls import HermiteIntervals, KnotSpline
 from cable_ocp.drive.drive import stage_times
@@ -320,7 +320,7 @@ def _interval_function(step_function, step, steps, seabed) -> ca.Function:
     )
 
 
-class ShootingProblem:
+class ShootingProblem(ProblemSolver):
     """The shooting NLP of a winch problem for IPOPT, built once and solved as often as needed.
 
     The NLP's parameters are the problem's named parameters
@@ -430,23 +430,14 @@ class ShootingProblem:
         )
         self.build_time = time.perf_counter() - started
 
-    def solve(
-        self,
-        values: ProblemParameters,
-        guess: np.ndarray,
-        fixed: dict[int, float] | None = None,
-        lower: np.ndarray | None = None,
-        upper: np.ndarray | None = None,
-    ) -> SolverOutcome:
-        """Solve from the winch parameters ``guess`` (rad, rad/s) under the parameter values.
+    def run(self, values, guess, fixed, lower, upper) -> SolverOutcome:
+        """IPOPT from ``guess`` (:meth:`ProblemSolver.solve`).
 
-        ``fixed`` pins winch parameters (index to value); ``lower``/``upper`` replace the
-        bounds' own limits. With multiple shooting the nodes start from the model's run under
-        ``guess``, or at the initial state where that run blows up.
+        With multiple shooting the nodes start from the model's run under ``guess``, or at the
+        initial state where that run blows up.
         """
         problem, size = self.problem, self.problem.control.size
         packed = values.pack()
-        guess = np.array(guess, dtype=float)
         nodes = np.zeros(0)
         if self.node_count:
             run = np.array(self._rollout(packed, guess))
@@ -455,7 +446,7 @@ class ShootingProblem:
             nodes = run.ravel(order="F")
         lbx = np.full(self.node_count + size, -np.inf)
         ubx = np.full(self.node_count + size, np.inf)
-        for index, value in (fixed or {}).items():
+        for index, value in fixed.items():
             lbx[self.node_count + index] = ubx[self.node_count + index] = value
             guess[index] = value
         bounds = problem.bounds

@@ -304,3 +304,32 @@ class SolverOutcome:
     function_time: float
     history: list[float]
     states: np.ndarray | None = None
+
+
+class ProblemSolver:
+    """A solver of a :class:`WinchProblem`, built once and solved as often as needed.
+
+    The contract is :mod:`cable_ocp.control.solvers`'; each solver implements :meth:`run`.
+    """
+
+    build_time = compile_time = 0.0
+
+    def solve(
+        self,
+        values: ProblemParameters,
+        guess: np.ndarray,
+        fixed: dict[int, float] | None = None,
+        lower: np.ndarray | None = None,
+        upper: np.ndarray | None = None,
+    ) -> SolverOutcome:
+        """Solve from the winch parameters ``guess`` (rad, rad/s) under the parameter values.
+
+        ``fixed`` pins winch parameters (index to value); ``lower``/``upper`` replace the bound
+        rows' own limits (a closed loop narrows the angle range). What the solver does is its
+        :meth:`run`'s.
+        """
+        return self.run(values, np.array(guess, dtype=float), dict(fixed or {}), lower, upper)
+
+    def run(self, values, guess, fixed, lower, upper) -> SolverOutcome:
+        """:meth:`solve` with its arguments made explicit (``fixed`` a dict, ``guess`` a copy)."""
+        raise NotImplementedError
