@@ -11,6 +11,7 @@ import numpy as np
 from cable_ocp.control.nelder_mead import NelderMeadSettings
 from cable_ocp.control.ocp import IpoptSettings
 from cable_ocp.control.optimization import optimize
+from cable_ocp.studies.figures import finished_chart
 from cable_ocp.studies.stability.markdown import table_cell
 
 
@@ -181,11 +182,7 @@ class KnotsComparison:
             axis.set_title(title)
             axis.grid(alpha=0.3, which="both")
             axis.legend(fontsize=8)
-        fig.tight_layout()
-        if path is not None:
-            fig.savefig(path, dpi=120)
-            plt.close(fig)
-        return fig
+        return finished_chart(fig, path)
 
 
 def _knot_run(knots: int, method: str, result) -> KnotRun:
