@@ -18,6 +18,7 @@ from __future__ import annotations
 
 from collections.abc import Callable
 from dataclasses import dataclass
+from typing import NamedTuple
 
 import casadi as ca
 
@@ -159,12 +160,7 @@ def structured_rhs(model: ParametricModel) -> ca.Function:
     ValueError
         For a model :func:`supports` rejects.
     """
-
-    def build() -> ca.Function:
-        x, u, p, xdot, *_ = _shared_graph(model)
-        return ca.Function("rhs", [x, u, p], [xdot], ["x", "u", "p"], ["xdot"])
-
-    return model.memo(("structured", "rhs"), build)
+    return _graph_function(model, "rhs", "rhs", lambda g: {"xdot": g.xdot})
 
 
 def structured_outputs(model: ParametricModel) -> ca.Function:
@@ -173,19 +169,12 @@ def structured_outputs(model: ParametricModel) -> ca.Function:
     What a :class:`~cable_ocp.simulation.trajectory.Trajectory` keeps of every sample, computed by
     the same loops as :func:`structured_rhs` so that it compiles in seconds at any ``n``.
     """
-
-    def build() -> ca.Function:
-        x, u, p, _, forces, joints, _ = _shared_graph(model)
-        tensions = ca.sqrt(ca.sum1(forces**2)).T
-        return ca.Function(
-            "joints_tensions",
-            [x, u, p],
-            [joints, tensions],
-            ["x", "u", "p"],
-            ["joints", "tensions"],
-        )
-
-    return model.memo(("structured", "outputs"), build)
+    return _graph_function(
+        model,
+        "outputs",
+        "joints_tensions",
+        lambda g: {"joints": g.joints, "tensions": ca.sqrt(ca.sum1(g.forces**2)).T},
+    )
 
 
 def structured_joints_and_forces(model: ParametricModel) -> ca.Function:
@@ -195,18 +184,12 @@ def structured_joints_and_forces(model: ParametricModel) -> ca.Function:
     graph of ``model.outputs``: 1 s at n = 100); compiled with the rest of the structure's
     library (:func:`compiled_library`), so that a cache hit builds no graph at all.
     """
-
-    def build() -> ca.Function:
-        x, u, p, _, forces, joints, _ = _shared_graph(model)
-        return ca.Function(
-            "joints_bond_forces",
-            [x, u, p],
-            [joints, forces],
-            ["x", "u", "p"],
-            ["joints", "bond_forces"],
-        )
-
-    return model.memo(("structured", "joints_bond_forces"), build)
+    return _graph_function(
+        model,
+        "joints_bond_forces",
+        "joints_bond_forces",
+        lambda g: {"joints": g.joints, "bond_forces": g.forces},
+    )
 
 
 def structured_bond_residual(model: ParametricModel) -> ca.Function:
@@ -215,14 +198,9 @@ def structured_bond_residual(model: ParametricModel) -> ca.Function:
     By the loops of :func:`structured_rhs`, so that a run integrated with them checks its bonds
     without the flat graph (1 s to build at n = 100).
     """
-
-    def build() -> ca.Function:
-        x, u, p, *_, residual = _shared_graph(model)
-        return ca.Function(
-            "bond_residual", [x, u, p], [ca.vec(residual)], ["x", "u", "p"], ["bond_residual"]
-        )
-
-    return model.memo(("structured", "bond_residual"), build)
+    return _graph_function(
+        model, "bond_residual", "bond_residual", lambda g: {"bond_residual": ca.vec(g.residual)}
+    )
 
 
 def compiled_structured(model: CableModel, which: str, count: int | None = None) -> ca.Function:
@@ -318,6 +296,42 @@ def _library_arguments(model: ParametricModel) -> tuple:
 def _shared_graph(model: ParametricModel) -> tuple[ca.MX, ...]:
     """:func:`structured_graph`, built once per model for the right-hand side and the outputs."""
     return model.memo(("structured", "graph"), lambda: structured_graph(model, kernels_of(model)))
+
+
+class _GraphParts(NamedTuple):
+    """What :func:`structured_graph` gives beside ``(x, u, p)``, by name."""
+
+    xdot: ca.MX
+    forces: ca.MX
+    joints: ca.MX
+    residual: ca.MX
+
+
+def _graph_function(
+    model: ParametricModel,
+    key: str,
+    name: str,
+    outputs: Callable[[_GraphParts], dict[str, ca.MX]],
+) -> ca.Function:
+    """``(x, u, p) ->`` the named ``outputs`` of the model's shared graph.
+
+    Parameters
+    ----------
+    model : ParametricModel
+    key : str
+        The Function is kept in the model's memo under ``("structured", key)``.
+    name : str
+        The Function's name.
+    outputs : callable
+        From the graph's parts to the outputs, by name and in order.
+    """
+
+    def build() -> ca.Function:
+        x, u, p, *rest = _shared_graph(model)
+        named = outputs(_GraphParts(*rest))
+        return ca.Function(name, [x, u, p], list(named.values()), ["x", "u", "p"], list(named))
+
+    return model.memo(("structured", key), build)
 
 
 @dataclass(frozen=True)

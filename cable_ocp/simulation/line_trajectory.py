@@ -23,6 +23,11 @@ from cable_ocp.simulation.trajectory import Trajectory
 KIND = "LineTrajectory"
 
 
+def _joined(name: str, doc: str) -> property:
+    """A whole-run view of the segments' attribute ``name``, by :meth:`LineTrajectory._whole`."""
+    return property(lambda self: self._whole(lambda s: getattr(s, name)), doc=doc)
+
+
 @dataclass(frozen=True, eq=False)
 class LineTrajectory:
     """A run of a line on the drum (``[winch.line]``), segment by segment.
@@ -47,30 +52,21 @@ class LineTrajectory:
         parts = [values(s) for s in self.segments]
         return np.concatenate([p[:-1] for p in parts[:-1]] + [parts[-1]])
 
-    @property
-    def time(self) -> np.ndarray:
-        """Output times (k,), s, each once."""
-        return self._whole(lambda s: s.time)
+    time = _joined("time", "Output times (k,), s, each once.")
 
     @property
     def element_count(self) -> np.ndarray:
         """``n`` at each output (k,): the model has ``n + 1`` elements."""
         return self._whole(lambda s: np.full(s.time.size, s.tensions.shape[1] - 1))
 
-    @property
-    def top_length(self) -> np.ndarray:
-        """Length of the top element (k,), m."""
-        return self._whole(lambda s: s.top_length)
+    top_length = _joined("top_length", "Length of the top element (k,), m.")
 
     @property
     def line_out(self) -> np.ndarray:
         """The modelled line out ``(n - 1/2) Delta + l_n`` (k,), m."""
         return (self.element_count - 0.5) * self.element_length + self.top_length
 
-    @property
-    def end(self) -> np.ndarray:
-        """Position of the end E (k, 3), m."""
-        return self._whole(lambda s: s.end)
+    end = _joined("end", "Position of the end E (k, 3), m.")
 
     @property
     def joints(self) -> np.ndarray:
@@ -93,25 +89,13 @@ class LineTrajectory:
         """The scene's name."""
         return self.segments[0].scene_name
 
-    @property
-    def top(self) -> np.ndarray:
-        """Position of the top point (k, 3), m."""
-        return self._whole(lambda s: s.top)
+    top = _joined("top", "Position of the top point (k, 3), m.")
 
-    @property
-    def top_tension(self) -> np.ndarray:
-        """Tension at the top (k,), N."""
-        return self._whole(lambda s: s.top_tension)
+    top_tension = _joined("top_tension", "Tension at the top (k,), N.")
 
-    @property
-    def winch_angle(self) -> np.ndarray:
-        """Drum angle (k,), rad."""
-        return self._whole(lambda s: s.winch_angle)
+    winch_angle = _joined("winch_angle", "Drum angle (k,), rad.")
 
-    @property
-    def clearance_error(self) -> np.ndarray:
-        """``e(t)`` of eq. 39 (k,), m."""
-        return self._whole(lambda s: s.clearance_error)
+    clearance_error = _joined("clearance_error", "``e(t)`` of eq. 39 (k,), m.")
 
     @property
     def omega(self) -> float:

@@ -13,6 +13,7 @@ import numpy as np
 
 from cable_ocp.model.cable import CableModel
 from cable_ocp.simulation.run import simulate
+from cable_ocp.studies.figures import finished_chart
 from cable_ocp.studies.uniform import locked_uniform
 
 
@@ -113,11 +114,7 @@ class ElementConvergence:
         ax.set_ylabel(f"max |r_E(n) - r_E({self.reference_elements})| [m]")
         ax.set_title("convergence of the end trajectory in n")
         ax.grid(alpha=0.3, which="both")
-        fig.tight_layout()
-        if path is not None:
-            fig.savefig(path, dpi=120)
-            plt.close(fig)
-        return fig
+        return finished_chart(fig, path)
 
 
 def element_convergence(

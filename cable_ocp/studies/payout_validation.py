@@ -16,6 +16,7 @@ from cable_ocp.scene.bundled import scene_path
 from cable_ocp.scene.schema import Scene, load_scene
 from cable_ocp.simulation.line_trajectory import LineTrajectory
 from cable_ocp.simulation.run import simulate
+from cable_ocp.studies.figures import CHART_DPI
 
 RAMP = 10.0  # s, the drum's quintic start (and turn)
 PAYLOAD = {"mass": 2000.0, "volume": 0.256, "drag_area": 1.0}  # 2 t of steel
@@ -262,5 +263,5 @@ def transient_chart(runs: dict[float, LineTrajectory], finest: LineTrajectory, p
     ax.legend(fontsize=8)
     fig.tight_layout()
     if path is not None:
-        fig.savefig(path, dpi=120)
+        fig.savefig(path, dpi=CHART_DPI)
     return fig

@@ -31,6 +31,7 @@ from __future__ import annotations
 import tempfile
 import time
 import traceback
+from collections.abc import Callable
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -447,6 +448,47 @@ def space_summary(rows: list[dict]) -> dict:
     return figures
 
 
+def _case_text(
+    k: int,
+    row: dict,
+    scene: str,
+    waves: list[str],
+    figures: Callable[[dict], str],
+    real_time_factor: bool,
+) -> str:
+    """A case's line: its scene and waves, then what became of it.
+
+    That is RAISED, or optimize's verdict, its ``figures`` and its status when it failed, then
+    mpc's run if it had one (with its real-time factor when ``real_time_factor``).
+    """
+    text = f"case {k:>3}: {scene}, {' + '.join(waves) or 'no heave'}: "
+    if row["raised"]:
+        return text + f"RAISED {row['raised']}"
+    text += ("ok" if row["success"] else "FAILED") + figures(row)
+    if not row["success"]:
+        text += f" [{row['status']}]"
+    if "mpc_success" in row:
+        rate = f"RTF {row.get('mpc_rtf', np.nan):.0f}, " if real_time_factor else ""
+        text += (
+            f"; mpc {'RAISED ' + row['mpc_raised'] if row['mpc_raised'] else ''}"
+            f"{'ok' if row['mpc_success'] else 'failed'} Omega {row.get('mpc_omega', np.nan):.3g}"
+            f" m, {rate}{row['mpc_wall']:.1f} s"
+        )
+        if not row["mpc_success"]:
+            text += f" [{row['mpc_status']}]"
+    return text
+
+
+def _summary_opening(f: dict, cases: str) -> list[str]:
+    """The first lines of a summary: what ran, how many succeeded, how many raised."""
+    return [
+        f"robustness: {f['cases']} {cases}, default optimize(); mpc() on the heaving ones",
+        f"  success            {f['success']}/{f['cases']} "
+        f"({100 * f['success'] / max(f['cases'], 1):.0f} %)",
+        f"  raised             {f['raised']}",
+    ]
+
+
 def _space_line(k: int, row: dict) -> str:
     o = row["overrides"]
     payload = o.get("end.payload", {}).get("mass", 0.0)
@@ -456,44 +498,29 @@ def _space_line(k: int, row: dict) -> str:
         waves.append(f"heave {heave['amplitude']:.2f} m")
     if "sea_state" in heave:
         waves.append(f"Hs {heave['sea_state']['significant_height']:.1f} m")
-    text = (
-        f"case {k:>3}: d {1e3 * o['cable.diameter']:.0f} mm, {o['cable.density']:.0f} kg/m3, "
+    scene = (
+        f"d {1e3 * o['cable.diameter']:.0f} mm, {o['cable.density']:.0f} kg/m3, "
         f"L {o['cable.length']:.0f} m, payload {payload / 1e3:.1f} t, n {o['model.elements']}, "
         f"T {o['numerics.duration']:.0f} s, h {row.get('step', float('nan')):g} s, "
         f"U {o['top.tow.surge_speed']:.2f}, {len(o[PLACED]['hills'])} hill(s)"
         f"{', grid' if 'grid' in o[PLACED] else ''}"
         f"{', rate limits' if 'winch.rate_max' in o else ''}"
-        f", {' + '.join(waves) or 'no heave'}: "
     )
-    if row["raised"]:
-        return text + f"RAISED {row['raised']}"
-    text += (
-        f"{'ok' if row['success'] else 'FAILED'}"
+    return _case_text(k, row, scene, waves, _space_figures, real_time_factor=True)
+
+
+def _space_figures(row: dict) -> str:
+    return (
         f"{'' if meets_space_goal(row) else ' (goal not met)'}"
         f" Omega {row['omega']:.3g} m (locked {row['locked']:.3g}, floor {row['floor']:.3g}), "
         f"{row['wall']:.1f} s"
     )
-    if not row["success"]:
-        text += f" [{row['status']}]"
-    if "mpc_success" in row:
-        text += (
-            f"; mpc {'RAISED ' + row['mpc_raised'] if row['mpc_raised'] else ''}"
-            f"{'ok' if row['mpc_success'] else 'failed'} Omega {row.get('mpc_omega', np.nan):.3g}"
-            f" m, RTF {row.get('mpc_rtf', np.nan):.0f}, {row['mpc_wall']:.1f} s"
-        )
-        if not row["mpc_success"]:
-            text += f" [{row['mpc_status']}]"
-    return text
 
 
 def _space_summary_text(f: dict, seed: int) -> str:
     return "\n".join(
         [
-            f"robustness: {f['cases']} scenes from the whole scene space (seed {seed}), default "
-            "optimize(); mpc() on the heaving ones",
-            f"  success            {f['success']}/{f['cases']} "
-            f"({100 * f['success'] / max(f['cases'], 1):.0f} %)",
-            f"  raised             {f['raised']}",
+            *_summary_opening(f, f"scenes from the whole scene space (seed {seed})"),
             f"  goal met           {f['goal']}/{f['cases']} (Omega <= {SPACE_OMEGA_GOAL} m, or "
             f">= {SPACE_GAIN_GOAL:g}x better than locked, or within "
             f"{100 * (SPACE_FLOOR_SHARE - 1):.0f} % of the reach floor)",
@@ -520,39 +547,24 @@ def _case_line(k: int, row: dict) -> str:
     if "sea_state" in heave:
         sea = heave["sea_state"]
         waves.append(f"sea Hs {sea['significant_height']:.2f} m/Tp {sea['peak_period']:.1f} s")
-    text = (
-        f"case {k:>3}: n = {o['model.elements']:>2}, U = {o['top.tow.surge_speed']:.2f}, "
-        f"{len(o['seabed.hills'])} hill(s){', grid' if SITE in o else ''}, "
-        f"{' + '.join(waves) or 'no heave'}: "
+    scene = (
+        f"n = {o['model.elements']:>2}, U = {o['top.tow.surge_speed']:.2f}, "
+        f"{len(o['seabed.hills'])} hill(s){', grid' if SITE in o else ''}"
     )
-    if row["raised"]:
-        return text + f"RAISED {row['raised']}"
-    text += (
-        f"{'ok' if row['success'] else 'FAILED'} Omega {row['omega']:.3g} m (locked "
-        f"{row['locked']:.3g} m, floor {row['floor']:.3g} m), bound {row['bound_time']:.0f} s, "
-        f"{row['wall']:.1f} s"
+    return _case_text(k, row, scene, waves, _case_figures, real_time_factor=False)
+
+
+def _case_figures(row: dict) -> str:
+    return (
+        f" Omega {row['omega']:.3g} m (locked {row['locked']:.3g} m, floor {row['floor']:.3g} m), "
+        f"bound {row['bound_time']:.0f} s, {row['wall']:.1f} s"
     )
-    if not row["success"]:
-        text += f" [{row['status']}]"
-    if "mpc_success" in row:
-        text += (
-            f"; mpc {'RAISED ' + row['mpc_raised'] if row['mpc_raised'] else ''}"
-            f"{'ok' if row['mpc_success'] else 'failed'} Omega {row.get('mpc_omega', np.nan):.3g}"
-            f" m, {row['mpc_wall']:.1f} s"
-        )
-        if not row["mpc_success"]:
-            text += f" [{row['mpc_status']}]"
-    return text
 
 
 def _summary_text(f: dict, seed: int) -> str:
     return "\n".join(
         [
-            f"robustness: {f['cases']} random variants of paper_hill (seed {seed}), default "
-            "optimize(); mpc() on the heaving ones",
-            f"  success            {f['success']}/{f['cases']} "
-            f"({100 * f['success'] / max(f['cases'], 1):.0f} %)",
-            f"  raised             {f['raised']}",
+            *_summary_opening(f, f"random variants of paper_hill (seed {seed})"),
             f"  goal met           {f['goal']}/{f['cases']} (Omega <= {OMEGA_GOAL} m or "
             f">= {GAIN_GOAL:g}x better than locked)",
             f"  Omega              median {f['omega_median']:.3g} m, "

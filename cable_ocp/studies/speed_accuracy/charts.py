@@ -10,6 +10,7 @@ from matplotlib.figure import Figure
 from matplotlib.lines import Line2D
 from matplotlib.transforms import blended_transform_factory
 
+from cable_ocp.studies.figures import CHART_DPI
 from cable_ocp.studies.speed_accuracy.ocp_points import OcpPoint
 from cable_ocp.studies.speed_accuracy.plan import TOLERANCES
 from cable_ocp.studies.speed_accuracy.scenes import SceneStudy
@@ -61,7 +62,7 @@ def speed_chart(study: SceneStudy, path: Path) -> None:
     )
     ax.grid(alpha=0.3, which="both")
     fig.tight_layout()
-    fig.savefig(path, dpi=120)
+    fig.savefig(path, dpi=CHART_DPI)
 
 
 def ocp_chart(points: Sequence[OcpPoint], scene_name: str, path: Path) -> None:
@@ -92,4 +93,4 @@ def ocp_chart(points: Sequence[OcpPoint], scene_name: str, path: Path) -> None:
     ax.legend(fontsize=7, loc="best")
     ax.grid(alpha=0.3, which="both")
     fig.tight_layout()
-    fig.savefig(path, dpi=120)
+    fig.savefig(path, dpi=CHART_DPI)

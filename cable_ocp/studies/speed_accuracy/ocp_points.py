@@ -5,36 +5,26 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 from cable_ocp.control.optimization import optimize
+from cable_ocp.studies.solve_record import SolveRecord, solve_figures
 from cable_ocp.studies.speed_accuracy.plan import OcpSetting, StudyPlan
 from cable_ocp.studies.speed_accuracy.timing import timed
 
 
 @dataclass(frozen=True)
-class OcpPoint:
+class OcpPoint(SolveRecord):
     """One optimiser run on the OCP scene, verified on the scene's own model.
+
+    Its figures (Omega, status, counts, wall time) are those of
+    :class:`~cable_ocp.studies.solve_record.SolveRecord`.
 
     Attributes
     ----------
     setting : OcpSetting
-    omega : float, m
-        Verified Omega (NaN when the last iterate could not be simulated).
-    omega_model : float, m
-        Omega on the optimisation model.
-    success : bool
-    status : str
-    iterations, evaluations : int
-    wall_time, cpu_time : float, s
-        The whole ``optimize`` call, verification included.
+    cpu_time : float, s
+        Of the whole ``optimize`` call, verification included.
     """
 
     setting: OcpSetting
-    omega: float
-    omega_model: float
-    success: bool
-    status: str
-    iterations: int
-    evaluations: int
-    wall_time: float
     cpu_time: float
 
 
@@ -43,17 +33,7 @@ def ocp_point(scene, setting: OcpSetting, intervals: int, quiet: bool = True) ->
     kwargs = {"refinements": setting.refinements} if setting.method == "ipopt" else {}
     settings = setting.settings(intervals)
     result, cpu, _ = timed(lambda: optimize(scene, settings=settings, quiet=quiet, **kwargs))
-    return OcpPoint(
-        setting=setting,
-        omega=result.omega,
-        omega_model=result.omega_model,
-        success=result.success,
-        status=result.status,
-        iterations=result.iterations,
-        evaluations=result.evaluations,
-        wall_time=result.wall_time,
-        cpu_time=cpu,
-    )
+    return OcpPoint(setting=setting, cpu_time=cpu, **solve_figures(result))
 
 
 def ocp_study(scene, plan: StudyPlan, quiet: bool = True) -> tuple[OcpPoint, ...]:

@@ -12,6 +12,7 @@ from cable_ocp.simulation.integrate import SimulationError
 from cable_ocp.simulation.run import simulate
 from cable_ocp.simulation.trajectory import Trajectory
 from cable_ocp.studies.convergence import end_difference
+from cable_ocp.studies.figures import finished_chart
 from cable_ocp.studies.stability.markdown import table_cell
 from cable_ocp.studies.stability.push import SHARP_PUSH, pushed_scene
 
@@ -132,11 +133,7 @@ class BaumgarteDrift:
         right.set_title("drift and accuracy per gain (completed runs)")
         right.grid(alpha=0.3, which="both", axis="y")
         right.legend(fontsize=8)
-        fig.tight_layout()
-        if path is not None:
-            fig.savefig(path, dpi=120)
-            plt.close(fig)
-        return fig
+        return finished_chart(fig, path)
 
 
 def baumgarte_drift(

@@ -13,40 +13,29 @@ from cable_ocp.control.ocp import IpoptSettings
 from cable_ocp.control.optimization import optimize
 from cable_ocp.control.settings import GridSettings, ModelSettings, TranscriptionSettings
 from cable_ocp.control.solvers import ocp_settings
+from cable_ocp.studies.figures import finished_chart
+from cable_ocp.studies.solve_record import SolveRecord, solve_figures
 from cable_ocp.studies.stability.markdown import table_cell
 
 
 @dataclass(frozen=True)
-class KnotRun:
+class KnotRun(SolveRecord):
     """One optimisation of the knots study.
+
+    Its figures (Omega, status, counts, wall time) are those of
+    :class:`~cable_ocp.studies.solve_record.SolveRecord`.
 
     Attributes
     ----------
     knots : int
     method : str
-        ``"ipopt"`` or ``"nelder-mead"``.
-    omega : float, m
-        Verified on the scene's full model (NaN if the last iterate cannot be simulated).
-    omega_model : float, m
-        On the optimisation model.
-    success : bool
-    status : str
-    iterations : int
-    evaluations : int
-    wall_time : float, s
+        ``"ipopt"``, ``"ipopt + correction"`` or ``"nelder-mead"``.
     history : tuple of float
         Nelder-Mead: best Omega after each evaluation (m); IPOPT: Omega^2 per iteration (m^2).
     """
 
     knots: int
     method: str
-    omega: float
-    omega_model: float
-    success: bool
-    status: str
-    iterations: int
-    evaluations: int
-    wall_time: float
     history: tuple[float, ...]
 
     def evaluations_to_within(self, fraction: float) -> int:
@@ -183,25 +172,12 @@ class KnotsComparison:
             axis.set_title(title)
             axis.grid(alpha=0.3, which="both")
             axis.legend(fontsize=8)
-        fig.tight_layout()
-        if path is not None:
-            fig.savefig(path, dpi=120)
-            plt.close(fig)
-        return fig
+        return finished_chart(fig, path)
 
 
 def _knot_run(knots: int, method: str, result) -> KnotRun:
     return KnotRun(
-        knots=knots,
-        method=method,
-        omega=result.omega,
-        omega_model=result.omega_model,
-        success=result.success,
-        status=result.status,
-        iterations=result.iterations,
-        evaluations=result.evaluations,
-        wall_time=result.wall_time,
-        history=tuple(result.history),
+        knots=knots, method=method, history=tuple(result.history), **solve_figures(result)
     )
 
 

@@ -8,6 +8,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from cable_ocp.studies.figures import finished_chart
 from cable_ocp.studies.stability.stable_step import StableStep, largest_stable_step
 
 
@@ -112,11 +113,7 @@ class StepLimits:
         ax.set_title("RK4 stability limit (end_force scene, pushed from t = 0)")
         ax.grid(alpha=0.3, which="both")
         ax.legend(fontsize=8, loc="upper left", bbox_to_anchor=(1.02, 1.0))
-        fig.tight_layout()
-        if path is not None:
-            fig.savefig(path, dpi=120)
-            plt.close(fig)
-        return fig
+        return finished_chart(fig, path)
 
 
 def step_limits(
