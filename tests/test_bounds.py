@@ -148,6 +148,7 @@ def test_nelder_mead_verification_failure_is_a_failed_result(short, monkeypatch)
     monkeypatch.setattr(verification_module, "checked_simulation", broken)
     result = optimize(short, "nelder-mead", NelderMeadSettings(max_evaluations=400), quiet=True)
     assert not result.success
-    assert result.status == (
-        "verification failed: the full-model simulation raised ValueError: top element too long"
+    assert result.status == (  # the same wording as the shooting solvers' (one verified loop)
+        "Nelder-Mead converged (Optimization terminated successfully.); verification failed: "
+        "the full-model simulation raised ValueError: top element too long"
     )

@@ -198,7 +198,7 @@ def knots_comparison(
     and so minimise the same objective (methods ``"ipopt"``, ``"nelder-mead"``). With
     ``refinements > 0`` IPOPT is also run with that many model-correction solves against the
     scene's model (``"ipopt + correction"``, see
-    :func:`cable_ocp.control.optimization.solve_shooting`). ``compiled``: the optimisers
+    :func:`cable_ocp.control.optimization.solve_verified`). ``compiled``: the optimisers
     simulate with the RK4 step compiled to C (cached on disk). A failed solve is kept with its
     status.
     """
