@@ -25,7 +25,8 @@ class Rule:
     Attributes
     ----------
     kind : str
-        ``"integer"``, ``"number"`` (a finite real), ``"choice"`` or ``"flag"`` (a bool).
+        ``"integer"``, ``"number"`` (a finite real), ``"choice"``, ``"flag"`` (a bool) or
+        ``"table"`` (a dict).
     low : float or None
         Smallest value allowed (inclusive), or None.
     high : float or None
@@ -56,6 +57,8 @@ class Rule:
             return None if value in self.choices else f"must be one of {', '.join(self.choices)}"
         if self.kind == "flag":
             return None if isinstance(value, bool) else "must be true or false"
+        if self.kind == "table":
+            return None if isinstance(value, dict) else "must be a table (a dict)"
         if isinstance(value, bool) or not isinstance(value, numbers.Real):
             return f"must be {'an integer' if self.kind == 'integer' else 'a number'}"
         if self.kind == "integer" and not isinstance(value, numbers.Integral):

@@ -90,10 +90,9 @@ class IpoptSettings:
                 "hessian": Rule("choice", choices=("limited-memory", "exact")),
                 "max_iter": Rule("integer", low=1),
                 "tolerance": Rule("number", above=0),
+                "ipopt_options": Rule("table"),
             },
         )
-        if not isinstance(self.ipopt_options, dict):
-            raise ValueError(f"IpoptSettings.ipopt_options = {self.ipopt_options!r}: a dict")
 
 
 def ipopt_options(
