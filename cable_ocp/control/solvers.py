@@ -150,6 +150,10 @@ def ocp_settings(
         solver, model, grid = settings.solver, settings.model, settings.grid
         settings, transcription = settings.solver_settings, settings.transcription
     entry, settings = solver_of(solver, settings)
+    for name, part, cls in (("model", model, ModelSettings), ("grid", grid, GridSettings),
+                            ("transcription", transcription, TranscriptionSettings)):  # fmt: skip
+        if part is not None and not isinstance(part, cls):
+            raise ValueError(f"{name} = {part!r:.60}: must be a {cls.__name__}")
     grid, transcription = grid or GridSettings(), transcription or TranscriptionSettings()
     if transcription.shooting not in (entry.shootings or ("single",)):
         takes = (
