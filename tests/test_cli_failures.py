@@ -28,7 +28,7 @@ from cable_ocp.control.closed_loop.result import MpcResult
 from cable_ocp.control.closed_loop.settings import MpcSettings
 from cable_ocp.control.ocp import IpoptSettings
 from cable_ocp.control.optimization import OcpResult
-from cable_ocp.scene import labelled
+from cable_ocp.result_files import netcdf as labelled
 from cable_ocp.scene.schema import load_scene
 
 MODELS = Path(__file__).resolve().parent.parent / "models"
@@ -121,7 +121,7 @@ def test_ipopt_options_beside_gauss_newton_are_named(tmp_path, capsys, no_optimi
 
 
 def test_a_full_disk_is_exit_1_saying_so(tmp_path, capsys, monkeypatch):
-    def refused(dataset, path):
+    def refused(dataset, path, groups=None):
         Path(path).write_bytes(b"\x89HDF")  # what a full disk leaves of the file
         raise RuntimeError("NetCDF: HDF error")
 

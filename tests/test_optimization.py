@@ -15,7 +15,7 @@ from cable_ocp.control.optimization import OcpResult, optimize
 from cable_ocp.drive.bounds import angle_bounds
 from cable_ocp.drive.controls import HermiteIntervals, KnotSpline
 from cable_ocp.drive.winch import spline_angle
-from cable_ocp.scene.labelled import fields_equal
+from cable_ocp.result_files.dataset import fields_equal
 from cable_ocp.scene.schema import load_scene
 from cable_ocp.simulation.run import simulate
 

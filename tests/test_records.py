@@ -19,10 +19,10 @@ from legacy_results import write_ocp_result, write_trajectory
 
 from cable_ocp.control.closed_loop.result import MpcResult
 from cable_ocp.control.optimization import OcpResult
-from cable_ocp.scene import labelled
+from cable_ocp.result_files import dataset as labelled
 from cable_ocp.scene.records import check_field, control_parameters, record_fields
-from cable_ocp.simulation.labelled import state_names
 from cable_ocp.simulation.trajectory import Trajectory
+from cable_ocp.simulation.trajectory_dataset import state_names
 
 DEEP = "[" * 100_000 + "]" * 100_000
 

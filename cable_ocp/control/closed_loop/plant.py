@@ -23,8 +23,10 @@ from cable_ocp.model.cable import CableModel
 from cable_ocp.model.layout import INPUTS
 from cable_ocp.simulation.figures import apart
 from cable_ocp.simulation.integrate import SimulationError, evaluate_into, step_function
-from cable_ocp.simulation.seabed import check_on_grid
+from cable_ocp.simulation.run import joints_and_tensions
+from cable_ocp.simulation.seabed import check_on_grid, clearance_error, rms_objective
 from cable_ocp.simulation.statics import equilibrium
+from cable_ocp.simulation.trajectory import Trajectory
 
 # Substeps per plant step tried in turn when a sample's run is in doubt (see Plant.advance). The
 # third (h / 16) carries a heave feedback that meets the winch's bound at 5.6 rad/s in Hs 3.8 m
@@ -332,3 +334,38 @@ class Plant:
                 f"t = {t:.6g} s at h = {h:g} s"
             )
         return None
+
+
+def plant_run(
+    plant: Plant, time: np.ndarray, states: np.ndarray, inputs: np.ndarray, angle: np.ndarray
+) -> Trajectory:
+    """The plant's run as a :class:`~cable_ocp.simulation.trajectory.Trajectory`.
+
+    Parameters
+    ----------
+    plant : Plant
+    time : array (k,), s
+    states : array (k, state_size)
+    inputs : array (k, 15)
+    angle : array (k,), rad
+        The winch angle applied.
+
+    Its joints and tensions are the model's outputs of the states (compiled), ``e(t)`` and
+    Omega those of eq. 39 on the end's path (no Omega of a single point: NaN).
+    """
+    scene = plant.scene
+    error = clearance_error(scene.seabed, states[:, 0:3])
+    joints, tensions = joints_and_tensions(plant.model, states, inputs, compiled=True)
+    return Trajectory(
+        time=time,
+        states=states,
+        inputs=inputs,
+        joints=joints,
+        tensions=tensions,
+        winch_angle=angle,
+        clearance_error=error,
+        omega=rms_objective(time, error) if time.size > 1 else float("nan"),
+        scene_name=scene.name,
+        state_names=plant.model.state_names,
+        scene_record=scene.to_dict(),
+    )

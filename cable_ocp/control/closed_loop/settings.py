@@ -10,7 +10,6 @@ from cable_ocp.control.checks import Rule, check_fields
 from cable_ocp.control.ocp import IpoptSettings
 from cable_ocp.drive.bounds import angle_bounds
 
-REFERENCES = ("locked", "open-loop")
 # Targets (s) of the derived timing: a solve every second, plan intervals of 5 s (1 s intervals
 # let the plan exploit the reduced model's errors, ``interval`` below), a 20 s horizon.
 SAMPLE, INTERVAL, HORIZON = 1.0, defaults.CONTROL_INTERVAL, 20.0
@@ -98,10 +97,6 @@ class MpcSettings:
     max_iter : int or None
         Iterations per solve: IPOPT's, or Gauss-Newton steps (None: 1 for Gauss-Newton, the
         real-time iteration; 300 for IPOPT, so that ``solver="ipopt"`` alone converges).
-    references : tuple of str
-        Reference runs on the same plant: ``"locked"`` (winch locked), ``"open-loop"`` (the
-        open-loop optimum of ``cable_ocp.optimize`` on the scene without its heave, applied as it
-        is and with the heave feedback).
     """
 
     horizon: float | None = None
@@ -116,7 +111,6 @@ class MpcSettings:
     limiter_band: float | None = None
     rate_weight: float = 1e-4
     max_iter: int | None = None
-    references: tuple[str, ...] = ("locked",)
 
     def __post_init__(self):
         check_fields(self, _RULES)
@@ -126,11 +120,6 @@ class MpcSettings:
             raise ValueError(f"MpcSettings.heave_feedback = {self.heave_feedback!r}: a bool")
         if None not in (self.horizon, self.sample, self.interval, self.step):
             self._check_timing()
-        unknown = set(self.references) - set(REFERENCES)
-        if unknown:
-            raise ValueError(
-                f"references = {self.references}: each must be one of {', '.join(REFERENCES)}"
-            )
 
     def _check_timing(self) -> None:
         """The horizon, sample, interval and step fit together (ValueError naming the setting)."""
