@@ -112,7 +112,7 @@ def test_simulate_writes_a_marked_folder_and_replaces_it(tmp_path, capsys):
     assert (out / MARKER).is_file()
     assert stat.S_IMODE(out.stat().st_mode) & 0o055 == 0o055  # group and others may read
     summary = json.loads((out / "summary.json").read_text())
-    assert summary["scene"] == "hanging" and summary["omega_m"] == 0.0
+    assert summary["scene"] == "hanging" and summary["omega"] == 0.0
     (out / "summary.json").write_text("stale")
     assert run_cli(args, capsys)[0] == 0  # a previous results folder is replaced
     assert json.loads((out / "summary.json").read_text())["scene"] == "hanging"
