@@ -336,7 +336,7 @@ def test_cli_simulate_writes_results(tmp_path, capsys):
     run = Trajectory.load(out / "trajectory")
     assert run.time[-1] == 10.0 and run.scene_name == "hanging"
     # Hanging at rest stays at rest: rise tolerance 1e-6 m.
-    assert abs(summary["end_rise_m"]) < 1e-6
+    assert abs(summary["end_rise"]) < 1e-6
     assert [p.name for p in tmp_path.iterdir()] == ["out"]  # no scratch folder left over
     assert "written to" in capsys.readouterr().out
 

@@ -23,8 +23,8 @@ from cable_ocp.model.cable import CableModel
 from cable_ocp.model.layout import INPUTS
 from cable_ocp.simulation.figures import apart
 from cable_ocp.simulation.integrate import SimulationError, evaluate_into, step_function
-from cable_ocp.simulation.run import joints_and_tensions
-from cable_ocp.simulation.seabed import check_on_grid, clearance_error, rms_objective
+from cable_ocp.simulation.run import run_trajectory
+from cable_ocp.simulation.seabed import check_on_grid
 from cable_ocp.simulation.statics import equilibrium
 from cable_ocp.simulation.trajectory import Trajectory
 
@@ -341,31 +341,7 @@ def plant_run(
 ) -> Trajectory:
     """The plant's run as a :class:`~cable_ocp.simulation.trajectory.Trajectory`.
 
-    Parameters
-    ----------
-    plant : Plant
-    time : array (k,), s
-    states : array (k, state_size)
-    inputs : array (k, 15)
-    angle : array (k,), rad
-        The winch angle applied.
-
-    Its joints and tensions are the model's outputs of the states (compiled), ``e(t)`` and
-    Omega those of eq. 39 on the end's path (no Omega of a single point: NaN).
+    Its states and inputs at ``time`` (s) under the applied ``angle`` (rad), its outputs
+    compiled (:func:`~cable_ocp.simulation.run.run_trajectory`).
     """
-    scene = plant.scene
-    error = clearance_error(scene.seabed, states[:, 0:3])
-    joints, tensions = joints_and_tensions(plant.model, states, inputs, compiled=True)
-    return Trajectory(
-        time=time,
-        states=states,
-        inputs=inputs,
-        joints=joints,
-        tensions=tensions,
-        winch_angle=angle,
-        clearance_error=error,
-        omega=rms_objective(time, error) if time.size > 1 else float("nan"),
-        scene_name=scene.name,
-        state_names=plant.model.state_names,
-        scene_record=scene.to_dict(),
-    )
+    return run_trajectory(plant.scene, plant.model, time, states, inputs, angle, compiled=True)
