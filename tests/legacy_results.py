@@ -48,6 +48,8 @@ def write_ocp_result(result, folder: Path) -> None:
         for k, v in asdict(result).items()
         if k not in ("parameters", "trajectory", "scene_record")
     }  # fmt: skip (not in 0.1)
+    if result.method != "nelder-mead":  # 0.1 kept the objective, Omega^2 (m^2)
+        meta["history"] = [None if v is None else v**2 for v in meta["history"]]
     (folder / "result.json").write_text(json.dumps(meta, indent=1, allow_nan=False))
     np.savez(folder / "result.npz", parameters=result.parameters)
 
