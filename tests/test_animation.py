@@ -7,8 +7,8 @@ import pytest
 from PIL import Image
 
 import cable_ocp as co
-from cable_ocp.simulation.labelled import state_names
 from cable_ocp.simulation.trajectory import Trajectory
+from cable_ocp.simulation.trajectory_dataset import state_names
 
 
 def _towed(k: int = 30, n: int = 3) -> Trajectory:

@@ -22,7 +22,7 @@ def test_bench_accepts_the_simulate_part():
 
 
 OUTPUTS = (["end_trajectory.png", "summary.json", "trajectory.nc"], {"scene": "end_force",
-           "omega_m": 22.6, "final_end_position_m": [107.5, -14.4, -267.3]})  # fmt: skip
+           "omega": 22.6, "final_end_position": [107.5, -14.4, -267.3]})  # fmt: skip
 
 
 def test_command_report_times_the_command_against_interpreted(models_dir, monkeypatch, capsys):
@@ -44,7 +44,7 @@ def test_command_report_times_the_command_against_interpreted(models_dir, monkey
 
 def test_command_report_refuses_runs_that_wrote_different_outputs(models_dir, monkeypatch):
     files, summary = OUTPUTS
-    other = (files, {**summary, "omega_m": 22.7})
+    other = (files, {**summary, "omega": 22.7})
     monkeypatch.setattr(
         bench_simulate,
         "_command_time",
@@ -56,7 +56,7 @@ def test_command_report_refuses_runs_that_wrote_different_outputs(models_dir, mo
 
 def test_same_outputs_compares_files_and_summary_to_rounding():
     files, summary = OUTPUTS
-    rounded = {**summary, "omega_m": summary["omega_m"] * (1 + 1e-12)}
+    rounded = {**summary, "omega": summary["omega"] * (1 + 1e-12)}
     assert bench_simulate._same_outputs(OUTPUTS, (files, rounded))
     assert not bench_simulate._same_outputs(OUTPUTS, (files[:-1], summary))
-    assert not bench_simulate._same_outputs(OUTPUTS, (files, {**summary, "omega_m": 23.0}))
+    assert not bench_simulate._same_outputs(OUTPUTS, (files, {**summary, "omega": 23.0}))

@@ -112,7 +112,7 @@ def test_simulate_writes_a_marked_folder_and_replaces_it(tmp_path, capsys):
     assert (out / MARKER).is_file()
     assert stat.S_IMODE(out.stat().st_mode) & 0o055 == 0o055  # group and others may read
     summary = json.loads((out / "summary.json").read_text())
-    assert summary["scene"] == "hanging" and summary["omega_m"] == 0.0
+    assert summary["scene"] == "hanging" and summary["omega"] == 0.0
     (out / "summary.json").write_text("stale")
     assert run_cli(args, capsys)[0] == 0  # a previous results folder is replaced
     assert json.loads((out / "summary.json").read_text())["scene"] == "hanging"
@@ -337,7 +337,7 @@ def test_cli_simulate_writes_results(tmp_path, capsys):
     run = Trajectory.load(out / "trajectory")
     assert run.time[-1] == 10.0 and run.scene_name == "hanging"
     # Hanging at rest stays at rest: rise tolerance 1e-6 m.
-    assert abs(summary["end_rise_m"]) < 1e-6
+    assert abs(summary["end_rise"]) < 1e-6
     assert [p.name for p in tmp_path.iterdir()] == ["out"]  # no scratch folder left over
     assert "written to" in capsys.readouterr().out
 

@@ -9,6 +9,7 @@ than the issue's own, on small_tow (a few seconds each).
 
 from __future__ import annotations
 
+import json
 import os
 import resource
 import subprocess
@@ -23,12 +24,12 @@ from cable_ocp import cli
 from cable_ocp.cli import files
 from cable_ocp.cli.mpc import settings_from
 from cable_ocp.control import optimization
-from cable_ocp.control.closed_loop import loop
+from cable_ocp.control.closed_loop import loop, references
 from cable_ocp.control.closed_loop.result import MpcResult
 from cable_ocp.control.closed_loop.settings import MpcSettings
 from cable_ocp.control.ocp import IpoptSettings
 from cable_ocp.control.optimization import OcpResult
-from cable_ocp.scene import labelled
+from cable_ocp.result_files import netcdf as labelled
 from cable_ocp.scene.schema import load_scene
 
 MODELS = Path(__file__).resolve().parent.parent / "models"
@@ -121,7 +122,7 @@ def test_ipopt_options_beside_gauss_newton_are_named(tmp_path, capsys, no_optimi
 
 
 def test_a_full_disk_is_exit_1_saying_so(tmp_path, capsys, monkeypatch):
-    def refused(dataset, path):
+    def refused(dataset, path, groups=None):
         Path(path).write_bytes(b"\x89HDF")  # what a full disk leaves of the file
         raise RuntimeError("NetCDF: HDF error")
 
@@ -214,7 +215,8 @@ def test_the_open_loop_reference_without_a_heave_table(tmp_path, capsys):
     out = tmp_path / "loop"
     code, _, stderr = run_cli(["mpc", SMALL_TOW, "--open-loop", *SHORT_LOOP, "--out", out], capsys)
     assert code == 0, stderr
-    assert set(MpcResult.load(out).reference_omegas) == {"locked", "open-loop"}
+    summary = json.loads((out / "summary.json").read_text())
+    assert set(summary["reference_omegas"]) == {"locked", "open-loop"}
 
 
 def test_the_open_loop_reference_knows_no_sea_state(tmp_path, capsys, monkeypatch):
@@ -224,7 +226,7 @@ def test_the_open_loop_reference_knows_no_sea_state(tmp_path, capsys, monkeypatc
         seen.append(scene.top.heave)
         return optimization.optimize(scene, *args, **kwargs)
 
-    monkeypatch.setattr(loop, "optimize", recorded)
+    monkeypatch.setattr(references, "optimize", recorded)
     out = tmp_path / "loop"
     sea = ["--set", "top.heave.sea_state.significant_height=0.5",
            "--set", "top.heave.sea_state.peak_period=7.0"]  # fmt: skip
@@ -232,7 +234,8 @@ def test_the_open_loop_reference_knows_no_sea_state(tmp_path, capsys, monkeypatc
                               capsys)  # fmt: skip
     assert code in (0, 3), stderr
     assert seen == [None]
-    assert "open-loop + heave feedback" in MpcResult.load(out).reference_omegas
+    summary = json.loads((out / "summary.json").read_text())
+    assert "open-loop + heave feedback" in summary["reference_omegas"]
 
 
 @pytest.mark.parametrize("option", ["--horizon", "--sample", "--interval", "--step"])

@@ -120,8 +120,8 @@ def test_optimize_writes_its_summary_and_the_winch_table(tmp_path, capsys):
     summary = json.loads((out / "summary.json").read_text())
     result = OcpResult.load(out)
     assert summary["scene"] == "small_tow" and summary["success"] is True
-    assert summary["omega_m"] == pytest.approx(result.omega, rel=1e-12)
-    assert summary["locked_omega_m"] > 10 * summary["omega_m"]
+    assert summary["omega"] == pytest.approx(result.omega, rel=1e-12)
+    assert summary["locked_omega"] > 10 * summary["omega"]
     table = np.genfromtxt(out / "winch.csv", delimiter=",", names=True)
     scene = load_scene(scene_path("small_tow"))
     radius = scene.winch.drum_radius

@@ -2,14 +2,12 @@
 
 from __future__ import annotations
 
-from dataclasses import replace
-
 import numpy as np
 import pytest
 import xarray as xr
 from legacy_results import write_mpc_result
 
-from cable_ocp.control.closed_loop import MpcSettings, mpc
+from cable_ocp.control.closed_loop import MpcSettings, mpc, reference_runs
 from cable_ocp.control.closed_loop.forecast import BlendedHeight, HeightFilter, TopForecast
 from cable_ocp.control.closed_loop.projection import project_state
 from cable_ocp.control.closed_loop.result import MpcResult
@@ -20,7 +18,7 @@ from cable_ocp.drive.controls import HermiteIntervals
 from cable_ocp.drive.drive import Drive
 from cable_ocp.model.cable import CableModel
 from cable_ocp.model.layout import INPUTS
-from cable_ocp.scene.labelled import fields_equal
+from cable_ocp.result_files.dataset import fields_equal
 from cable_ocp.scene.schema import load_scene
 from cable_ocp.simulation.statics import equilibrium
 
@@ -36,7 +34,7 @@ def short_hill(models_dir):
 
 @pytest.fixture(scope="module")
 def closed_loop(short_hill):
-    return mpc(short_hill, references=("locked",), quiet=True, **SHORT)
+    return mpc(short_hill, quiet=True, **SHORT)
 
 
 @pytest.mark.parametrize(
@@ -58,7 +56,6 @@ def closed_loop(short_hill):
         ({"model": ModelSettings(2, 0.3)}, "step = 0.3 s: must divide sample"),
         ({"heave_margin": 2.0}, "heave_margin = 2.0: must be <= 1"),
         ({"heave_filter": -1.0}, "heave_filter = -1.0 s"),
-        ({"references": ("perfect",)}, "references"),
         ({"solver_settings": IpoptSettings()}, "IpoptSettings given for solver 'gauss-newton'"),
     ],
 )
@@ -249,18 +246,27 @@ def test_blended_height_is_continuous_at_both_ends():
     np.testing.assert_allclose(np.gradient(speed, t)[1:-1], acc[1:-1], atol=1e-5)
 
 
-def test_closed_loop_is_finite_holds_the_winch_bounds_and_beats_the_locked_winch(closed_loop):
+def test_closed_loop_is_finite_holds_the_winch_bounds_and_beats_the_locked_winch(
+    closed_loop, short_hill
+):
     r = closed_loop
     assert r.success, r.failures
-    assert r.sample_times.size == 8 and len(r.statuses) == 8
+    assert r.solves.sample_time.size == 8 and len(r.solves.status) == 8
     assert np.all(np.isfinite(r.end)) and np.all(np.isfinite(r.clearance_error))
     low, high = r.angle_range
     assert low <= r.winch_angle.min() and r.winch_angle.max() <= high
     # The heave feedback turns the winch with the 1 m heave: about +-2 rad at r_D = 0.5 m.
     assert np.ptp(r.winch_angle - r.planned_angle) > 3.0
-    assert r.omega < 0.1 * r.reference_omegas["locked"]
+    locked = reference_runs(short_hill, r)
+    assert list(locked.runs) == ["locked"] and not locked.notes
+    assert r.omega < 0.1 * locked.omegas["locked"]
     assert r.omega < 0.05
-    assert r.real_time_factor > 0 and r.worst_solve_time == pytest.approx(r.solve_times.max())
+    assert r.real_time_factor > 0 and r.worst_solve_time == pytest.approx(r.solves.solve_time.max())
+    assert r.iterations == r.solves.iterations.sum()
+    # The plant's run is a Trajectory as an open loop's is: its end is the state's first joint.
+    np.testing.assert_array_equal(r.trajectory.end, r.trajectory.states[:, 0:3])
+    with pytest.raises(ValueError, match="each must be one of locked, open-loop"):
+        reference_runs(short_hill, r, ("perfect",))
 
 
 def test_closed_loop_result_round_trip(closed_loop, tmp_path):
@@ -271,24 +277,25 @@ def test_closed_loop_result_round_trip(closed_loop, tmp_path):
         assert all(
             v.attrs.get("units") and v.attrs.get("long_name") for v in data.variables.values()
         )
-        assert data["end"].dims == ("time", "component") and data["solve_times"].dims == ("sample",)
-        assert data["references"].sel(reference="locked").attrs["units"] == "m"
+        assert data["joint_position"].dims == ("time", "joint", "component")
+        assert data["solves_solve_time"].dims == ("solve",)
+        assert data["solves_solve_time"].attrs["units"] == "s"
         assert data["angle_range"].attrs["units"] == "rad"
     write_mpc_result(closed_loop, tmp_path / "old")  # format 1 (cable_ocp 0.1) still loads
-    # It kept no scene; the rest is as it was.
-    assert fields_equal(MpcResult.load(tmp_path / "old"), replace(closed_loop, scene_record={}))
+    old = MpcResult.load(tmp_path / "old")  # it kept no scene and no states; the rest as it was
+    assert old.scene_record == {} and fields_equal(old.solves, closed_loop.solves)
+    np.testing.assert_array_equal(old.end, closed_loop.end)
+    assert old.omega == closed_loop.omega
     with pytest.raises(ValueError, match=r"nothing/mpc\.nc: no such file"):
         MpcResult.load(tmp_path / "nothing")
 
 
 def test_quiet_prints_nothing(models_dir, capfd):
     scene = load_scene(models_dir / "paper_hill.toml", {"numerics.duration": 10.0})
-    result = mpc(
-        scene, horizon=10.0, sample=5.0, model=ModelSettings(2, 1.0), references=(), quiet=True
-    )
+    result = mpc(scene, horizon=10.0, sample=5.0, model=ModelSettings(2, 1.0), quiet=True)
     out, err = capfd.readouterr()
     assert out == "" and err == ""
-    assert result.success and result.sample_times.tolist() == [0.0, 5.0]
+    assert result.success and result.solves.sample_time.tolist() == [0.0, 5.0]
 
 
 def test_failed_solves_keep_the_previous_plan_and_are_reported(models_dir):
@@ -298,12 +305,11 @@ def test_failed_solves_keep_the_previous_plan_and_are_reported(models_dir):
     by design.)"""
     scene = load_scene(models_dir / "paper_hill.toml", {"numerics.duration": 10.0})
     one_iteration = IpoptSettings(max_iter=1, tolerance=1e-6)
-    settings = {**SHORT, "horizon": 10.0, "solver": "ipopt", "solver_settings": one_iteration,
-                "references": ()}  # fmt: skip
+    settings = {**SHORT, "horizon": 10.0, "solver": "ipopt", "solver_settings": one_iteration}
     result = mpc(scene, quiet=True, **settings)
     assert not result.success
     assert len(result.failures) == 2 and result.failures[0].startswith("t = 0 s: Maximum_Iter")
-    assert result.statuses == ["Maximum_Iterations_Exceeded"] * 2
+    assert result.solves.status == ["Maximum_Iterations_Exceeded"] * 2
     # The plan in force stays the initial one (winch at rest), so nothing but the winch at rest
     # was applied.
     np.testing.assert_allclose(result.planned_angle, 0.0, atol=1e-12)
@@ -326,7 +332,8 @@ def test_mpc_command_writes_results_and_figures(models_dir, tmp_path, capsys):
     written = sorted(p.name for p in out.iterdir() if not p.name.startswith("."))
     assert written == ["clearance.png", "mpc.nc", "solve_times.png", "summary.json",
                        "winch_angle.png"]  # fmt: skip
-    assert '"omega_m"' in capsys.readouterr().out
+    printed = capsys.readouterr().out
+    assert '"omega"' in printed and '"reference_omegas"' in printed
 
 
 def test_the_plan_holds_the_winch_bounds_between_samples(short_hill):
@@ -337,7 +344,7 @@ def test_the_plan_holds_the_winch_bounds_between_samples(short_hill):
     stays in the angle range, to BOUND_TOLERANCE. (The limiter's band narrows the range beyond
     the first sample of each plan, which is the part applied.)"""
     scene = short_hill.updated({"winch.angle_max": 1.0})
-    result = mpc(scene, quiet=True, references=(), heave_margin=0.0, **SHORT)
+    result = mpc(scene, quiet=True, heave_margin=0.0, **SHORT)
     low, high = result.angle_range
     assert result.success, result.status
     band = result.settings["limiter_band"]
@@ -353,7 +360,6 @@ def test_real_time_iteration_and_ipopt_solve_one_transcription(short_hill, close
     converged = mpc(
         short_hill,
         quiet=True,
-        references=(),
         solver="ipopt",
         solver_settings=IpoptSettings(max_iter=100, tolerance=1e-6),
         **SHORT,

@@ -18,8 +18,10 @@ import pytest  # noqa: E402
 
 import cable_ocp as co  # noqa: E402
 from cable_ocp import cli, plots  # noqa: E402
+from cable_ocp.control.closed_loop import SolveLog  # noqa: E402
 from cable_ocp.plots import closed_loop  # noqa: E402
 from cable_ocp.simulation import progress  # noqa: E402
+from cable_ocp.simulation.trajectory_dataset import state_names  # noqa: E402
 
 UNIT = re.compile(r"\[[^\]]+\]")  # "x [m]", "t [s]", "winch angle phi [rad]"
 
@@ -128,32 +130,48 @@ def test_the_catenary_legend_covers_neither_the_curve_nor_a_tick_label():
     plt.close(fig)
 
 
+def _run(t: np.ndarray, error: np.ndarray, omega: float) -> co.Trajectory:
+    """A run of one element on paper_hill (its end and top only matter to the figures)."""
+    k = t.size
+    return co.Trajectory(
+        time=t, states=np.zeros((k, 20)), inputs=np.zeros((k, 15)), joints=np.zeros((k, 3, 3)),
+        tensions=np.zeros((k, 2)), winch_angle=np.sin(t), clearance_error=error, omega=omega,
+        scene_name="paper_hill", state_names=state_names(2, 5),
+    )  # fmt: skip
+
+
 def mpc_result(omega: float = 0.0234) -> co.MpcResult:
     t = np.linspace(0, 20, 41)
     samples = np.arange(0, 20, 1.0)
     return co.MpcResult(
-        time=t, winch_angle=np.sin(t), planned_angle=np.sin(t), end=np.zeros((t.size, 3)),
-        top=np.zeros((t.size, 3)), clearance_error=1e-3 * np.sin(t), omega=omega,
-        sample_times=samples, solve_times=np.full(samples.size, 5.6e-3),
-        iterations=np.ones(samples.size, dtype=int), statuses=["ok"] * samples.size,
-        failures=[], success=True, limited_steps=0, angle_range=(-16.0, 24.0),
+        trajectory=_run(t, 1e-3 * np.sin(t), omega), planned_angle=np.sin(t),
+        solves=SolveLog(samples, np.full(samples.size, 5.6e-3),
+                        np.ones(samples.size, dtype=int), ["ok"] * samples.size),
+        failures=[], success=True, status="", iterations=samples.size, solve_time=0.112,
+        limited_steps=0, projected_samples=0, angle_range=(-16.0, 24.0),
         real_time_factor=157.3, worst_solve_time=7.7e-3, wall_time=1.0, build_time=0.5,
         settings={"solver": "gauss-newton", "sample_s": 1.0},
-        references={"locked": 4.0 * np.sin(t)}, reference_omegas={"locked": 4.3312},
     )  # fmt: skip
 
 
 def test_the_closed_loop_figures_name_scene_and_run():
+    """The closed loop is drawn by the open loop's functions, beside its locked reference."""
     result = mpc_result(1.302e-4)
-    fig = closed_loop.clearance(result, scene_name="paper_hill")
+    t = result.time
+    locked = _run(t, 4.0 * np.sin(t), 4.3312)
+    fig = co.plots.clearance([locked, result], labels=["locked", "closed loop (gauss-newton)"],
+                             zoom=True)  # fmt: skip
     title = fig.axes[0].get_title()
     assert "paper_hill" in title and "closed loop (gauss-newton)" in title and "locked" in title
     assert "closed loop (gauss-newton) (Omega = 1.30e-4 m)" in legend_texts(fig.axes[0])
     assert "locked (Omega = 4.33 m)" in legend_texts(fig.axes[0])
+    assert "locked (Omega = 4.33 m)" not in legend_texts(fig.axes[1])  # the zoom
     plt.close(fig)
-    fig = closed_loop.winch_angle(result, scene_name="paper_hill")
+    fig = co.plots.winch_angle(result, bounds=result.angle_range)
     assert "paper_hill" in fig.axes[0].get_title()
-    assert any(t.startswith("winch range phi_min") for t in legend_texts(fig.axes[0]))
+    texts = legend_texts(fig.axes[0])
+    assert any(t.startswith("winch bounds phi_min") for t in texts)
+    assert "closed loop (gauss-newton), planned" in texts
     assert_units(fig.axes[0])
     plt.close(fig)
     fig = closed_loop.solve_times(result, scene_name="paper_hill")

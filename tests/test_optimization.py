@@ -17,7 +17,7 @@ from cable_ocp.control.settings import GridSettings, ModelSettings, Transcriptio
 from cable_ocp.drive.bounds import angle_bounds
 from cable_ocp.drive.controls import HermiteIntervals, KnotSpline
 from cable_ocp.drive.winch import spline_angle
-from cable_ocp.scene.labelled import fields_equal
+from cable_ocp.result_files.dataset import fields_equal
 from cable_ocp.scene.schema import load_scene
 from cable_ocp.simulation.run import simulate
 
@@ -70,7 +70,7 @@ def test_result_round_trip(solved, tmp_path):
         assert all(
             v.attrs.get("units") and v.attrs.get("long_name") for v in data.variables.values()
         )
-        assert data["omega"].attrs["units"] == "m" and data["history"].attrs["units"] == "m2"
+        assert data["omega"].attrs["units"] == "m" and data["history"].attrs["units"] == "m"
         assert data["wall_time"].attrs["units"] == "s" and data.attrs["method"] == "ipopt"
         assert data["trajectory_omega"] == data["omega"]  # the verified run's Omega
         assert data["tension"].dims == ("time", "element")

@@ -15,14 +15,14 @@ import json
 import numpy as np
 import pytest
 import xarray as xr
-from legacy_results import write_ocp_result, write_trajectory
+from legacy_results import write_mpc_format_2, write_mpc_result, write_ocp_result, write_trajectory
 
-from cable_ocp.control.closed_loop.result import MpcResult
+from cable_ocp.control.closed_loop.result import MpcResult, SolveLog
 from cable_ocp.control.optimization import OcpResult
-from cable_ocp.scene import labelled
+from cable_ocp.result_files import dataset as labelled
 from cable_ocp.scene.records import check_field, control_parameters, record_fields
-from cable_ocp.simulation.labelled import state_names
 from cable_ocp.simulation.trajectory import Trajectory
+from cable_ocp.simulation.trajectory_dataset import state_names
 
 DEEP = "[" * 100_000 + "]" * 100_000
 
@@ -266,15 +266,15 @@ def test_a_trajectory_of_format_2_with_a_field_of_the_wrong_type_is_named(
 
 
 def _mpc() -> MpcResult:
-    k, s = 4, 2
+    k, s = 3, 2
     return MpcResult(
-        time=np.linspace(0, 1, k), winch_angle=np.zeros(k), planned_angle=np.zeros(k),
-        end=np.zeros((k, 3)), top=np.ones((k, 3)), clearance_error=np.full(k, 0.1), omega=0.1,
-        sample_times=np.arange(s, dtype=float), solve_times=np.full(s, 0.01),
-        iterations=np.array([3, 4]), statuses=["Solve_Succeeded"] * s, failures=[],
-        success=True, limited_steps=0, angle_range=(-1.0, 1.0), real_time_factor=2.0,
-        worst_solve_time=0.01, wall_time=0.5, build_time=0.2, settings={"horizon_s": 2.0},
-        references={"locked": np.full(k, 0.2)}, reference_omegas={"locked": 0.2},
+        trajectory=_trajectory(), planned_angle=np.zeros(k),
+        solves=SolveLog(np.arange(s, dtype=float), np.full(s, 0.01), np.array([3, 4]),
+                        ["Solve_Succeeded"] * s),
+        failures=[], success=True, status="every solve succeeded", iterations=7,
+        solve_time=0.02, worst_solve_time=0.01, limited_steps=0, projected_samples=0,
+        angle_range=(-1.0, 1.0), real_time_factor=2.0, wall_time=0.5, build_time=0.2,
+        settings={"horizon_s": 2.0},
     )  # fmt: skip
 
 
@@ -285,18 +285,15 @@ def _mpc() -> MpcResult:
         (("limited_steps", 2.5), "limited_steps = 2.5: expected an integer >= 0"),
         (("angle_range", ("bound", [-1.0, np.inf])), "angle_range[1] = inf: expected a finite"),
         (("angle_range", ("b", [1.0, 2.0, 3.0])), "angle_range = [1.0, 2.0, 3.0]: expected 2"),
-        (("statuses", '["ok", 3]'), "statuses[1] = 3: expected a string"),
-        (("statuses", "[1"), "statuses: Expecting"),
+        (("solves_status", '["ok", 3]'), "status[1] = 3: expected a string"),
+        (("solves_status", "[1"), "status: Expecting"),
         (("settings", "[" * 100_000 + "]" * 100_000), "settings: JSON nested too deeply"),
         (("settings", "[1, 2]"), "settings = [1, 2]: expected a mapping of names"),
-        (("reference_omegas", ("reference", ["x"])), "reference_omegas['locked'] = 'x'"),
-        (("iterations", ("sample", ["a", "b"])), "iterations = an array of <U1 of shape (2,)"),
-        (("omega", None), "missing field(s) omega"),
+        (("solves_iterations", ("solve", ["a", "b"])), "iterations = an array of <U1 of shape"),
+        (("omega", None), "trajectory: missing field(s) omega"),
     ],
 )
-def test_an_mpc_result_of_format_2_with_a_field_of_the_wrong_type_is_named(
-    tmp_path, change, message
-):
+def test_an_mpc_result_with_a_field_of_the_wrong_type_is_named(tmp_path, change, message):
     path = _mpc().save(tmp_path / "m")
     assert labelled.fields_equal(MpcResult.load(tmp_path / "m"), _mpc())
     _rewrite(path, change)
@@ -304,6 +301,22 @@ def test_an_mpc_result_of_format_2_with_a_field_of_the_wrong_type_is_named(
         MpcResult.load(tmp_path / "m")
     assert str(error.value).startswith(f"{path}: not a readable closed-loop result")
     assert message in str(error.value)
+
+
+def test_an_mpc_result_of_format_1_and_2_loads(tmp_path):
+    """Files of cable_ocp 0.1 (mpc.json + mpc.npz) and of format 2 (the run as its end and top
+    over time): the run, its solves and its figures as they were; the reference runs left out."""
+    new = _mpc()
+    for write, folder in ((write_mpc_result, tmp_path / "1"), (write_mpc_format_2, tmp_path / "2")):
+        write(new, folder)
+        old = MpcResult.load(folder)
+        np.testing.assert_array_equal(old.end, new.end)
+        np.testing.assert_array_equal(old.top, new.top)
+        np.testing.assert_array_equal(old.time, new.time)
+        np.testing.assert_array_equal(old.clearance_error, new.clearance_error)
+        assert old.omega == new.omega and old.iterations == 7 and old.solve_time == 0.02
+        assert labelled.fields_equal(old.solves, new.solves)
+        assert old.summary()["omega"] == new.omega and old.success
 
 
 def test_check_field_directly():

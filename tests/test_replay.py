@@ -85,7 +85,8 @@ def test_a_simulation_keeps_its_scene(tmp_path):
 
 
 def test_an_mpc_run_with_a_heave_set_on_the_command_line_reruns_from_its_file(tmp_path, capsys):
-    """``--set`` overrides are in mpc.nc's scene: the loop on it gives the same Omega."""
+    """``--set`` overrides are in mpc.nc's scene and its settings in its record: the loop on
+    them gives the same Omega (1e-9 m), and the same plant run."""
     out = tmp_path / "m"
     command = ["mpc", "small_tow", "--out", str(out), "--quiet",
                "--set", "top.heave.amplitude=0.5", "--set", "top.heave.period=8.0"]  # fmt: skip
@@ -93,8 +94,9 @@ def test_an_mpc_run_with_a_heave_set_on_the_command_line_reruns_from_its_file(tm
     loaded = co.load_result(out)
     assert isinstance(loaded, co.MpcResult)
     assert loaded.scene == co.load_scene(scene_path("small_tow"), HEAVE)
-    again = co.mpc(loaded.scene, MpcSettings(references=("locked",)), quiet=True)
+    again = co.mpc(loaded.scene, MpcSettings.from_record(loaded.settings), quiet=True)
     assert abs(again.omega - loaded.omega) < 1e-9
+    np.testing.assert_allclose(again.end, loaded.end, atol=1e-9)
 
 
 def test_a_result_written_before_scenes_were_kept_loads_and_says_so(heaving_optimum, tmp_path):
@@ -125,13 +127,13 @@ def test_cable_ocp_replay_drives_a_saved_optimum_on_its_scene_or_a_changed_one(
     result.save(folder)
     assert cli.main(["replay", str(folder), "--out", str(tmp_path / "same"), "--quiet"]) == 0
     same = json.loads((tmp_path / "same" / "summary.json").read_text())
-    assert abs(same["omega_m"] - result.omega) < 1e-9
-    assert same["saved_omega_m"] == result.omega
+    assert abs(same["omega"] - result.omega) < 1e-9
+    assert same["saved_omega"] == result.omega and same["units"]["omega"] == "m"
     assert (tmp_path / "same" / "clearance.png").is_file()
     finer = ["replay", str(folder), "--out", str(tmp_path / "finer"), "--quiet"]
     assert cli.main([*finer, "--set", "model.elements=8"]) == 0
     moved = json.loads((tmp_path / "finer" / "summary.json").read_text())
-    assert np.isfinite(moved["omega_m"]) and moved["omega_m"] != same["omega_m"]
+    assert np.isfinite(moved["omega"]) and moved["omega"] != same["omega"]
     capsys.readouterr()
 
 

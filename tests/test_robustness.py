@@ -164,7 +164,7 @@ def test_mpc_keeps_its_plant_through_heave_into_the_bound(hill):
             "environment.current": [0.2, -0.1, 0.0],
         }
     )
-    result = co.mpc(scene, quiet=True, references=())
+    result = co.mpc(scene, quiet=True)
     assert result.success, result.status
     assert result.limited_steps > 0  # the limiter did act
     assert result.omega < 0.1

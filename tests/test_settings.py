@@ -43,7 +43,7 @@ def test_an_mpc_result_keeps_its_settings_and_runs_again_from_its_file(solver, t
     heave = {"top.heave.amplitude": 0.5, "top.heave.period": 8.0, "numerics.duration": 20.0}
     scene = co.load_scene(scene_path("small_tow"), heave)
     chosen = MpcSettings(horizon=12.0, sample=2.0, solver=solver, rate_weight=2e-4,
-                         model=co.ModelSettings(elements=3), references=())  # fmt: skip
+                         model=co.ModelSettings(elements=3))  # fmt: skip
     first = co.mpc(scene, chosen, quiet=True)
     first.save(tmp_path / "m")
     kept = co.load_result(tmp_path / "m")

@@ -15,11 +15,11 @@ import pytest
 import xarray as xr
 from legacy_results import write_trajectory
 
-from cable_ocp.scene.labelled import FORMAT
+from cable_ocp.result_files.netcdf import FORMAT
 from cable_ocp.scene.schema import load_scene
-from cable_ocp.simulation.labelled import state_names
 from cable_ocp.simulation.run import simulate
 from cable_ocp.simulation.trajectory import Trajectory
+from cable_ocp.simulation.trajectory_dataset import state_names
 
 
 @pytest.fixture(scope="module")

@@ -82,8 +82,13 @@ def _replay(args) -> int:
         )
     scene = result.scene.updated(parse_overrides(args.set)) if args.set else result.scene
     trajectory = simulate(scene, winch=result, quiet=args.quiet)
-    _write_run(trajectory, scene, Path(args.out), args.animate, {"saved_omega_m": result.omega})
+    _write_run(trajectory, scene, Path(args.out), args.animate, {"saved_omega": result.omega})
     return 0
+
+
+# Units of the figures in a run's summary.json (the results' own are in their summary()).
+RUN_UNITS = {"omega": "m", "saved_omega": "m", "end_rise": "m", "final_end_position": "m",
+             "max_top_tension": "N", "locked_omega": "m"}  # fmt: skip
 
 
 def _write_run(trajectory, scene, out: Path, animate: bool, extra: dict | None = None) -> None:
@@ -105,12 +110,13 @@ def _write_run(trajectory, scene, out: Path, animate: bool, extra: dict | None =
             plots.line_run(trajectory, path=folder / "line_run.png")
         summary = {
             "scene": scene.name,
-            "omega_m": trajectory.omega,
-            "end_rise_m": float(trajectory.end[:, 2].max() - trajectory.end[0, 2]),
-            "final_end_position_m": trajectory.end[-1].tolist(),
-            "max_top_tension_N": float(trajectory.top_tension.max()),
+            "omega": trajectory.omega,
+            "end_rise": float(trajectory.end[:, 2].max() - trajectory.end[0, 2]),
+            "final_end_position": trajectory.end[-1].tolist(),
+            "max_top_tension": float(trajectory.top_tension.max()),
             **(extra or {}),
         }
+        summary["units"] = {name: RUN_UNITS[name] for name in summary if name in RUN_UNITS}
         (folder / "summary.json").write_text(json_text(summary))
     print(json_text(summary))
     print(f"results and figures written to {out.resolve()}")
@@ -238,7 +244,8 @@ def _optimize(args) -> int:
     runs = [("locked winch", locked), (f"optimised ({result.solver})", result.trajectory)]
     runs = [(label, run) for label, run in runs if run is not None]
     summary = {"scene": scene.name, **result.summary(),
-               "locked_omega_m": locked.omega if locked is not None else float("nan")}  # fmt: skip
+               "locked_omega": locked.omega if locked is not None else float("nan")}  # fmt: skip
+    summary["units"] = {**summary["units"], "locked_omega": RUN_UNITS["locked_omega"]}
     with results_folder(args.out) as folder:
         result.save(folder)
         (folder / "summary.json").write_text(json_text(summary))

@@ -146,28 +146,39 @@ def settings_from(args: argparse.Namespace) -> MpcSettings:
         heave_margin=args.heave_margin,
         limiter_band=args.limiter_band,
         rate_weight=args.rate_weight,
-        references=("locked", "open-loop") if args.open_loop else ("locked",),
     )
 
 
 def run_mpc_command(args: argparse.Namespace) -> int:
     """Run ``cable-ocp mpc``; returns the exit code (3 if a solve, the plant or a check failed)."""
+    from cable_ocp import plots
     from cable_ocp.cli import parse_overrides
     from cable_ocp.cli.files import results_folder
     from cable_ocp.control.closed_loop.loop import mpc
-    from cable_ocp.plots import closed_loop as plots
+    from cable_ocp.control.closed_loop.references import reference_runs
+    from cable_ocp.plots import closed_loop
     from cable_ocp.scene.output import json_text
     from cable_ocp.scene.schema import load_scene
 
     scene = load_scene(args.scene, parse_overrides(args.set))
     result = mpc(scene, settings_from(args), quiet=args.quiet)
+    names = ("locked", "open-loop") if args.open_loop else ("locked",)
+    references = reference_runs(scene, result, names)
+    figures = result.summary()
+    units = {**figures.pop("units"), "reference_omegas": "m"}
+    figures.update(reference_omegas=references.omegas, reference_notes=references.notes)
+    figures["units"] = units
+    runs = [*references.runs.values(), result]
+    labels = [*references.runs, plots.result_label(result)]
+    seabed = scene.seabed
     with results_folder(args.out) as folder:
         result.save(folder)
-        plots.clearance(result, folder / "clearance.png", scene.name)
-        plots.solve_times(result, folder / "solve_times.png", scene.name)
-        plots.winch_angle(result, folder / "winch_angle.png", scene.name)
-        (folder / "summary.json").write_text(json_text(result.summary()))
-    summary = {k: v for k, v in result.summary().items() if k != "failures"}
+        plots.clearance(runs, seabed.clearance, labels, folder / "clearance.png",
+                        seabed.minimum_clearance, zoom=True)  # fmt: skip
+        closed_loop.solve_times(result, folder / "solve_times.png", scene.name)
+        plots.winch_angle(result, bounds=result.angle_range, path=folder / "winch_angle.png")
+        (folder / "summary.json").write_text(json_text(figures))
+    summary = {k: v for k, v in figures.items() if k != "failures"}
     print(json_text(summary))
     print(f"results and figures written to {Path(args.out).resolve()}")
     if not result.success:

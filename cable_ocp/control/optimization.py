@@ -15,7 +15,6 @@ keeps score (CONVENTIONS.md §5, "reduced models for optimisation").
 from __future__ import annotations
 
 import time
-import zipfile
 from collections.abc import Callable
 from dataclasses import dataclass, field, fields, replace
 from functools import partial
@@ -24,7 +23,7 @@ from pathlib import Path
 import numpy as np
 import xarray as xr
 
-from cable_ocp.control import labelled
+from cable_ocp import result_files
 from cable_ocp.control.nelder_mead import nelder_mead_problem, resolved_nelder_mead
 from cable_ocp.control.ocp import control_of, full_model_scene, resolved, shooting_problem
 from cable_ocp.control.problem import SolverOutcome, WinchProblem
@@ -37,7 +36,8 @@ from cable_ocp.control.settings import (
 from cable_ocp.control.solvers import SOLVERS, ocp_settings
 from cable_ocp.control.verification import Verification, correction_step
 from cable_ocp.drive.drive import Drive
-from cable_ocp.scene import labelled as results
+from cable_ocp.result_files import dataset, format_1
+from cable_ocp.result_files.units import units_of
 from cable_ocp.scene.schema import scene_of
 from cable_ocp.simulation.progress import check_verbosity
 from cable_ocp.simulation.trajectory import Trajectory
@@ -72,6 +72,7 @@ class OcpResult:
     status : str
         The solver's own status message, or ``"verification failed: <reason>"``.
     iterations : int
+        Iterations of the solver (of every solve, with model correction).
     evaluations : int
         Objective evaluations (Nelder-Mead) or NLP objective evaluations (IPOPT).
     wall_time : float, s
@@ -82,11 +83,13 @@ class OcpResult:
         Time inside the solver(s).
     function_time : float, s
         Of ``solve_time``, the part spent evaluating NLP functions and derivatives (IPOPT).
-    history : list of float
-        Objective per iteration (IPOPT: Omega^2 on the optimisation model, m^2) or best Omega per
-        evaluation (Nelder-Mead, m).
-    refinements : list of float
-        Omega of the full model after each solve (m); more than one entry with model
+    history : list of float, m
+        The objective as an Omega, for every solver in m: the square root of the objective at
+        each iteration (Gauss-Newton and IPOPT; Omega on the optimisation model, the rate
+        penalty included when ``rate_weight`` > 0), or the best Omega after each evaluation
+        (Nelder-Mead).
+    refinements : list of float, m
+        Omega of the full model after each solve; more than one entry with model
         correction. The reported solve's is its verification at the scene's step, the others'
         come from the correction runs at a coarser step (``notes`` gives it;
         :func:`cable_ocp.control.verification.correction_step`).
@@ -194,43 +197,61 @@ class OcpResult:
         return drive.winch_angle(np.atleast_1d(np.asarray(t, dtype=float)))[0]
 
     def summary(self) -> dict:
-        """The scalar figures of the result (json-ready; units in the keys, as ``MpcResult``'s)."""
-        return {
-            "solver": self.solver,
-            "method": self.method,
-            "control": self.control,
-            "success": self.success,
-            "status": self.status,
-            "omega_m": self.omega,
-            "omega_model_m": self.omega_model,
-            "iterations": self.iterations,
-            "evaluations": self.evaluations,
-            "wall_time_s": self.wall_time,
-            "build_time_s": self.build_time,
-            "solve_time_s": self.solve_time,
-            "verification_time_s": self.verification_time,
-            "refinements_omega_m": list(self.refinements),
-            "bound_time_s": self.bound_time,
-            "bond_residual_m": self.bond_residual,
-            "verified_step_s": self.verified_step,
-            "minimum_clearance_m": self.minimum_clearance,
-            "minimum_clearance_time_s": self.minimum_clearance_time,
-            "heave_feedforward": self.heave_feedforward,
-            "notes": self.notes,
-        }
+        """The scalar figures of the result (json-ready), named as its fields.
+
+        Named as in ``MpcResult.summary`` where the quantity is the same (``omega``,
+        ``success``, ``status``, ``iterations``, ``solve_time``, ``wall_time``,
+        ``build_time``); ``"units"`` gives the unit of each figure that has one (from the
+        Attributes above: Omega in m, times in s).
+        """
+        names = (
+            "solver", "method", "control", "success", "status", "omega", "omega_model",
+            "iterations", "evaluations", "wall_time", "build_time", "solve_time",
+            "verification_time", "bound_time", "bond_residual", "verified_step",
+            "minimum_clearance", "minimum_clearance_time", "heave_feedforward", "notes",
+        )  # fmt: skip
+        figures = {name: getattr(self, name) for name in names}
+        figures["refinements"] = list(self.refinements)
+        return {**figures, "units": units_of(type(self), figures)}
 
     def to_xarray(self) -> xr.Dataset:
         """The result as an ``xarray.Dataset``, its verified trajectory over ``time`` included.
 
-        Every variable carries ``units`` and ``long_name`` (:mod:`cable_ocp.control.labelled`).
+        ``parameters`` lie over ``parameter``, ``history`` over ``iteration`` (an evaluation for
+        Nelder-Mead), ``refinements`` over ``solve``; the numbers are 0-d variables, the strings
+        attributes, the trajectory's variables join them (:mod:`cable_ocp.result_files.dataset`,
+        a name the result uses too prefixed ``trajectory_``). Every variable carries ``units``
+        and ``long_name``.
         """
-        return labelled.to_xarray(self)
+        units = {"parameters": PARAMETER_UNITS.get(self.control.partition("(")[0], "rad")}
+        return dataset.to_dataset(self, type(self).__name__, RESULT_DIMS, units=units)
+
+    @classmethod
+    def from_xarray(cls, data: xr.Dataset) -> OcpResult:
+        """The result a Dataset of :meth:`to_xarray` holds (an older file's too).
+
+        A history in m^2 (IPOPT and Gauss-Newton in files of format 2) is turned into m.
+
+        Raises
+        ------
+        ValueError, KeyError, TypeError
+            A field is missing or does not fit.
+        """
+        from cable_ocp.scene.records import control_parameters
+
+        values = dataset.from_dataset(cls, data)
+        if values["method"] not in METHODS:
+            raise ValueError(f"method = {values['method']!r:.40}: not a known method")
+        control_parameters(values["parameters"], values["control"])
+        if "history" in data.variables and data["history"].attrs.get("units") == "m2":
+            values["history"] = omega_history(values["history"])
+        return cls(**values)
 
     def save(self, folder: str | Path) -> Path:
         """Write the result to netCDF, ``folder/result.nc`` (see :meth:`to_xarray`)."""
         folder = Path(folder)
         folder.mkdir(parents=True, exist_ok=True)
-        return results.write(self.to_xarray(), folder / labelled.FILE)
+        return result_files.save(self, folder / RESULT_FILE)
 
     @classmethod
     def load(cls, folder: str | Path) -> OcpResult:
@@ -241,62 +262,57 @@ class OcpResult:
         ValueError
             Naming the file, if a file of the result is missing, truncated or garbled.
         """
-        import typing
-
-        from cable_ocp.scene.records import control_parameters as check_control
-
-        netcdf = Path(folder) / labelled.FILE
-        if netcdf.exists() or not (Path(folder) / "result.json").exists():
-            dataset = results.read(netcdf, labelled.KIND)
-            try:
-                values = labelled.from_dataset(cls, dataset, Trajectory)
-                if values["method"] not in METHODS:
-                    raise ValueError(f"method = {values['method']!r:.40}: not a known method")
-                check_control(values["parameters"], values["control"])
-            except (ValueError, KeyError, TypeError) as error:
-                raise ValueError(
-                    f"{netcdf}: not a readable optimisation result ({type(error).__name__}: "
-                    f"{error})"
-                ) from None
-            return cls(**values)
-        # Result format 1 (cable_ocp 0.1): result.json, result.npz and the trajectory's files.
-        from cable_ocp.scene.records import (
-            control_parameters,
-            control_size,
-            parse_json,
-            record_fields,
-        )
-
         folder = Path(folder)
-        hints = typing.get_type_hints(cls)  # each field of result.json checked against its type
-        saved = [f.name for f in fields(cls) if f.name not in ("parameters", "trajectory")]
-        types = {name: hints[name] for name in saved}
-        path = folder / "result.json"
-        try:
-            meta = record_fields(parse_json(path.read_text()), types, _OPTIONAL_FIELDS)
-            if meta["method"] not in METHODS:
-                raise ValueError(f"method = {meta['method']!r:.40}: not {' or '.join(METHODS)}")
-            control_size(meta["control"])
-            path = folder / "result.npz"
-            with np.load(path) as data:
-                parameters = np.asarray(data["parameters"], dtype=float)
-            control_parameters(parameters, meta["control"])
-        except (OSError, ValueError, KeyError, TypeError, zipfile.BadZipFile, EOFError) as error:
-            raise ValueError(
-                f"{path}: not a readable optimisation result ({type(error).__name__}: {error})"
-            ) from None
-        trajectory = None
-        if (folder / "trajectory.npz").exists() or (folder / "trajectory.json").exists():
-            trajectory = Trajectory.load(folder / "trajectory")  # a ValueError naming its file
-        return cls(parameters=parameters, trajectory=trajectory, **meta)
+        if (folder / RESULT_FILE).exists() or not (folder / "result.json").exists():
+            return result_files.load(cls, folder / RESULT_FILE, WHAT)
+        return _from_format_1(cls, folder)
 
 
+RESULT_FILE = "result.nc"
+WHAT = "optimisation result"
+RESULT_DIMS = {"parameters": ("parameter",), "history": ("iteration",), "refinements": ("solve",)}
+# What the docstring cannot state: the parameters' units depend on the control.
+PARAMETER_UNITS = {"spline": "rad", "hermite": "rad, then rad s-1 (angles, then rates)"}
 # Fields of OcpResult that results written before them lack (their defaults are used).
 _OPTIONAL_FIELDS = {
     "compile_time", "verification_time", "bound_time", "bond_residual", "verified_step",
     "heave_feedforward", "notes", "minimum_clearance", "minimum_clearance_time", "scene_record",
     "solver", "settings",
 }  # fmt: skip
+
+
+def omega_history(squares: list[float]) -> list[float]:
+    """An objective history in m^2 (Omega^2 per iteration) as ``sqrt``, in m."""
+    return [float(np.sqrt(max(value, 0.0))) if np.isfinite(value) else value for value in squares]
+
+
+def _from_format_1(cls, folder: Path) -> OcpResult:
+    """An OcpResult from ``result.json``, ``result.npz`` and the trajectory's files (0.1)."""
+    import typing
+
+    from cable_ocp.scene.records import control_parameters, control_size, record_fields
+
+    hints = typing.get_type_hints(cls)  # each field of result.json checked against its type
+    saved = [f.name for f in fields(cls) if f.name not in ("parameters", "trajectory")]
+    types = {name: hints[name] for name in saved}
+    path = folder / "result.json"
+    meta = format_1.read_json(path, WHAT)
+    with format_1.blame(path, WHAT):
+        meta = record_fields(meta, types, _OPTIONAL_FIELDS)
+        if meta["method"] not in METHODS:
+            raise ValueError(f"method = {meta['method']!r:.40}: not {' or '.join(METHODS)}")
+        control_size(meta["control"])
+    path = folder / "result.npz"
+    arrays = format_1.read_arrays(path, WHAT)
+    with format_1.blame(path, WHAT):
+        parameters = np.asarray(arrays["parameters"], dtype=float)
+        control_parameters(parameters, meta["control"])
+    if meta["method"] != "nelder-mead":  # Omega^2 per iteration then
+        meta["history"] = omega_history(meta.get("history", []))
+    trajectory = None
+    if (folder / "trajectory.npz").exists() or (folder / "trajectory.json").exists():
+        trajectory = Trajectory.load(folder / "trajectory")  # a ValueError naming its file
+    return cls(parameters=parameters, trajectory=trajectory, **meta)
 
 
 def _timed_verify(problem: WinchProblem, quiet: bool, compiled: bool):
@@ -414,6 +430,7 @@ def solve_verified(
                 f"{checked.reason}"
             )
     shown = best_outcome or outcomes[-1]
+    history = [v for o in outcomes for v in o.history]
     return OcpResult(
         method=method_of(settings.solver),
         solver=settings.solver,
@@ -430,7 +447,7 @@ def solve_verified(
         build_time=nlp.build_time,
         solve_time=sum(o.solve_time for o in outcomes),
         function_time=sum(o.function_time for o in outcomes),
-        history=[v for o in outcomes for v in o.history],
+        history=omega_history(history) if solver.history_unit == "m2" else history,
         refinements=verified,
         compile_time=nlp.compile_time,
         verification_time=verification_time(),

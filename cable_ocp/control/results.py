@@ -4,10 +4,8 @@ from __future__ import annotations
 
 from pathlib import Path
 
-from cable_ocp.control.closed_loop import labelled as mpc_files
-from cable_ocp.control.closed_loop.result import MpcResult
-from cable_ocp.control.labelled import FILE as OCP_FILE
-from cable_ocp.control.optimization import OcpResult
+from cable_ocp.control.closed_loop.result import MPC_FILE, MpcResult
+from cable_ocp.control.optimization import RESULT_FILE, OcpResult
 from cable_ocp.simulation.trajectory import Trajectory
 
 TRAJECTORY_FILE = "trajectory.nc"
@@ -36,8 +34,8 @@ def load_result(path: str | Path) -> OcpResult | MpcResult | Trajectory:
     path = Path(path)
     folder, name = (path.parent, path.name) if path.suffix == ".nc" else (path, None)
     readers = {
-        OCP_FILE: OcpResult.load,
-        mpc_files.FILE: MpcResult.load,
+        RESULT_FILE: OcpResult.load,
+        MPC_FILE: MpcResult.load,
         TRAJECTORY_FILE: lambda where: Trajectory.load(where / "trajectory"),
     }
     for file, read in readers.items():

@@ -62,6 +62,9 @@ class Solver:
         The ``TranscriptionSettings.shooting`` it takes (empty: the paper's knots, no shooting).
     closed_loop : bool
         It takes ``fixed``, ``lower`` and ``upper`` (rule 2), so ``mpc`` may run it.
+    history_unit : str
+        The unit of its outcome's ``history``: ``"m2"`` (Omega^2, its objective) or ``"m"``
+        (Omega); results report Omega, m.
     """
 
     name: str
@@ -70,6 +73,7 @@ class Solver:
     build: Callable
     shootings: tuple[str, ...]
     closed_loop: bool
+    history_unit: str
 
 
 def _gauss_newton(problem, settings: OcpSettings, quiet, verbose, rate_weight) -> GaussNewton:
@@ -87,12 +91,34 @@ def _nelder_mead(problem, settings: OcpSettings, quiet, verbose, rate_weight) ->
 
 SOLVERS: dict[str, Solver] = {
     entry.name: entry
-    for entry in (
+    for entry in (  # fmt: skip
         Solver(
-            "gauss-newton", "Gauss-Newton", GaussNewtonSettings, _gauss_newton, ("single",), True
+            "gauss-newton",
+            "Gauss-Newton",
+            GaussNewtonSettings,
+            _gauss_newton,
+            ("single",),
+            closed_loop=True,
+            history_unit="m2",
         ),
-        Solver("ipopt", "IPOPT", IpoptSettings, _ipopt, ("single", "multiple"), True),
-        Solver("nelder-mead", "Nelder-Mead", NelderMeadSettings, _nelder_mead, (), False),
+        Solver(
+            "ipopt",
+            "IPOPT",
+            IpoptSettings,
+            _ipopt,
+            ("single", "multiple"),
+            closed_loop=True,
+            history_unit="m2",
+        ),
+        Solver(
+            "nelder-mead",
+            "Nelder-Mead",
+            NelderMeadSettings,
+            _nelder_mead,
+            (),
+            closed_loop=False,
+            history_unit="m",
+        ),
     )
 }
 DEFAULT_SOLVER = "gauss-newton"

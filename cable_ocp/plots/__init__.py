@@ -1,7 +1,11 @@
 """Figures of results (matplotlib): the paper's Fig. 14, 17 and 18 and more; :func:`animate`.
 
-Every function takes one or more :class:`~cable_ocp.simulation.trajectory.Trajectory` objects and
-returns the figure. Importing this module never selects a matplotlib backend: matplotlib chooses one
+Every function takes one or more runs and returns the figure: a
+:class:`~cable_ocp.simulation.trajectory.Trajectory`, or a result that carries one (an
+``OcpResult``'s verified run, an ``MpcResult``'s plant run; its planned angle too in
+:func:`winch_angle`), so that an open loop and a closed loop are drawn by the same functions. The
+figures of the closed loop's solves are in :mod:`cable_ocp.plots.closed_loop`. Importing this
+module never selects a matplotlib backend: matplotlib chooses one
 (Agg without a display, so the command line and the tests run headless; inline in a notebook).
 
 Who closes a figure:
@@ -19,6 +23,7 @@ from __future__ import annotations
 import math
 from collections.abc import Sequence
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 import matplotlib.pyplot as plt
 import numpy as np
@@ -30,6 +35,13 @@ from cable_ocp.scene.schema import Seabed
 from cable_ocp.simulation.line_trajectory import LineTrajectory
 from cable_ocp.simulation.seabed import bathymetry, clearance_reference, seabed_elevation
 from cable_ocp.simulation.trajectory import Trajectory
+
+if TYPE_CHECKING:  # the results are told by what they hold, so that figures load no solver
+    from cable_ocp.control.closed_loop.result import MpcResult
+    from cable_ocp.control.optimization import OcpResult
+
+    # What a figure draws: a run, or a result that carries one (module docstring).
+    Run = Trajectory | LineTrajectory | OcpResult | MpcResult
 
 
 def finish_figure(fig: Figure, path: str | Path | None) -> Figure:
@@ -76,16 +88,47 @@ def run_title(what: str, scenes: Sequence[str | None], runs: Sequence[str]) -> s
     return f"{what}\nscene {scene}: {run}" if scene else f"{what}\n{run}"
 
 
-def _labelled(trajectories, labels):
-    one = isinstance(trajectories, Trajectory | LineTrajectory)
-    trajectories = [trajectories] if one else list(trajectories)
+def result_label(result) -> str:
+    """What a result's run is: ``closed loop (SOLVER)`` or ``optimised (SOLVER)``."""
+    if _closed_loop(result):
+        return f"closed loop ({result.settings.get('solver', 'ipopt')})"
+    return f"optimised ({result.solver or result.method})"
+
+
+def _closed_loop(run) -> bool:
+    """Whether a run is an ``MpcResult`` (it holds its solves)."""
+    return hasattr(run, "solves") and hasattr(run, "planned_angle")
+
+
+def _run_of(run) -> Trajectory | LineTrajectory:
+    """The trajectory of a run: itself, or the one a result carries."""
+    if isinstance(run, Trajectory | LineTrajectory):
+        return run
+    if getattr(run, "trajectory", None) is None:
+        raise ValueError(f"{type(run).__name__} holds no run to draw (no verified trajectory)")
+    return run.trajectory
+
+
+def _runs(runs, labels) -> list[tuple[object, Trajectory | LineTrajectory, str]]:
+    """``(run, its trajectory, its label)`` of one run or several (module docstring)."""
+    one = isinstance(runs, Trajectory | LineTrajectory) or hasattr(runs, "trajectory")
+    runs = [runs] if one else list(runs)
+    trajectories = [_run_of(run) for run in runs]
     if labels:
         labels = list(labels)
-    elif len({_scene(t) for t in trajectories}) > 1:
-        labels = [f"{_scene(t)}, {run_label(t)}" for t in trajectories]
     else:
-        labels = [run_label(t) for t in trajectories]
-    return list(zip(trajectories, labels, strict=True))
+        labels = [run_label(t) if t is run else result_label(run)
+                  for run, t in zip(runs, trajectories, strict=True)]  # fmt: skip
+        if len({_scene(t) for t in trajectories}) > 1:
+            labels = [
+                f"{_scene(t)}, {label}" for t, label in zip(trajectories, labels, strict=True)
+            ]
+    return list(zip(runs, trajectories, labels, strict=True))
+
+
+def _labelled(runs, labels) -> list[tuple[Trajectory | LineTrajectory, str]]:
+    """``(trajectory, label)`` of one run or several."""
+    return [(trajectory, label) for _, trajectory, label in _runs(runs, labels)]
 
 
 def _scene(run) -> str | None:
@@ -98,7 +141,7 @@ def _title(ax, what: str, pairs) -> None:
 
 
 def end_trajectory(
-    trajectories: Trajectory | Sequence[Trajectory],
+    trajectories: Run | Sequence[Run],
     labels: Sequence[str] | None = None,
     path: str | Path | None = None,
 ) -> Figure:
@@ -125,41 +168,49 @@ def end_trajectory(
 
 
 def clearance(
-    trajectories: Trajectory | Sequence[Trajectory],
+    trajectories: Run | Sequence[Run],
     clearance_depth: float = 5.0,
     labels: Sequence[str] | None = None,
     path: str | Path | None = None,
     minimum_clearance: float | None = None,
+    zoom: bool = False,
 ) -> Figure:
     """Height of the end above the seabed, ``delta + e(t)`` (eq. 39), against the target.
 
     ``minimum_clearance`` (m, ``seabed.minimum_clearance``) draws the hard minimum c_min too.
+    With ``zoom`` a lower panel zooms on the runs within 10 times the largest error of the best
+    run (a locked winch is metres off a closed loop's centimetres).
     """
-    fig, ax = plt.subplots(figsize=(9, 4.4))
+    fig, axes = plt.subplots(2 if zoom else 1, 1, figsize=(10, 6.8) if zoom else (9, 4.4),
+                             sharex=True, squeeze=False)  # fmt: skip
+    axes = axes[:, 0]
     pairs = _labelled(trajectories, labels)
-    for traj, label in pairs:
-        ax.plot(
-            traj.time,
-            clearance_depth + traj.clearance_error,
-            label=f"{label} (Omega = {significant(traj.omega)} m)",
-        )
-    ax.axhline(
-        clearance_depth, color="k", ls="--", lw=0.8, label=f"target delta = {clearance_depth} m"
-    )
-    if minimum_clearance is not None:
-        ax.axhline(
-            minimum_clearance, color="r", lw=1.2, label=f"minimum c_min = {minimum_clearance} m"
-        )
-    _title(ax, "height of the end E above the seabed (eq. 39)", pairs)
-    ax.set_ylabel("end height above the seabed [m]")
-    ax.set_xlabel("t [s]")
-    ax.grid(alpha=0.3)
-    ax.legend(fontsize=8)
+    scale = 10 * min(np.max(np.abs(traj.clearance_error)) for traj, _ in pairs)
+    for index, (traj, label) in enumerate(pairs):
+        shown = [axes[0]]
+        if zoom and np.max(np.abs(traj.clearance_error)) <= scale:
+            shown.append(axes[1])
+        for ax in shown:
+            ax.plot(traj.time, clearance_depth + traj.clearance_error, color=f"C{index}",
+                    label=f"{label} (Omega = {significant(traj.omega)} m)")  # fmt: skip
+    for ax in axes:
+        ax.axhline(clearance_depth, color="k", ls="--", lw=0.8,
+                   label=f"target delta = {clearance_depth} m")  # fmt: skip
+        if minimum_clearance is not None:
+            ax.axhline(minimum_clearance, color="r", lw=1.2,
+                       label=f"minimum c_min = {minimum_clearance} m")  # fmt: skip
+        ax.set_ylabel("end height above the seabed [m]")
+        ax.grid(alpha=0.3)
+        ax.legend(fontsize=8)
+    _title(axes[0], "height of the end E above the seabed (eq. 39)", pairs)
+    if zoom:
+        axes[1].set_ylabel("end height above the seabed [m] (zoom)")
+    axes[-1].set_xlabel("t [s]")
     return finish_figure(fig, path)
 
 
 def cable_shapes(
-    trajectory: Trajectory,
+    trajectory: Run,
     times: Sequence[float] | None = None,
     seabed: Seabed | None = None,
     path: str | Path | None = None,
@@ -169,8 +220,10 @@ def cable_shapes(
 
     ``seabed`` is the scene's ``[seabed]`` section (default: flat, delta = 5 m under the start);
     a grid's seabed is drawn where the grid reaches. ``label`` names the run in the title
-    (default: ``run_label``).
+    (default: ``run_label``, or what a result's run is).
     """
+    if not isinstance(trajectory, Trajectory | LineTrajectory):
+        label, trajectory = label or result_label(trajectory), _run_of(trajectory)
     seabed = Seabed() if seabed is None else seabed
     reference = clearance_reference(seabed, trajectory.end[0])
     times = np.linspace(0, trajectory.time[-1], 6) if times is None else np.asarray(times)
@@ -204,19 +257,26 @@ def cable_shapes(
 
 
 def winch_angle(
-    trajectories: Trajectory | Sequence[Trajectory],
+    trajectories: Run | Sequence[Run],
     labels: Sequence[str] | None = None,
     bounds: tuple[float, float] | None = None,
     path: str | Path | None = None,
 ) -> Figure:
     """Winch angle versus time (the paper's Fig. 17), with the angle bounds (dotted).
 
-    ``bounds`` is ``(winch.angle_min, winch.angle_max)``, rad.
+    ``bounds`` is ``(winch.angle_min, winch.angle_max)``, rad (a closed loop's
+    ``angle_range``). A closed loop's angle is the one applied (heave feedback included); its
+    controller's plan is drawn beside it.
     """
     fig, ax = plt.subplots(figsize=(9, 4.4))
-    pairs = _labelled(trajectories, labels)
-    for traj, label in pairs:
-        ax.plot(traj.time, traj.winch_angle, label=label)
+    runs = _runs(trajectories, labels)
+    pairs = [(traj, label) for _, traj, label in runs]
+    for run, traj, label in runs:
+        if _closed_loop(run):
+            ax.plot(traj.time, traj.winch_angle, lw=0.9, label=f"{label}, applied")
+            ax.plot(traj.time, run.planned_angle, lw=1.6, label=f"{label}, planned")
+        else:
+            ax.plot(traj.time, traj.winch_angle, label=label)
     if bounds is not None:
         low, high = bounds
         text = f"winch bounds phi_min = {low:g} rad, phi_max = {high:g} rad"

@@ -17,7 +17,7 @@ import numpy as np
 import xarray as xr
 
 from cable_ocp.model.layout import INPUTS
-from cable_ocp.simulation import labelled
+from cable_ocp.result_files import netcdf
 from cable_ocp.simulation.trajectory import Trajectory
 
 KIND = "LineTrajectory"
@@ -128,7 +128,7 @@ class LineTrajectory:
             },
             coords={"time": ("time", self.time, {"units": "s"}), "component": ["x", "y", "z"]},
             attrs={
-                "cable_ocp_kind": KIND,
+                **netcdf.file_attributes(KIND),
                 "segments": len(self.segments),
                 "element_length": self.element_length,
             },  # fmt: skip
@@ -141,14 +141,15 @@ class LineTrajectory:
         Returns the path.
         """
         path = Path(path).with_suffix(".nc")
-        self.to_xarray().to_netcdf(path, mode="w", format="NETCDF4")
-        for k, segment in enumerate(self.segments):
-            segment.to_xarray().to_netcdf(path, mode="a", group=f"segment_{k}")
-        return path
+        groups = {f"segment_{k}": s.to_xarray() for k, s in enumerate(self.segments)}
+        return netcdf.write(self.to_xarray(), path, groups)
 
     @classmethod
     def load(cls, path: str | Path) -> LineTrajectory:
         """Read a file written by :meth:`save`.
+
+        Files written before line trajectories carried the result format (their kind in
+        ``cable_ocp_kind``) are read too.
 
         Raises
         ------
@@ -158,13 +159,20 @@ class LineTrajectory:
         path = Path(path).with_suffix(".nc")
         try:
             with xr.open_dataset(path) as root:
-                if root.attrs.get("cable_ocp_kind") != KIND:
-                    raise ValueError(f"not a {KIND}")
-                count, length = int(root.attrs["segments"]), float(root.attrs["element_length"])
+                old = netcdf.KIND not in root.attrs and root.attrs.get("cable_ocp_kind") == KIND
+            attrs = root.attrs if old else netcdf.read(path, KIND).attrs
+            count, length = int(attrs["segments"]), float(attrs["element_length"])
             segments = []
             for k in range(count):
-                with xr.open_dataset(path, group=f"segment_{k}") as group:
-                    segments.append(Trajectory(**labelled.from_dataset(group.load())))
+                segments.append(Trajectory.from_xarray(_segment(path, f"segment_{k}", old)))
         except (OSError, KeyError, ValueError, TypeError) as error:
             raise ValueError(f"{path}: not a readable line trajectory ({error})") from None
         return cls(segments, length)
+
+
+def _segment(path: Path, group: str, old: bool) -> xr.Dataset:
+    """The Dataset of a segment's group (of a file written before the result format: as is)."""
+    if not old:
+        return netcdf.read(path, KIND, group=group)
+    with xr.open_dataset(path, group=group) as dataset:
+        return dataset.load()

@@ -282,23 +282,44 @@ def checked_simulation(
         quiet=quiet,
         compiled=compiled,
     )
-    joints, tensions = joints_and_tensions(model, run.states, run.inputs, compiled)
-    check_on_grid(scene.seabed, joints[:, :, 0], run.time)
+    angle = drive.winch_angle(run.time)[0]
+    trajectory = run_trajectory(scene, model, run.time, run.states, run.inputs, angle, compiled)
+    return trajectory, run.bond_residual
+
+
+def run_trajectory(
+    scene,
+    model: CableModel,
+    time: np.ndarray,
+    states: np.ndarray,
+    inputs: np.ndarray,
+    winch_angle: np.ndarray,
+    compiled: bool = False,
+) -> Trajectory:
+    """The :class:`Trajectory` of a run of ``model`` on ``scene``.
+
+    Its states and inputs at ``time`` (s), with the winch angle (rad) that drove it.
+
+    Its joints and tensions are the model's outputs (:func:`joints_and_tensions`), ``e(t)`` and
+    Omega those of eq. 39 on the end's path (no Omega of a single point: NaN). Raises
+    :class:`~cable_ocp.simulation.seabed.OffGridError` if the end left the bathymetry grid.
+    """
+    joints, tensions = joints_and_tensions(model, states, inputs, compiled)
+    check_on_grid(scene.seabed, joints[:, :, 0], time)
     error = clearance_error(scene.seabed, joints[:, :, 0])
-    trajectory = Trajectory(
-        time=run.time,
-        states=run.states,
-        inputs=run.inputs,
+    return Trajectory(
+        time=time,
+        states=states,
+        inputs=inputs,
         joints=joints,
         tensions=tensions,
-        winch_angle=drive.winch_angle(run.time)[0],
+        winch_angle=winch_angle,
         clearance_error=error,
-        omega=rms_objective(run.time, error),
+        omega=rms_objective(time, error) if time.size > 1 else float("nan"),
         scene_name=scene.name,
         scene_record=scene.to_dict(),
         state_names=model.state_names,
     )
-    return trajectory, run.bond_residual
 
 
 def _line_simulation(scene, winch, model, initial_state, quiet, compiled):

@@ -2,24 +2,23 @@
 
 from __future__ import annotations
 
-import json
-import zipfile
-import zlib
 from dataclasses import dataclass, field, fields
 from pathlib import Path
 
 import numpy as np
 import xarray as xr
 
-from cable_ocp.model.layout import INPUTS
-from cable_ocp.scene import labelled as results
+from cable_ocp import result_files
+from cable_ocp.model.layout import INPUT_SIZE, INPUTS
+from cable_ocp.result_files import format_1
 from cable_ocp.scene.records import check_run
 from cable_ocp.scene.schema import scene_of
-from cable_ocp.simulation import labelled
+from cable_ocp.simulation import trajectory_dataset
 
 ARRAY_FIELDS = (
     "time", "states", "inputs", "joints", "tensions", "winch_angle", "clearance_error",
 )  # fmt: skip
+WHAT = "trajectory"
 
 
 @dataclass(frozen=True, eq=False)
@@ -95,13 +94,55 @@ class Trajectory:
     def to_xarray(self) -> xr.Dataset:
         """The run as an ``xarray.Dataset`` over (time, element, joint, component, angle).
 
-        Every variable carries ``units`` and ``long_name`` (:mod:`cable_ocp.simulation.labelled`).
+        Every variable carries ``units`` and ``long_name``
+        (:mod:`cable_ocp.simulation.trajectory_dataset`).
         """
-        return labelled.to_xarray(self)
+        return trajectory_dataset.to_xarray(self)
 
     def save(self, path: str | Path) -> Path:
         """Write the run to netCDF, ``path.nc`` (see :meth:`to_xarray`); returns the path."""
-        return results.write(self.to_xarray(), Path(path).with_suffix(".nc"))
+        return result_files.save(self, Path(path).with_suffix(".nc"))
+
+    @classmethod
+    def from_positions(
+        cls,
+        time: np.ndarray,
+        end: np.ndarray,
+        top: np.ndarray,
+        winch_angle: np.ndarray,
+        clearance_error: np.ndarray,
+        omega: float,
+        scene_record: dict,
+    ) -> Trajectory:
+        """A run known only by the positions of its end and its top (k, 3; m) over ``time``.
+
+        The closed-loop files of result formats 1 and 2 kept no more of the plant's run. Its
+        joints are the end and the top alone, its tensions NaN, its states empty (so it cannot
+        be saved again), its inputs NaN but the top's position.
+        """
+        count = np.shape(time)[0]
+        inputs = np.full((count, INPUT_SIZE), np.nan)
+        inputs[:, INPUTS.top] = top
+        return cls(
+            time=np.asarray(time, dtype=float), states=np.zeros((count, 0)), inputs=inputs,
+            joints=np.stack([end, top], axis=2), tensions=np.full((count, 1), np.nan),
+            winch_angle=winch_angle, clearance_error=clearance_error, omega=omega,
+            scene_name=scene_record.get("name", "scene"), state_names=[],
+            scene_record=scene_record,
+        )  # fmt: skip
+
+    @classmethod
+    def from_xarray(cls, dataset: xr.Dataset) -> Trajectory:
+        """The trajectory a Dataset of :meth:`to_xarray` holds.
+
+        Raises
+        ------
+        ValueError, KeyError
+            A variable is missing or does not fit, or the arrays do not fit together.
+        """
+        arrays = trajectory_dataset.from_dataset(dataset, cls)
+        _check_shapes({name: arrays[name] for name in ARRAY_FIELDS})
+        return cls(**arrays)
 
     @classmethod
     def load(cls, path: str | Path) -> Trajectory:
@@ -120,30 +161,15 @@ class Trajectory:
         netcdf = path.with_suffix(".nc")
         if netcdf.exists() or not (path.with_suffix(".npz").exists() or
                                    path.with_suffix(".json").exists()):  # fmt: skip
-            dataset = results.read(netcdf, labelled.KIND)
-            try:
-                arrays = labelled.from_dataset(dataset)
-                _check_shapes({name: arrays[name] for name in ARRAY_FIELDS})
-            except (ValueError, KeyError, TypeError) as error:
-                raise ValueError(
-                    f"{netcdf}: not a readable trajectory ({type(error).__name__}: {error})"
-                ) from None
-            return cls(**arrays)
+            return result_files.load(cls, netcdf, WHAT)
         arrays_path, meta_path = path.with_suffix(".npz"), path.with_suffix(".json")
-        try:
-            with np.load(arrays_path) as data:
-                arrays = {name: np.asarray(data[name], dtype=float) for name in ARRAY_FIELDS}
+        arrays = format_1.read_arrays(arrays_path, WHAT)
+        with format_1.blame(arrays_path, WHAT):
+            arrays = {name: np.asarray(arrays[name], dtype=float) for name in ARRAY_FIELDS}
             _check_shapes(arrays)
-        except (OSError, ValueError, KeyError, EOFError, zipfile.BadZipFile, zlib.error) as error:
-            raise ValueError(
-                f"{arrays_path}: not a readable trajectory ({type(error).__name__}: {error})"
-            ) from None
-        try:
-            meta = _meta_from_json(json.loads(meta_path.read_text()), arrays["states"].shape[1])
-        except (OSError, ValueError, RecursionError) as error:  # RecursionError: nested too deeply
-            raise ValueError(
-                f"{meta_path}: not a readable trajectory ({type(error).__name__}: {error})"
-            ) from None
+        meta = format_1.read_json(meta_path, WHAT)
+        with format_1.blame(meta_path, WHAT):
+            meta = _meta_from_json(meta, arrays["states"].shape[1])
         return cls(**arrays, **meta)
 
     def equals(self, other: Trajectory) -> bool:

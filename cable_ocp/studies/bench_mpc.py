@@ -17,6 +17,7 @@ from pathlib import Path
 import numpy as np
 
 from cable_ocp.control.closed_loop.loop import mpc
+from cable_ocp.control.closed_loop.references import ReferenceRuns, reference_runs
 from cable_ocp.control.closed_loop.result import MpcResult
 from cable_ocp.control.closed_loop.settings import MpcSettings
 from cable_ocp.control.ocp import IpoptSettings
@@ -45,32 +46,39 @@ CASES = (
 QUICK_DURATION = 40.0  # s of the scene with --quick
 
 
-def run_cases(models_dir: Path, quick: bool = False) -> dict[str, MpcResult]:
-    """Each case of :data:`CASES` on the heave case, after one untimed warm-up run of each."""
+def run_cases(
+    models_dir: Path, quick: bool = False
+) -> tuple[dict[str, MpcResult], dict[str, ReferenceRuns]]:
+    """Each case of :data:`CASES` on the heave case, after one untimed warm-up run of each.
+
+    With each, its locked-winch reference run on its plant.
+    """
     changes = {**HEAVE, **({"numerics.duration": QUICK_DURATION} if quick else {})}
     scene = load_scene(models_dir / "paper_hill.toml", changes)
     warm = scene.updated({"numerics.duration": 20.0})
     for _, settings in CASES:  # compile (or load) the controller's and the plant's libraries
-        mpc(warm, replace(settings, references=()), quiet=True)
-    return {label: mpc(scene, settings, quiet=True) for label, settings in CASES}
+        mpc(warm, settings, quiet=True)
+    runs = {label: mpc(scene, settings, quiet=True) for label, settings in CASES}
+    return runs, {label: reference_runs(scene, run) for label, run in runs.items()}
 
 
 def report(models_dir: Path, quick: bool = False) -> dict[str, MpcResult]:
     """Print the benchmark's table (see the module docstring) and return the runs by label."""
-    results = run_cases(models_dir, quick)
+    results, references = run_cases(models_dir, quick)
     baseline = results[CASES[0][0]]
-    base_median = float(np.median(baseline.solve_times))
+    base_median = float(np.median(baseline.solves.solve_time))
     duration = baseline.time[-1]
     print(f"mpc on paper_hill with a 1 m, 8 s heave ({duration:g} s), 20 s horizon, same plant, "
           "same run; libraries compiled beforehand")  # fmt: skip
     print(f"{'case':<40}{'solves':>7}{'median':>10}{'worst':>10}{'RTF':>7}{'Omega [m]':>11}"
           f"{'locked [m]':>11}{'success':>8}{'median vs base':>15}")  # fmt: skip
     for label, r in results.items():
-        median = float(np.median(r.solve_times))
+        median = float(np.median(r.solves.solve_time))
+        locked = references[label].omegas.get("locked", float("nan"))
         print(
-            f"{label:<40}{r.sample_times.size:>7}{1e3 * median:>8.1f}ms"
+            f"{label:<40}{r.solves.sample_time.size:>7}{1e3 * median:>8.1f}ms"
             f"{1e3 * r.worst_solve_time:>8.1f}ms{r.real_time_factor:>7.1f}{r.omega:>11.4g}"
-            f"{r.reference_omegas.get('locked', float('nan')):>11.4g}{str(r.success):>8}"
+            f"{locked:>11.4g}{str(r.success):>8}"
             f"{base_median / median:>14.0f}x"
         )
     print(

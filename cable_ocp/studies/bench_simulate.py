@@ -165,7 +165,7 @@ def _same_outputs(a: tuple[list[str], dict], b: tuple[list[str], dict]) -> bool:
     (files_a, summary_a), (files_b, summary_b) = a, b
 
     def numbers(summary):
-        values = [summary[key] for key in sorted(summary) if key != "scene"]
+        values = [summary[key] for key in sorted(summary) if key not in ("scene", "units")]
         return [
             float(v) for value in values for v in (value if isinstance(value, list) else [value])
         ]

@@ -1,6 +1,7 @@
 """The package's import graph by layer, checked and drawn (``python -m cable_ocp.studies.imports``).
 
-The package is layered, bottom to top: ``scene`` (files in and out), ``model`` (the rfe equations),
+The package is layered, bottom to top: ``scene`` (files in and out), ``result_files``
+(results kept as netCDF), ``model`` (the rfe equations),
 ``drive`` (vessel, winch, end force), ``simulation`` (statics, RK4 runs), ``control`` (IPOPT,
 Nelder-Mead, MPC), ``sweep`` and ``studies`` (many runs; nothing below imports them), and the faces
 ``cli``, ``plots`` and the package's ``__init__``. A module may import from its own layer and the
@@ -19,6 +20,7 @@ PACKAGE = "cable_ocp"
 # Bottom to top; layers on one row may not import each other.
 LAYERS = (
     ("scene",),
+    ("result_files",),
     ("model",),
     ("drive",),
     ("simulation",),

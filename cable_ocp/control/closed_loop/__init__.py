@@ -5,9 +5,12 @@ solves the open loop's winch problem over a receding horizon on a reduced model 
 Modules, in the order of one sample: ``estimator`` (the plant's measurements to the controller's
 view, with ``projection`` for the reduced state and ``forecast`` for the top), ``controller``
 (the receding-horizon problem and its solver), ``plant`` (the plant and the heave feedback);
-``loop`` is the front door, ``settings`` holds :class:`MpcSettings`, ``result``
-:class:`MpcResult` and ``labelled`` its Dataset. Its figures are in
-``cable_ocp.plots.closed_loop`` and its command in ``cable_ocp.cli.mpc``. The package is not
+``loop`` is the front door (the loop alone), ``settings`` holds :class:`MpcSettings`,
+``result`` :class:`MpcResult` (the plant's run as a ``Trajectory``, the solves as a
+:class:`SolveLog`), ``references`` the runs a loop is judged against (:func:`reference_runs`:
+the winch locked, the open-loop optimum). Its figures are those of ``cable_ocp.plots``, and its
+command is in
+``cable_ocp.cli.mpc``. The package is not
 called ``mpc`` so that ``cable_ocp.mpc`` can be the function.
 
 A loop of one's own steps the parts that :func:`loop_parts` builds as :func:`~.loop.mpc` does:
@@ -31,7 +34,8 @@ if TYPE_CHECKING:  # what __getattr__ imports, for type checkers and the import 
     from cable_ocp.control.closed_loop.estimator import Estimator
     from cable_ocp.control.closed_loop.loop import LoopParts, loop_parts, mpc
     from cable_ocp.control.closed_loop.plant import Measurement, Plant
-    from cable_ocp.control.closed_loop.result import MpcResult
+    from cable_ocp.control.closed_loop.references import ReferenceRuns, reference_runs
+    from cable_ocp.control.closed_loop.result import MpcResult, SolveLog
     from cable_ocp.control.closed_loop.settings import MpcSettings
 
 _SOURCES = {
@@ -44,11 +48,15 @@ _SOURCES = {
     "loop_parts": "cable_ocp.control.closed_loop.loop",
     "mpc": "cable_ocp.control.closed_loop.loop",
     "MpcResult": "cable_ocp.control.closed_loop.result",
+    "SolveLog": "cable_ocp.control.closed_loop.result",
+    "ReferenceRuns": "cable_ocp.control.closed_loop.references",
+    "reference_runs": "cable_ocp.control.closed_loop.references",
     "MpcSettings": "cable_ocp.control.closed_loop.settings",
 }
 __all__ = [
     "Estimator", "LoopParts", "Measurement", "MpcResult", "MpcSettings", "Plant",
-    "RecedingHorizon", "WinchCommand", "loop_parts", "mpc",
+    "RecedingHorizon", "ReferenceRuns", "SolveLog", "WinchCommand", "loop_parts", "mpc",
+    "reference_runs",
 ]  # fmt: skip
 
 

@@ -15,31 +15,25 @@ from __future__ import annotations
 
 import time
 from dataclasses import dataclass
-from types import SimpleNamespace
 
 import numpy as np
 
 from cable_ocp.control.closed_loop.command import WinchCommand
 from cable_ocp.control.closed_loop.controller import WIDENED, RecedingHorizon
 from cable_ocp.control.closed_loop.estimator import Estimator
-from cable_ocp.control.closed_loop.plant import Measurement, Plant
-from cable_ocp.control.closed_loop.result import MpcResult
+from cable_ocp.control.closed_loop.plant import Measurement, Plant, plant_run
+from cable_ocp.control.closed_loop.result import MpcResult, SolveLog
 from cable_ocp.control.closed_loop.settings import MpcSettings
-from cable_ocp.control.interrupts import interrupt_here
-from cable_ocp.control.ocp import compile_ahead, make_control, resolved
-from cable_ocp.control.optimization import optimize, refuse_line_scene
-from cable_ocp.control.solvers import ocp_settings
+from cable_ocp.control.ocp import compile_ahead
+from cable_ocp.control.optimization import refuse_line_scene
 from cable_ocp.control.verification import lowest_clearance
 from cable_ocp.drive.bounds import angle_bounds
-from cable_ocp.drive.drive import Drive
 from cable_ocp.simulation.integrate import SimulationError
 from cable_ocp.simulation.progress import Progress
 from cable_ocp.simulation.seabed import (
     OffGridError,
     check_start,
-    clearance_error,
     clearance_reference,
-    rms_objective,
 )
 
 
@@ -131,7 +125,8 @@ def mpc(scene, settings: MpcSettings | None = None, quiet: bool = False, **field
         ``success`` is False if any solve failed (see ``failures``), the plant failed or its end
         left the bathymetry grid (the loop then stops there, with the arrays up to that time),
         or the end came under ``seabed.minimum_clearance``; ``status`` says which, when and
-        where. A reference run that fails is left out, with the reason in ``status``.
+        where. The runs it is judged against (the winch locked, the open-loop optimum) are
+        left to :func:`~.references.reference_runs`.
 
     Raises
     ------
@@ -182,37 +177,36 @@ def mpc(scene, settings: MpcSettings | None = None, quiet: bool = False, **field
     wall_time = time.perf_counter() - loop_started
 
     time_grid = np.concatenate([run.time for run in runs])
-    end = np.concatenate([run.states for run in runs])[:, 0:3]
-    error = clearance_error(scene.seabed, end)
-    ref_errors, ref_failures = _references(scene, plant, settings.references, time_grid)
-    # lowest_clearance reads a run's time and end, as a Trajectory has them.
-    _, _, too_low = lowest_clearance(scene.seabed, SimpleNamespace(time=time_grid, end=end))
-    statuses = [solve.status for solve in solves]
-    solve_times = [solve.solve_time for solve in solves]
-    widened = sum(WIDENED in text for text in statuses)
-    if widened:
-        ref_failures = [f"{widened} solves {WIDENED}", *ref_failures]
-    status = _status(samples, failures, plant_failure, too_low, ref_failures)
-    return MpcResult(
-        time=time_grid,
-        winch_angle=np.concatenate([run.applied.angle for run in runs]),
-        planned_angle=np.concatenate(planned),
-        end=end,
-        top=np.concatenate([run.inputs for run in runs])[:, 0:3],
-        clearance_error=error,
-        # No Omega of a plant that failed in its first sample (one point, no span).
-        omega=rms_objective(time_grid, error) if time_grid.size > 1 else float("nan"),
-        sample_times=settings.sample * np.arange(len(solves)),
-        solve_times=np.array(solve_times),
+    trajectory = plant_run(
+        plant,
+        time_grid,
+        np.concatenate([run.states for run in runs]),
+        np.concatenate([run.inputs for run in runs]),
+        np.concatenate([run.applied.angle for run in runs]),
+    )
+    _, _, too_low = lowest_clearance(scene.seabed, trajectory)
+    solve_log = SolveLog(
+        sample_time=settings.sample * np.arange(len(solves)),
+        solve_time=np.array([solve.solve_time for solve in solves]),
         iterations=np.array([solve.iterations for solve in solves]),
-        statuses=statuses,
+        status=[solve.status for solve in solves],
+    )
+    widened = sum(WIDENED in text for text in solve_log.status)
+    notes = [f"{widened} solves {WIDENED}"] if widened else []
+    return MpcResult(
+        trajectory=trajectory,
+        planned_angle=np.concatenate(planned),
+        solves=solve_log,
         failures=failures,
         success=not failures and plant_failure is None and too_low is None,
+        status=_status(samples, failures, plant_failure, too_low, notes),
+        iterations=int(np.sum(solve_log.iterations)),
+        solve_time=float(np.sum(solve_log.solve_time)),
+        worst_solve_time=float(np.max(solve_log.solve_time)),
         limited_steps=sum(int(np.count_nonzero(run.applied.limited)) for run in runs[1:]),
         projected_samples=plant.projections,
         angle_range=plant.angle_range,
         real_time_factor=duration / wall_time,
-        worst_solve_time=float(np.max(solve_times)),
         wall_time=wall_time,
         build_time=build_time,
         settings={
@@ -221,10 +215,6 @@ def mpc(scene, settings: MpcSettings | None = None, quiet: bool = False, **field
             "plant_elements": scene.model.elements,
             "plant_step": h,
         },
-        references=ref_errors,
-        reference_omegas={k: rms_objective(time_grid, v) for k, v in ref_errors.items()},
-        status=status,
-        scene_record=scene.to_dict(),
     )
 
 
@@ -240,7 +230,7 @@ def _status(
 ) -> str:
     """One line on how the loop went: plant, minimum clearance, solves, then ``notes``.
 
-    The notes: solves on the winch's own range, reference runs left out.
+    The notes: solves on the winch's own range.
     """
     parts = [reason for reason in (plant_failure, too_low) if reason]
     parts.append(
@@ -251,50 +241,3 @@ def _status(
         else "every solve succeeded"
     )
     return "; ".join(parts + notes)
-
-
-def _run_open(plant: Plant, angle, time_grid: np.ndarray) -> np.ndarray:
-    """Clearance error of the plant under a fixed angle history (no controller).
-
-    Raises SimulationError when the plant fails under it.
-    """
-    x = plant.initial_state(plant.apply(angle, np.zeros(1)))
-    interrupt_here("reference run")
-    states, _, _ = plant.advance(x, 0.0, time_grid.size - 1, angle)
-    return clearance_error(plant.scene.seabed, states[:, 0:3])
-
-
-def _references(scene, plant: Plant, names, time_grid) -> tuple[dict[str, np.ndarray], list]:
-    """The reference runs asked for (see :func:`mpc`), and why any of them is missing."""
-    out, missing = {}, []
-
-    def run(name, angle):
-        try:
-            out[name] = _run_open(plant, angle, time_grid)
-        except SimulationError as error:
-            missing.append(f"reference {name!r} left out: its plant run failed ({error})")
-
-    if time_grid[-1] < scene.numerics.duration:
-        return out, ["no reference runs: the loop stopped early"]
-    if "locked" in names:
-        run("locked", lambda t: tuple(np.zeros((3, np.size(t)))))
-    if "open-loop" in names:
-        # The open loop knows no heave at all: neither the sine nor the sea state.
-        calm = scene.updated({"top.heave": None})
-        try:
-            # The settings optimize() derives, fixed here: the profile's control needs them.
-            settings, _ = resolved(calm, ocp_settings())
-            result = optimize(calm, model=settings.model, grid=settings.grid, quiet=True)
-        except (ValueError, RuntimeError) as error:  # the derivation's locked run, say
-            missing.append(f"reference 'open-loop' left out: {error}")
-            return out, missing
-        if not result.success:
-            missing.append(f"reference 'open-loop' left out: {result.status}")
-            return out, missing
-        profile = make_control(calm, settings).angle_function(result.parameters)
-        run("open-loop", profile)
-        if scene.top.has_heave:
-            # The same profile with the heave paid out by eq. 38 (the drive's compensation).
-            compensated = scene.updated({"top.heave.compensation": True})
-            run("open-loop + heave feedback", Drive.from_scene(compensated, profile).winch_angle)
-    return out, missing

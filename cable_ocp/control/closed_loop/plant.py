@@ -23,8 +23,10 @@ from cable_ocp.model.cable import CableModel
 from cable_ocp.model.layout import INPUTS
 from cable_ocp.simulation.figures import apart
 from cable_ocp.simulation.integrate import SimulationError, evaluate_into, step_function
+from cable_ocp.simulation.run import run_trajectory
 from cable_ocp.simulation.seabed import check_on_grid
 from cable_ocp.simulation.statics import equilibrium
+from cable_ocp.simulation.trajectory import Trajectory
 
 # Substeps per plant step tried in turn when a sample's run is in doubt (see Plant.advance). The
 # third (h / 16) carries a heave feedback that meets the winch's bound at 5.6 rad/s in Hs 3.8 m
@@ -332,3 +334,14 @@ class Plant:
                 f"t = {t:.6g} s at h = {h:g} s"
             )
         return None
+
+
+def plant_run(
+    plant: Plant, time: np.ndarray, states: np.ndarray, inputs: np.ndarray, angle: np.ndarray
+) -> Trajectory:
+    """The plant's run as a :class:`~cable_ocp.simulation.trajectory.Trajectory`.
+
+    Its states and inputs at ``time`` (s) under the applied ``angle`` (rad), its outputs
+    compiled (:func:`~cable_ocp.simulation.run.run_trajectory`).
+    """
+    return run_trajectory(plant.scene, plant.model, time, states, inputs, angle, compiled=True)

@@ -1,16 +1,62 @@
-"""The result of a closed-loop run: :class:`MpcResult`, kept as a labelled Dataset in netCDF."""
+"""The result of a closed-loop run: :class:`MpcResult`, the plant's run and its solves.
+
+The plant's run is a :class:`~cable_ocp.simulation.trajectory.Trajectory`, as an open-loop
+``OcpResult`` carries its verified run; the solves are a :class:`SolveLog`, one entry a solve.
+Both are kept in the result's netCDF file (:mod:`cable_ocp.result_files`).
+"""
 
 from __future__ import annotations
 
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, fields
 from pathlib import Path
 
 import numpy as np
 import xarray as xr
 
-from cable_ocp.control.closed_loop import labelled
-from cable_ocp.scene import labelled as results
-from cable_ocp.scene.schema import scene_of
+from cable_ocp import result_files
+from cable_ocp.result_files import dataset, format_1, netcdf
+from cable_ocp.result_files.units import units_of
+from cable_ocp.scene.records import check_run
+from cable_ocp.simulation.trajectory import Trajectory
+
+MPC_FILE = "mpc.nc"
+WHAT = "closed-loop result"
+
+
+@dataclass(frozen=True, eq=False)
+class SolveLog:
+    """The controller's solves, one entry a solve (a sample).
+
+    Attributes
+    ----------
+    sample_time : array (s,), s
+        When the controller solved.
+    solve_time : array (s,), s
+        Wall time of each solve (Gauss-Newton or IPOPT), without the state estimate.
+    iterations : array (s,)
+        Iterations of each solve (1 for the real-time iteration).
+    status : list of str
+        The solver's status of each solve.
+    """
+
+    sample_time: np.ndarray
+    solve_time: np.ndarray
+    iterations: np.ndarray
+    status: list[str]
+
+    def to_xarray(self) -> xr.Dataset:
+        """The solves as a Dataset over ``solve``."""
+        dims = {name: ("solve",) for name in ("sample_time", "solve_time", "iterations")}
+        return dataset.to_dataset(self, type(self).__name__, dims)
+
+    @classmethod
+    def from_xarray(cls, data: xr.Dataset) -> SolveLog:
+        """The solves a Dataset of :meth:`to_xarray` holds; ValueError if they do not fit."""
+        values = dataset.from_dataset(cls, data)
+        sizes = {name: len(values[name]) for name in ("solve_time", "iterations", "status")}
+        if any(size != len(values["sample_time"]) for size in sizes.values()):
+            raise ValueError(f"{sizes} entries for {len(values['sample_time'])} sample times")
+        return cls(**values)
 
 
 @dataclass(frozen=True, eq=False)
@@ -19,34 +65,31 @@ class MpcResult:
 
     Attributes
     ----------
-    time : array (k,), s
-        The plant's steps.
-    winch_angle : array (k,), rad
-        The angle applied (heave feedback included, held in the winch range by a soft limiter).
+    trajectory : Trajectory
+        The plant's run at its steps, as ``OcpResult.trajectory`` holds an open-loop run: its
+        states, inputs, joints and tensions, the winch angle applied (heave feedback
+        included, held in the winch range by a soft limiter), ``e(t)`` of eq. 39 and Omega,
+        and the plant's scene (its overrides, a heave set by ``--set`` say, applied).
     planned_angle : array (k,), rad
-        The controller's plan (commanded angle, before heave feedback).
-    end, top : arrays (k, 3), m
-        Positions of the end E and of the top point.
-    clearance_error : array (k,), m
-        ``e(t)`` of eq. 39 on the plant.
-    omega : float, m
-        Omega of eq. 39 over the run.
-    sample_times : array (s,), s
-        When the controller solved.
-    solve_times : array (s,), s
-        Wall time of each solve (Gauss-Newton or IPOPT), without the state estimate.
-    iterations : array (s,)
-        Iterations of each solve (1 for the real-time iteration).
-    statuses : list of str
-        The solver's status of each solve.
+        The controller's plan at the plant's steps (commanded angle, before heave feedback).
+    solves : SolveLog
+        Each solve: its sample time, wall time, iterations and status.
     failures : list of str
         One line per failed solve (its time and status); the plant then kept the previous plan.
     success : bool
         Every solve succeeded and the plant ran to the end.
+    status : str
+        How the loop went: the plant's failure (when and why; the run then ends there), the
+        failed solves, solves on the winch's own range.
+    iterations : int
+        Iterations of all the solves.
+    solve_time : float, s
+        Time inside the solver, all the solves.
+    worst_solve_time : float, s
+        The longest solve.
     limited_steps : int
         Plant steps at which the soft limiter changed the commanded angle (within
-        ``MpcSettings.limiter_band`` of a
-        bound, :mod:`.plant`).
+        ``MpcSettings.limiter_band`` of a bound, :mod:`.plant`).
     projected_samples : int
         Samples that started from a plant state moved back onto its bonds, its residual having
         crept above half of ``numerics.constraint_tolerance`` (:meth:`.plant.Plant.onto_bonds`).
@@ -55,27 +98,209 @@ class MpcResult:
     real_time_factor : float
         Simulated time over the wall time of the loop (controller and plant; > 1 is faster than
         real time). The one-off build of the controller is not in it (``build_time``).
-    worst_solve_time : float, s
     wall_time : float, s
         The loop's wall time.
     build_time : float, s
         Building the controller's transcription (compiling or loading its libraries).
     settings : dict
         The fields of :class:`.settings.MpcSettings` (:meth:`.settings.MpcSettings.record`; the
-        model's and the solver's as tables), ``derived``, ``plant_elements`` and ``plant_step``
-        (s). Files written before the settings were split keep their units in the keys.
-    references : dict of str to array (k,)
-        Clearance errors of reference runs on the same plant and time grid (``"locked"``,
-        ``"open-loop"``, ``"open-loop + heave feedback"``), m.
-    reference_omegas : dict of str to float
-        Their Omega, m.
-    status : str
-        How the loop went: the plant's failure (when and why; the arrays then end there), the
-        failed solves, reference runs left out.
-    scene_record : dict
-        The plant's scene, as :meth:`~cable_ocp.scene.schema.Scene.to_dict` gives it (its
-        overrides, a heave set by ``--set`` say, applied); :attr:`scene` rebuilds it. Empty in
-        files written before it was kept.
+        model's and the solver's as tables, :meth:`.settings.MpcSettings.from_record` rebuilds
+        them), ``derived`` (how the settings left unset were derived), ``plant_elements`` and
+        ``plant_step`` (s). Files written before the settings were split keep their units in
+        the keys (``sample_s``).
+    """
+
+    trajectory: Trajectory
+    planned_angle: np.ndarray
+    solves: SolveLog
+    failures: list[str]
+    success: bool
+    status: str
+    iterations: int
+    solve_time: float
+    worst_solve_time: float
+    limited_steps: int
+    projected_samples: int
+    angle_range: tuple[float, float]
+    real_time_factor: float
+    wall_time: float
+    build_time: float
+    settings: dict
+
+    # The plant's run, as a closed loop's figures and notebooks read it (one copy: the trajectory).
+    @property
+    def time(self) -> np.ndarray:
+        """The plant's steps (k,), s."""
+        return self.trajectory.time
+
+    @property
+    def winch_angle(self) -> np.ndarray:
+        """The angle applied (k,), rad."""
+        return self.trajectory.winch_angle
+
+    @property
+    def clearance_error(self) -> np.ndarray:
+        """``e(t)`` of eq. 39 on the plant (k,), m."""
+        return self.trajectory.clearance_error
+
+    @property
+    def end(self) -> np.ndarray:
+        """Position of the end E (k, 3), m."""
+        return self.trajectory.end
+
+    @property
+    def top(self) -> np.ndarray:
+        """Position of the top point (k, 3), m."""
+        return self.trajectory.top
+
+    @property
+    def omega(self) -> float:
+        """Omega of eq. 39 over the run, m (NaN for a plant that failed in its first sample)."""
+        return self.trajectory.omega
+
+    @property
+    def scene_record(self) -> dict:
+        """The plant's scene as :meth:`~cable_ocp.scene.schema.Scene.to_dict` gives it."""
+        return self.trajectory.scene_record
+
+    @property
+    def scene(self):
+        """The plant's scene (a validated ``Scene``), its overrides applied.
+
+        Raises
+        ------
+        ValueError
+            If the run holds no scene (a file written before scenes were kept).
+        """
+        return self.trajectory.scene
+
+    def setting(self, name: str):
+        """The setting ``name`` of :attr:`settings` (whose key may carry its unit: ``_s``).
+
+        Raises
+        ------
+        KeyError
+            If the settings hold none of that name.
+        """
+        for key, value in self.settings.items():
+            if key == name or key.rpartition("_")[0] == name:
+                return value
+        raise KeyError(f"the result's settings hold no {name}")
+
+    def summary(self) -> dict:
+        """The scalar figures of the run (json-ready), named as its fields.
+
+        Named as in ``OcpResult.summary`` where the quantity is the same (``omega``,
+        ``success``, ``status``, ``iterations``, ``solve_time``, ``wall_time``,
+        ``build_time``); ``"units"`` gives the unit of each figure that has one.
+        """
+        solves = self.solves
+        figures = {
+            "omega": self.omega,
+            "success": self.success,
+            "status": self.status,
+            "failed_solves": len(self.failures),
+            "failures": self.failures,
+            "solves": int(solves.sample_time.size),
+            "iterations": self.iterations,
+            "mean_iterations": float(np.mean(solves.iterations)),
+            "solve_time": self.solve_time,
+            "mean_solve_time": float(np.mean(solves.solve_time)),
+            "worst_solve_time": self.worst_solve_time,
+            "real_time_factor": self.real_time_factor,
+            "wall_time": self.wall_time,
+            "build_time": self.build_time,
+            "limited_steps": self.limited_steps,
+            "projected_samples": self.projected_samples,
+            "angle_range": list(self.angle_range),
+            "applied_angle_range": [float(self.winch_angle.min()), float(self.winch_angle.max())],
+            "settings": self.settings,
+        }
+        units = {**units_of(type(self), figures), "omega": "m", "mean_solve_time": "s",
+                 "applied_angle_range": "rad"}  # fmt: skip
+        return {**figures, "units": units}
+
+    def to_xarray(self) -> xr.Dataset:
+        """The run as an ``xarray.Dataset``, the plant's trajectory over ``time`` included.
+
+        The trajectory's variables are named as ``Trajectory.to_xarray`` names them, the plan
+        lies over ``time``, the solves over ``solve`` (``solves_...`` where a name is the
+        result's too), the winch range over ``bound``; failures and settings are attributes
+        (JSON).
+
+        Every variable carries ``units`` and ``long_name``.
+        """
+        dims = {"planned_angle": ("time",), "angle_range": ("bound",)}
+        return dataset.to_dataset(self, type(self).__name__, dims, {"bound": ("min", "max")})
+
+    @classmethod
+    def from_xarray(cls, data: xr.Dataset) -> MpcResult:
+        """The run a Dataset of :meth:`to_xarray` holds, or a file of format 2.
+
+        Format 2 held the run as its end and top over time and the solves as
+        ``sample_times``, ``solve_times``, ... (:func:`_format_2`).
+
+        Raises
+        ------
+        ValueError, KeyError, TypeError
+            A field is missing or does not fit.
+        """
+        if netcdf.format_of(data) == 2:
+            return _format_2(cls, data)
+        values = dataset.from_dataset(cls, data)
+        _check_plan(values["planned_angle"], values["trajectory"].time)
+        return cls(**values)
+
+    def save(self, folder: str | Path) -> Path:
+        """Write the run to netCDF, ``folder/mpc.nc`` (see :meth:`to_xarray`)."""
+        folder = Path(folder)
+        folder.mkdir(parents=True, exist_ok=True)
+        return result_files.save(self, folder / MPC_FILE)
+
+    @classmethod
+    def load(cls, folder: str | Path) -> MpcResult:
+        """Read a run written by :meth:`save` (or ``mpc.json`` + ``mpc.npz`` of cable_ocp 0.1).
+
+        Raises
+        ------
+        ValueError
+            Naming the file, if it is missing, truncated, garbled or of a newer format.
+        """
+        folder = Path(folder)
+        if not (folder / MPC_FILE).exists() and (folder / "mpc.json").exists():
+            return _format_1(cls, folder)
+        return result_files.load(cls, folder / MPC_FILE, WHAT)
+
+
+def _check_plan(planned: np.ndarray, time: np.ndarray) -> None:
+    if np.shape(planned) != np.shape(time):
+        raise ValueError(
+            f"planned_angle of shape {np.shape(planned)} does not fit time {np.shape(time)}"
+        )
+
+
+# --- files of the earlier formats: the run as its end and top over time ------------------------
+
+# Fields of the earlier formats' MpcResult that the present one keeps under the same name.
+KEPT = ("failures", "success", "status", "worst_solve_time", "limited_steps",
+        "projected_samples", "angle_range", "real_time_factor", "wall_time", "build_time",
+        "settings")  # fmt: skip
+
+
+@dataclass(frozen=True, eq=False)
+class _Earlier:
+    """An MpcResult as formats 1 and 2 held it (the fields that changed since; see MpcResult).
+
+    Attributes
+    ----------
+    time : array (k,), s
+    winch_angle, planned_angle : arrays (k,), rad
+    end, top : arrays (k, 3), m
+    clearance_error : array (k,), m
+    omega : float, m
+    sample_times, solve_times : arrays (s,), s
+    iterations : array (s,)
+    statuses : list of str
     """
 
     time: np.ndarray
@@ -89,6 +314,52 @@ class MpcResult:
     solve_times: np.ndarray
     iterations: np.ndarray
     statuses: list[str]
+    scene_record: dict = field(default_factory=dict)
+
+
+def _from_earlier(cls, earlier: _Earlier, kept: dict) -> MpcResult:
+    """The present MpcResult of a run of format 1 or 2.
+
+    Its plant's run is known by its end and top alone (:meth:`Trajectory.from_positions`).
+    """
+    for name in ("winch_angle", "planned_angle", "clearance_error", "end", "top"):
+        if np.shape(getattr(earlier, name))[:1] != np.shape(earlier.time):
+            raise ValueError(
+                f"{name} of shape {np.shape(getattr(earlier, name))} does not fit time "
+                f"{np.shape(earlier.time)}"
+            )
+    check_run(earlier.time, {"end": earlier.end, "top": earlier.top})
+    run = Trajectory.from_positions(
+        earlier.time, earlier.end, earlier.top, earlier.winch_angle, earlier.clearance_error,
+        earlier.omega, earlier.scene_record,
+    )  # fmt: skip
+    solves = SolveLog(earlier.sample_times, earlier.solve_times, earlier.iterations,
+                      earlier.statuses)  # fmt: skip
+    return cls(
+        trajectory=run, planned_angle=earlier.planned_angle, solves=solves,
+        iterations=int(np.sum(earlier.iterations)), solve_time=float(np.sum(earlier.solve_times)),
+        **kept,
+    )  # fmt: skip
+
+
+def _kept_fields(cls, values: dict) -> dict:
+    """The fields of ``cls`` that the earlier formats kept by name (the defaults where not)."""
+    defaults = {"projected_samples": 0, "status": ""}
+    hints = {f.name for f in fields(cls)}
+    return {name: values.get(name, defaults.get(name)) for name in KEPT if name in hints}
+
+
+def _format_2(cls, data: xr.Dataset) -> MpcResult:
+    """An MpcResult from a netCDF file of format 2."""
+    earlier = dataset.from_dataset(_Earlier, data)
+    kept = dataset.from_dataset(_Format2Kept, data)
+    return _from_earlier(cls, _Earlier(**earlier), _kept_fields(cls, kept))
+
+
+@dataclass(frozen=True, eq=False)
+class _Format2Kept:
+    """The fields of format 2 that the present MpcResult keeps (their types, for the checks)."""
+
     failures: list[str]
     success: bool
     limited_steps: int
@@ -99,63 +370,30 @@ class MpcResult:
     build_time: float
     settings: dict
     projected_samples: int = 0
-    references: dict[str, np.ndarray] = field(default_factory=dict)
-    reference_omegas: dict[str, float] = field(default_factory=dict)
     status: str = ""
-    scene_record: dict = field(default_factory=dict)
 
-    @property
-    def scene(self):
-        """The plant's scene (a validated ``Scene``; see ``scene_record``)."""
-        return scene_of(self.scene_record, self.scene_record.get("name", "scene"))
 
-    def summary(self) -> dict:
-        """The scalar figures of the run (json-ready)."""
-        return {
-            "omega_m": self.omega,
-            "success": self.success,
-            "status": self.status,
-            "failed_solves": len(self.failures),
-            "failures": self.failures,
-            "solves": int(self.sample_times.size),
-            "real_time_factor": self.real_time_factor,
-            "worst_solve_time_s": self.worst_solve_time,
-            "mean_solve_time_s": float(np.mean(self.solve_times)),
-            "mean_iterations": float(np.mean(self.iterations)),
-            "wall_time_s": self.wall_time,
-            "build_time_s": self.build_time,
-            "limited_steps": self.limited_steps,
-            "projected_samples": self.projected_samples,
-            "angle_range_rad": list(self.angle_range),
-            "applied_angle_range_rad": [
-                float(self.winch_angle.min()),
-                float(self.winch_angle.max()),
-            ],
-            "reference_omegas_m": self.reference_omegas,
-            "settings": self.settings,
-        }
+# Format 1 (cable_ocp 0.1): mpc.json held the summary under these names, mpc.npz the arrays.
+FORMAT_1_NAMES = {
+    "omega_m": "omega", "real_time_factor": "real_time_factor",
+    "worst_solve_time_s": "worst_solve_time", "wall_time_s": "wall_time",
+    "build_time_s": "build_time", "limited_steps": "limited_steps", "success": "success",
+    "failures": "failures", "statuses": "statuses", "settings": "settings", "status": "status",
+}  # fmt: skip
+FORMAT_1_WHAT = f"{WHAT} of format 1 (mpc.json + mpc.npz, cable_ocp 0.1)"
 
-    def to_xarray(self) -> xr.Dataset:
-        """The run as an ``xarray.Dataset`` over (time, component, sample, reference, bound).
 
-        Every variable carries ``units`` and ``long_name``
-        (:mod:`cable_ocp.control.closed_loop.labelled`).
-        """
-        return labelled.to_xarray(self)
-
-    def save(self, folder: str | Path) -> Path:
-        """Write the run to netCDF, ``folder/mpc.nc`` (see :meth:`to_xarray`)."""
-        folder = Path(folder)
-        folder.mkdir(parents=True, exist_ok=True)
-        return results.write(self.to_xarray(), folder / labelled.FILE)
-
-    @classmethod
-    def load(cls, folder: str | Path) -> MpcResult:
-        """Read a run written by :meth:`save` (or ``mpc.json`` + ``mpc.npz`` of cable_ocp 0.1).
-
-        Raises
-        ------
-        ValueError
-            Naming the file, if it is missing, truncated, garbled or of a newer format.
-        """
-        return labelled.load(cls, Path(folder))
+def _format_1(cls, folder: Path) -> MpcResult:
+    """An MpcResult from ``mpc.json`` and ``mpc.npz`` (its reference runs are left out)."""
+    path = folder / "mpc.json"
+    meta = format_1.read_json(path, FORMAT_1_WHAT)
+    with format_1.blame(path, FORMAT_1_WHAT):
+        values = {field: meta[name] for name, field in FORMAT_1_NAMES.items() if name in meta}
+        values["angle_range"] = tuple(float(v) for v in meta["angle_range_rad"])
+    path = folder / "mpc.npz"
+    arrays = format_1.read_arrays(path, FORMAT_1_WHAT)
+    with format_1.blame(path, FORMAT_1_WHAT):
+        arrays = {k: v for k, v in arrays.items() if not k.startswith("reference ")}
+        names = {f.name for f in fields(_Earlier)}
+        earlier = _Earlier(**{k: v for k, v in {**values, **arrays}.items() if k in names})
+        return _from_earlier(cls, earlier, _kept_fields(cls, values))

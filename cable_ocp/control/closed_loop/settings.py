@@ -13,7 +13,6 @@ from cable_ocp.control.settings import ModelSettings
 from cable_ocp.control.solvers import SOLVERS, solver_of
 from cable_ocp.drive.bounds import angle_bounds
 
-REFERENCES = ("locked", "open-loop")
 # Targets (s) of the derived timing: a solve every second, plan intervals of 5 s (1 s intervals
 # let the plan exploit the reduced model's errors, ``interval`` below), a 20 s horizon.
 SAMPLE, INTERVAL, HORIZON = 1.0, defaults.CONTROL_INTERVAL, 20.0
@@ -103,10 +102,6 @@ class MpcSettings:
         on 1.
     rate_weight : float, s^2
         Weight of the pay-out speed ``(r_D phi')^2`` against ``e^2`` in the objective.
-    references : tuple of str
-        Reference runs on the same plant: ``"locked"`` (winch locked), ``"open-loop"`` (the
-        open-loop optimum of ``cable_ocp.optimize`` on the scene without its heave, applied as it
-        is and with the heave feedback).
     """
 
     horizon: float | None = None
@@ -120,7 +115,6 @@ class MpcSettings:
     heave_margin: float = 0.5
     limiter_band: float | None = None
     rate_weight: float = 1e-4
-    references: tuple[str, ...] = ("locked",)
 
     def __post_init__(self):
         check_fields(self, _RULES)
@@ -129,11 +123,6 @@ class MpcSettings:
         solver_of(self.solver, self.solver_settings, closed_loop=True)
         if None not in (self.horizon, self.sample, self.interval, self.step):
             self._check_timing()
-        unknown = set(self.references) - set(REFERENCES)
-        if unknown:
-            raise ValueError(
-                f"references = {self.references}: each must be one of {', '.join(REFERENCES)}"
-            )
 
     def _check_timing(self) -> None:
         """The horizon, sample, interval and step fit together (ValueError naming the setting)."""
@@ -292,8 +281,6 @@ class MpcSettings:
             solver = record["solver"]
             if record.get("solver_settings") is not None:
                 fields["solver_settings"] = SOLVERS[solver].settings(**record["solver_settings"])
-            if isinstance(fields.get("references"), str):
-                fields["references"] = tuple(filter(None, fields["references"].split(",")))
             return cls(**fields)
         except (KeyError, TypeError) as error:
             raise ValueError(

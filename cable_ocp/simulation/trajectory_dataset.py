@@ -17,8 +17,9 @@ import numpy as np
 import xarray as xr
 
 from cable_ocp.model.layout import INPUT_SIZE, INPUTS
-from cable_ocp.scene.labelled import COMPONENT, DIMENSIONLESS, describe, to_dataset
-from cable_ocp.scene.labelled import from_dataset as labelled_fields
+from cable_ocp.result_files.dataset import COMPONENT, to_dataset
+from cable_ocp.result_files.dataset import from_dataset as labelled_fields
+from cable_ocp.result_files.units import DIMENSIONLESS, describe
 from cable_ocp.scene.records import check_field
 
 KIND = "Trajectory"
@@ -132,7 +133,7 @@ def from_dataset(dataset: xr.Dataset, cls: type | None = None) -> dict:
     """The fields of a Trajectory (class ``cls``, by default ``Trajectory``) from its Dataset.
 
     The fields stored as they are (``time``, ``omega``, ``scene_name``, ...) are read and
-    checked against their types by :func:`cable_ocp.scene.labelled.from_dataset`; the state,
+    checked against their types by :func:`cable_ocp.result_files.dataset.from_dataset`; the state,
     input, joint and tension variables must be arrays of numbers.
 
     Raises

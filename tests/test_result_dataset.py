@@ -1,4 +1,4 @@
-"""Results as labelled Datasets (cable_ocp.scene.labelled): any dataclass field, by its type."""
+"""Results as labelled Datasets (cable_ocp.result_files): any dataclass field, by its type."""
 
 from __future__ import annotations
 
@@ -8,7 +8,7 @@ import numpy as np
 import pytest
 import xarray as xr
 
-from cable_ocp.scene import labelled
+from cable_ocp.result_files import dataset, netcdf, units
 
 
 @dataclass(frozen=True, eq=False)
@@ -50,9 +50,9 @@ def _toy() -> Toy:
 def test_every_kind_of_field_goes_through_netcdf(tmp_path):
     toy = _toy()
     dims = {"speed": ("time",), "series": ("key", "time"), "scores": ("key",)}
-    path = labelled.write(labelled.to_dataset(toy, "Toy", dims), tmp_path / "toy.nc")
-    back = Toy(**labelled.from_dataset(Toy, labelled.read(path, "Toy")))
-    assert labelled.fields_equal(back, toy)
+    path = netcdf.write(dataset.to_dataset(toy, "Toy", dims), tmp_path / "toy.nc")
+    back = Toy(**dataset.from_dataset(Toy, netcdf.read(path, "Toy")))
+    assert dataset.fields_equal(back, toy)
     with xr.open_dataset(path) as data:
         assert all(v.attrs.get("units") for v in data.variables.values())
         assert data["speed"].attrs == {"units": "m s-2", "long_name": "How fast it goes"}
@@ -60,21 +60,21 @@ def test_every_kind_of_field_goes_through_netcdf(tmp_path):
         assert data["added"].attrs["long_name"] == "added"  # undocumented: its name, units 1
         assert data.attrs["name"] == "x" and data.attrs["cable_ocp_result"] == "Toy"
     with pytest.raises(ValueError, match="holds a Toy, not a Trajectory"):
-        labelled.read(path, "Trajectory")
+        netcdf.read(path, "Trajectory")
     empty = Toy(np.zeros(0), 0, False, "", [], (0.0, 0.0), {}, {}, {})
-    path = labelled.write(labelled.to_dataset(empty, "Toy", dims), tmp_path / "empty.nc")
-    again = Toy(**labelled.from_dataset(Toy, labelled.read(path, "Toy")))
-    assert labelled.fields_equal(again, empty)
+    path = netcdf.write(dataset.to_dataset(empty, "Toy", dims), tmp_path / "empty.nc")
+    again = Toy(**dataset.from_dataset(Toy, netcdf.read(path, "Toy")))
+    assert dataset.fields_equal(again, empty)
 
 
 def test_a_field_the_file_lacks_takes_its_default(tmp_path):
-    data = labelled.to_dataset(_toy(), "Toy", {}).drop_vars("added")
-    assert np.isnan(labelled.from_dataset(Toy, data)["added"])
+    data = dataset.to_dataset(_toy(), "Toy", {}).drop_vars("added")
+    assert np.isnan(dataset.from_dataset(Toy, data)["added"])
     with pytest.raises(ValueError, match=r"missing field\(s\) count"):
-        labelled.from_dataset(Toy, data.drop_vars("count"))
+        dataset.from_dataset(Toy, data.drop_vars("count"))
 
 
 @pytest.mark.parametrize(("unit", "cf"), [("m/s", "m s-1"), ("m^2", "m2"), ("rad/s", "rad s-1"),
                                           ("N", "N"), ("s^2", "s2")])  # fmt: skip
 def test_units_in_the_cf_spelling(unit, cf):
-    assert labelled.cf_units(unit) == cf
+    assert units.cf_units(unit) == cf

@@ -1,0 +1,50 @@
+"""Results kept on disk: one netCDF form for every result, and the reader of the old files.
+
+- :mod:`.dataset`: a result dataclass as a labelled ``xarray.Dataset`` and back, field by field
+  (a result inside a result, such as a run's :class:`~cable_ocp.simulation.trajectory.Trajectory`,
+  included);
+- :mod:`.units`: the fields' units and long names, from the class docstring;
+- :mod:`.netcdf`: the one writer and reader of result files, which checks a file before reading
+  its data, and the format versions;
+- :mod:`.format_1`: the npz + json files of cable_ocp 0.1.
+
+:func:`save` and :func:`load` are the path every result takes.
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+from cable_ocp.result_files import netcdf
+
+
+def save(result, path: str | Path) -> Path:
+    """Write ``result.to_xarray()`` to the netCDF file ``path``; returns the path."""
+    return netcdf.write(result.to_xarray(), Path(path))
+
+
+def load(cls: type, path: str | Path, what: str):
+    """A ``cls`` read from the netCDF file ``path`` by ``cls.from_xarray``.
+
+    Parameters
+    ----------
+    cls : result class
+        Its name is the kind the file must hold.
+    path : path-like
+    what : str
+        The result in words, for the error (``"trajectory"``).
+
+    Raises
+    ------
+    ValueError
+        Naming the file: it is missing, not a result of this kind or of a format this cable_ocp
+        reads (:func:`.netcdf.read`), or its fields do not fit (``from_xarray``).
+    """
+    path = Path(path)
+    dataset = netcdf.read(path, cls.__name__)
+    try:
+        return cls.from_xarray(dataset)
+    except (ValueError, KeyError, TypeError) as error:
+        raise ValueError(
+            f"{path}: not a readable {what} ({type(error).__name__}: {error})"
+        ) from None

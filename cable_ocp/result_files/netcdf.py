@@ -1,0 +1,157 @@
+"""Result files: a result's Dataset written to netCDF and read back, checked before it is read.
+
+Versions of the file format (the global attribute ``cable_ocp_format``): 1 is the npz + json of
+cable_ocp 0.1 (:mod:`.format_1`); 2 is netCDF; 3 is netCDF with a closed-loop run kept as its
+plant's :class:`~cable_ocp.simulation.trajectory.Trajectory` and its solves, and every
+objective history in m^2. This module writes 3 and reads 2 and 3 (each result's reader turns a
+2 into the present fields).
+"""
+
+from __future__ import annotations
+
+from importlib import metadata
+from pathlib import Path
+
+import numpy as np
+import xarray as xr
+
+FORMAT = 3
+READ_FORMATS = (2, 3)
+FORMATS = "1 (npz + json, cable_ocp 0.1), 2 and 3 (netCDF)"
+KIND = "cable_ocp_result"
+VERSION = "cable_ocp_format"
+WRITER = "cable_ocp_version"
+# Global attributes of every file, not fields of a result.
+GLOBAL = (KIND, VERSION, WRITER, "Conventions")
+
+
+def package_version() -> str:
+    """The installed cable_ocp's version (``"unknown"`` outside an installation)."""
+    try:
+        return metadata.version("cable_ocp")
+    except metadata.PackageNotFoundError:
+        return "unknown"
+
+
+def file_attributes(kind: str) -> dict[str, object]:
+    """The global attributes of a result file holding a ``kind`` (its class name)."""
+    return {KIND: kind, VERSION: FORMAT, WRITER: package_version(), "Conventions": "CF-1.10"}
+
+
+def format_of(dataset: xr.Dataset) -> int:
+    """The format a Dataset read by :func:`read` was written in."""
+    return int(dataset.attrs[VERSION])
+
+
+def write(dataset: xr.Dataset, path: Path, groups: dict[str, xr.Dataset] | None = None) -> Path:
+    """Write a result's Dataset to netCDF at ``path``, without any Dask scheduler's lock.
+
+    ``groups`` are written beside it as netCDF groups by name (a line's segments).
+
+    A result's arrays are in memory, so they go straight to xarray's netCDF4 store under
+    netCDF4's own locks: ``Dataset.to_netcdf`` first asks Dask for its scheduler, which imports
+    ``dask.distributed`` (0.3 s of a ``cable-ocp simulate``), and in a sweep's worker would take
+    the cluster's lock. The file is the one ``to_netcdf`` writes (same store, same encoding).
+    """
+    from xarray.backends import NetCDF4DataStore
+    from xarray.backends.locks import HDF5_LOCK, NETCDFC_LOCK, combine_locks
+
+    path = Path(path)
+    parts = {None: dataset, **(groups or {})}
+    for part in parts.values():
+        if any(variable.chunks is not None for variable in part.variables.values()):
+            raise ValueError(f"{path}: a result's arrays must be in memory, not Dask arrays")
+    lock = combine_locks([NETCDFC_LOCK, HDF5_LOCK])  # what to_netcdf takes, less Dask's
+    for k, (group, part) in enumerate(parts.items()):
+        store = NetCDF4DataStore.open(path, mode="a" if k else "w", format="NETCDF4",
+                                      group=group, lock=lock)  # fmt: skip
+        try:
+            part.dump_to_store(store)
+        finally:
+            store.close()
+    return path
+
+
+# Deflate, the netCDF4 compression, packs at most about 1032 bytes into one: a file cannot hold
+# more data than that many times its size.
+DEFLATE_RATIO = 1032
+
+
+def read(path: Path, kind: str, group: str | None = None) -> xr.Dataset:
+    """A result's Dataset from ``path`` (or its ``group``), loaded into memory (file closed).
+
+    Before any data is read, the file's declared contents are checked (:func:`_check_declared`):
+    its kind and format, sizes that the file can hold, booleans stored as 0 or 1.
+
+    Raises
+    ------
+    ValueError
+        Naming the file: it is missing, unreadable, not a cable_ocp result of this kind, written
+        in a newer format than this cable_ocp reads (with the versions), or declaring more data
+        than it holds, or a field that does not fit.
+    """
+    path = Path(path)
+    try:
+        with xr.open_dataset(path, decode_cf=False) as raw:
+            _check_declared(path, raw, kind)
+        with xr.open_dataset(path, group=group) as dataset:
+            dataset = dataset.load()
+    except FileNotFoundError:
+        raise ValueError(f"{path}: no such file") from None
+    except _Refused as error:
+        raise ValueError(f"{path}: {error}") from None
+    except (OSError, ValueError, KeyError, TypeError, RuntimeError) as error:
+        detail = " ".join(str(error).split())[:160]
+        raise ValueError(f"{path}: not a readable netCDF file ({detail})") from None
+    return dataset
+
+
+class _Refused(Exception):
+    """A file that is netCDF but not a readable result (the message names the field)."""
+
+
+def _check_declared(path: Path, raw: xr.Dataset, kind: str) -> None:
+    """Check what the file declares, reading no more than its booleans; _Refused if it is bad."""
+    found, version = raw.attrs.get(KIND), raw.attrs.get(VERSION)
+    if found is None:
+        raise _Refused(f"not a cable_ocp result (no attribute {KIND})")
+    if found != kind:
+        raise _Refused(f"holds a {found}, not a {kind}")
+    if not isinstance(version, int | np.integer) or isinstance(version, bool | np.bool_):
+        raise _Refused(f"{VERSION} = {version!r:.40}: expected an integer (the result format)")
+    if version > FORMAT:
+        writer = raw.attrs.get(WRITER, "unknown")
+        raise _Refused(
+            f"written in result format {version} by cable_ocp {writer}; cable_ocp "
+            f"{package_version()} reads formats {FORMATS}: install a newer cable_ocp"
+        )
+    if version not in READ_FORMATS:
+        raise _Refused(
+            f"{VERSION} = {version}: not a format of netCDF results (those are "
+            f"{', '.join(map(str, READ_FORMATS))})"
+        )
+    size = path.stat().st_size
+    declared = 0.0
+    for variable in raw.variables.values():
+        nbytes = float(np.prod(variable.shape, dtype=float)) * variable.dtype.itemsize
+        packed = variable.encoding.get("zlib") or variable.encoding.get("compression")
+        declared += nbytes / DEFLATE_RATIO if packed else nbytes
+    if declared > size:
+        largest = max(raw.variables, key=lambda name: raw.variables[name].size)
+        shape = dict(zip(raw.variables[largest].dims, raw.variables[largest].shape, strict=True))
+        raise _Refused(
+            f"declares more data than its {size} bytes can hold ({largest} over {shape}): "
+            "a damaged or forged file"
+        )
+    booleans = [name for name, variable in raw.variables.items() if variable.dtype == bool]
+    if booleans:  # xarray reads any byte as a bool: the stored bytes, from netCDF4 itself
+        import netCDF4
+
+        with netCDF4.Dataset(path) as stored:
+            for name in booleans:
+                variable = stored[name]
+                variable.set_auto_maskandscale(False)
+                values = np.asarray(variable[...])
+                if not np.isin(values, (0, 1)).all():
+                    shown = values.tolist()
+                    raise _Refused(f"{name} = {shown!r:.40}: expected true or false (0 or 1)")
