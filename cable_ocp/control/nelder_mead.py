@@ -38,8 +38,12 @@ class NelderMeadSettings:
     Attributes
     ----------
     max_evaluations : int
+        Objective evaluations (one RK4 run of the model each) before the search stops unfinished
+        (SciPy's ``maxfev``; the paper's method usually stops here).
     xatol : float, rad
+        The simplex has converged once its vertices are this close in every knot value...
     fatol : float, m
+        ... and their Omega this close (SciPy's ``xatol`` and ``fatol``, both must hold).
     """
 
     max_evaluations: int = 3000
