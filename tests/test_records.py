@@ -74,7 +74,7 @@ def test_a_result_loads_back(saved):
         ("iterations", -1, "iterations = -1: expected an integer >= 0"),
         ("evaluations", True, "evaluations = True: expected an integer >= 0"),
         ("method", 5, "method = 5: expected a string"),
-        ("method", "newton", "method = 'newton': not ipopt or nelder-mead"),
+        ("method", "newton", "method = 'newton': not shooting or nelder-mead"),
         ("status", None, "status = None: expected a string"),
         ("omega", "0.1", "omega = '0.1': expected a finite number or null"),
         ("wall_time", float("nan"), "wall_time = nan: expected a finite number or null"),

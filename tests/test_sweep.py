@@ -417,7 +417,8 @@ def test_sweep_defaults_are_the_registrys(tmp_path, monkeypatch):
 
     base = f'scene = "{MODELS / "small_tow.toml"}"\ntask = "optimize"\n'  # 21 s: 42 steps of 0.5 s
     duration = '[set]\n"numerics.duration" = 21.0\n'
-    for method, solver in (("ipopt", "gauss-newton"), ("nelder-mead", "nelder-mead")):
+    for method, solver in (("ipopt", "gauss-newton"), ("shooting", "gauss-newton"),
+                           ("nelder-mead", "nelder-mead")):  # fmt: skip
         spec = load_sweep(write(tmp_path, base + f'method = "{method}"\n' + duration))
         assert spec.settings == ocp_settings(solver)
         assert spec.settings.elements is None  # derived from each case's scene, as optimize()

@@ -381,7 +381,7 @@ def _add_optimiser_options(parser) -> None:
     parser.add_argument(
         "--control",
         choices=["hermite", "spline"],
-        help="the winch's parametrisation for --method ipopt: hermite (cubic Hermite intervals, "
+        help="the winch's parametrisation for --method shooting: hermite (cubic Hermite intervals, "
         "the default) or spline (the paper's knots, winch.knots)",
     )
     parser.add_argument(
@@ -596,10 +596,11 @@ def build_parser() -> argparse.ArgumentParser:
 
     opt = commands.add_parser("optimize", **shown, help="optimise the winch angle of a scene")
     opt.add_argument("scene", type=scene_argument, help=SCENE_HELP)
-    opt.add_argument("--method", choices=["ipopt", "nelder-mead"], default="ipopt",
-                     help="ipopt: direct shooting on the winch parameters, solved by --solver "
-                     "(Gauss-Newton SQP or IPOPT), refined by model correction; nelder-mead: "
-                     "the paper's simplex on winch.knots (as --solver nelder-mead)")  # fmt: skip
+    opt.add_argument("--method", choices=["shooting", "nelder-mead", "ipopt"], default="shooting",
+                     help="shooting: direct shooting on the winch parameters, solved by --solver "
+                     "(Gauss-Newton SQP or IPOPT), refined by model correction (ipopt: its old "
+                     "name); nelder-mead: the paper's simplex on winch.knots (as --solver "
+                     "nelder-mead)")  # fmt: skip
     opt.add_argument("--out", type=Path, required=True, help=OUT_HELP)
     opt.add_argument("--refinements", type=integer(0, 100), default=3,
                      help="model-correction solves")  # fmt: skip

@@ -53,7 +53,9 @@ class OcpResult:
     Attributes
     ----------
     method : str
-        The transcription: ``"ipopt"`` (direct shooting, whichever solver) or ``"nelder-mead"``.
+        The transcription: ``"shooting"`` (direct shooting, by Gauss-Newton or IPOPT) or
+        ``"nelder-mead"`` (the paper's knots); files written before the solvers were named say
+        ``"ipopt"`` for shooting, read as ``"shooting"``.
     parameters : array
         Winch parameters of the control (rad, rad/s).
     control : str
@@ -240,6 +242,7 @@ class OcpResult:
         from cable_ocp.scene.records import control_parameters
 
         values = dataset.from_dataset(cls, data)
+        values["method"] = OLD_METHODS.get(values["method"], values["method"])
         if values["method"] not in METHODS:
             raise ValueError(f"method = {values['method']!r:.40}: not a known method")
         control_parameters(values["parameters"], values["control"])
@@ -299,6 +302,7 @@ def _from_format_1(cls, folder: Path) -> OcpResult:
     meta = format_1.read_json(path, WHAT)
     with format_1.blame(path, WHAT):
         meta = record_fields(meta, types, _OPTIONAL_FIELDS)
+        meta["method"] = OLD_METHODS.get(meta["method"], meta["method"])
         if meta["method"] not in METHODS:
             raise ValueError(f"method = {meta['method']!r:.40}: not {' or '.join(METHODS)}")
         control_size(meta["control"])
@@ -527,10 +531,12 @@ class Method:
 
 
 # The transcriptions (OcpResult.method): direct shooting for Gauss-Newton and IPOPT, the paper's
-# knots for Nelder-Mead. A reduced model derived from the scene optimises; the scene's own model
-# verifies.
+# knots for Nelder-Mead. Files and sweeps of before the solvers were named called shooting "ipopt"
+# (OLD_METHODS), whichever solver ran. A reduced model derived from the scene optimises; the
+# scene's own model verifies.
+OLD_METHODS = {"ipopt": "shooting"}
 METHODS = {
-    "ipopt": Method(resolved, shooting_problem, solve_verified),
+    "shooting": Method(resolved, shooting_problem, solve_verified),
     # The paper's method as it was measured (VALIDATION.md): no model correction, verified on the
     # interpreted full model.
     "nelder-mead": Method(
@@ -543,7 +549,7 @@ METHODS = {
 
 def method_of(solver: str) -> str:
     """The transcription (``OcpResult.method``) that a solver of the registry runs on."""
-    return "nelder-mead" if solver == "nelder-mead" else "ipopt"
+    return "nelder-mead" if solver == "nelder-mead" else "shooting"
 
 
 def optimize(
@@ -612,7 +618,7 @@ def optimize(
     model_text = "the optimisation model"
     try:
         settings, derived = chosen.resolve(scene, settings)
-        if method == "ipopt":
+        if method == "shooting":
             scene, fitted = full_model_scene(scene, settings)
             derived = "; ".join(text for text in (derived, fitted) if text)
         model_text = (

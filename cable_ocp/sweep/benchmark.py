@@ -23,7 +23,7 @@ task = "{task}"
 [grid]
 "top.tow.surge_speed" = {speeds}
 """
-OPTIMIZER = 'method = "ipopt"\n[optimizer]\nelements = 4\nstep = 0.25\nintervals = 8'
+OPTIMIZER = 'method = "shooting"\n[optimizer]\nelements = 4\nstep = 0.25\nintervals = 8'
 
 
 def _load() -> str:

@@ -47,7 +47,7 @@ def run_case(scene: Scene, task: str, method: str, settings: Any) -> dict[str, A
     task : str
         ``"simulate"`` (locked winch) or ``"optimize"``.
     method : str
-        ``"ipopt"`` or ``"nelder-mead"`` (optimize).
+        ``"shooting"`` or ``"nelder-mead"`` (optimize).
     settings : OcpSettings or None
         The optimiser's settings (``SweepSpec.settings``; None: optimize()'s defaults).
 

@@ -4,7 +4,7 @@ A sweep file names a scene, a task and the overrides of each case::
 
     scene = "../paper_flat.toml"   # relative to the sweep file, or a bundled scene name
     task = "optimize"              # or "simulate"
-    method = "ipopt"               # optimize only: "ipopt" or "nelder-mead"
+    method = "shooting"            # optimize only: "shooting" (old name "ipopt") or "nelder-mead"
     [optimizer]                    # optimize only: the fields of the model, grid, transcription
                                    # and solver settings (and solver); unset ones are optimize()'s
     elements = 3
@@ -47,6 +47,7 @@ from typing import Any
 import numpy as np
 
 from cable_ocp.control.optimization import METHODS as TRANSCRIPTIONS
+from cable_ocp.control.optimization import OLD_METHODS
 from cable_ocp.control.settings import OcpSettings
 from cable_ocp.control.solvers import ocp_settings_from
 from cable_ocp.scene.bundled import models_dir
@@ -103,7 +104,7 @@ class SweepSpec:
     task : str
         ``"simulate"`` or ``"optimize"``.
     method : str
-        ``"ipopt"`` or ``"nelder-mead"`` (used by ``optimize``).
+        ``"shooting"`` or ``"nelder-mead"`` (used by ``optimize``).
     settings : OcpSettings or None
         Optimiser settings (None for ``simulate``).
     fixed : dict
@@ -445,7 +446,7 @@ def load_sweep(path: str | Path) -> SweepSpec:
     task = data.get("task", "simulate")
     if task not in TASKS:
         raise _fail("task", f" = {task!r}: must be one of {', '.join(TASKS)}")
-    method = data.get("method", "ipopt")
+    method = OLD_METHODS.get(data.get("method"), data.get("method", "shooting"))
     if method not in METHODS:
         raise _fail("method", f" = {method!r}: must be one of {', '.join(METHODS)}")
     settings = _settings(data, task, method)
