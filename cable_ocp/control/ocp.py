@@ -64,7 +64,9 @@ def interrupted_solve(solver: ca.Function, **arguments) -> dict:
 
 @dataclass(frozen=True)
 class IpoptSettings:
-    """IPOPT's own settings (the problem's and the transcription's: :mod:`.settings`).
+    """IPOPT's own settings (the model's, grid's and transcription's are apart).
+
+    The others are :mod:`cable_ocp.control.settings`'.
 
     Attributes
     ----------
