@@ -58,7 +58,7 @@ def _earlier_mpc(result) -> dict:
     """The fields of an MpcResult as formats 1 and 2 held them."""
     solves = result.solves
     return {
-        "time": result.time, "winch_angle": result.winch_angle,
+        "time": result.time, "winch_angle": result.trajectory.winch_angle,
         "planned_angle": result.planned_angle, "end": result.end, "top": result.top,
         "clearance_error": result.clearance_error, "sample_times": solves.sample_time,
         "solve_times": solves.solve_time, "iterations": solves.iterations,

@@ -170,7 +170,7 @@ def test_plant_has_no_kick_when_solves_fail_past_the_horizon(models_dir, monkeyp
     result = mpc(scene, MpcSettings(horizon=10.0), quiet=True)
     assert "the plant failed" not in result.status, result.status
     assert len(result.failures) == round(40.0 - 4.0)
-    rate = np.gradient(result.winch_angle, result.time)
+    rate = np.gradient(result.trajectory.winch_angle, result.time)
     jumps = np.abs(np.diff(rate))
     before = jumps[result.time[1:] < 13.0].max()  # while the plans were fresh
     assert jumps[result.time[1:] >= 13.0].max() < 3 * before  # no kick at t = 14 s

@@ -91,7 +91,7 @@ def run_title(what: str, scenes: Sequence[str | None], runs: Sequence[str]) -> s
 def result_label(result) -> str:
     """What a result's run is: ``closed loop (SOLVER)`` or ``optimised (SOLVER)``."""
     if _closed_loop(result):
-        return f"closed loop ({result.settings.get('solver', 'ipopt')})"
+        return f"closed loop ({result.settings.get('solver', 'solver not recorded')})"
     return f"optimised ({result.solver or result.method})"
 
 

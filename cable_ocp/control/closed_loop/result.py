@@ -133,10 +133,14 @@ class MpcResult:
         """The plant's steps (k,), s."""
         return self.trajectory.time
 
-    @property
-    def winch_angle(self) -> np.ndarray:
-        """The angle applied (k,), rad."""
-        return self.trajectory.winch_angle
+    def winch_angle(self, t) -> np.ndarray:
+        """The drum's angle (rad) applied at the times ``t`` (s), as ``OcpResult.winch_angle``.
+
+        Linear between the plant's steps (exact on them; ``trajectory.winch_angle`` holds them),
+        held at the ends outside the run.
+        """
+        run = self.trajectory
+        return np.interp(np.atleast_1d(np.asarray(t, dtype=float)), run.time, run.winch_angle)
 
     @property
     def clearance_error(self) -> np.ndarray:
@@ -213,7 +217,10 @@ class MpcResult:
             "limited_steps": self.limited_steps,
             "projected_samples": self.projected_samples,
             "angle_range": list(self.angle_range),
-            "applied_angle_range": [float(self.winch_angle.min()), float(self.winch_angle.max())],
+            "applied_angle_range": [
+                float(np.min(self.trajectory.winch_angle)),
+                float(np.max(self.trajectory.winch_angle)),
+            ],  # fmt: skip
             "settings": self.settings,
         }
         units = {**units_of(type(self), figures), "omega": "m", "mean_solve_time": "s",
