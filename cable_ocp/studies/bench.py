@@ -220,7 +220,7 @@ def rk4_report(models_dir: Path, quick: bool = False) -> list[StepTiming]:
 
 
 def ocp_report(models_dir: Path, quick: bool = False) -> list[tuple[str, OcpResult]]:
-    """Print IPOPT against Nelder-Mead on ``paper_flat`` (``small_tow`` when ``quick``).
+    """Print Gauss-Newton against Nelder-Mead on ``paper_flat`` (``small_tow`` when ``quick``).
 
     Returns the rows as ``(label, result)``.
     """
@@ -242,7 +242,7 @@ def ocp_report(models_dir: Path, quick: bool = False) -> list[tuple[str, OcpResu
     print(f"Winch optimisation on {scene.name} (Omega verified on the scene's n = "
           f"{scene.model.elements} model), same run")  # fmt: skip
     print(f"{'method':<24}{'Omega [m]':>11}{'success':>9}{'iter.':>7}{'evals':>7}{'solve [s]':>11}"
-          f"{'s/iter.':>9}{'s/eval':>8}{'total [s]':>11}{'vs IPOPT':>10}")  # fmt: skip
+          f"{'s/iter.':>9}{'s/eval':>8}{'total [s]':>11}{'vs GN':>10}")  # fmt: skip
     baseline = rows[0][1].wall_time
     for label, r in rows:
         print(
