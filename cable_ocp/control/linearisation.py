@@ -183,25 +183,38 @@ def propagate_sensitivities(
     slopes = np.zeros((4, size, nx))  # the slopes' rows past the active ones are never read
     scratch = np.empty((size, nx))
     ranked_out = np.zeros((count + 1, size, kept))
-    shares = (step / 2, step / 2, step)
+    half, whole, sixth = step / 2, step, step / 6
+    # The loop is a few dozen small products and sums a step, so the views it works on are made
+    # once per active count and per window, and np.dot (the same dgemm as np.matmul, bitwise)
+    # takes a quarter less time per call: over a controller's 160 steps, 3.8 ms against 5.5 ms.
+    by_active = {m: (work[:m], scratch[:m], *slopes[:, :m], ranked_out[:, :m]) for m in set(active)}
+    by_window = {start: tuple(slopes[:, start : start + width]) for start in set(low)}
     for k in range(count):
-        m, jx, pushed, rows = active[k], state_parts[k], forced[k], slice(low[k], low[k] + width)
-        current, point = work[:m], scratch[:m]
-        np.matmul(current, jx[0], out=slopes[0, :m])
-        slopes[0, rows] += pushed[0]
-        for stage, share in enumerate(shares, start=1):
-            np.multiply(slopes[stage - 1, :m], share, out=point)
-            point += current
-            np.matmul(point, jx[stage], out=slopes[stage, :m])
-            slopes[stage, rows] += pushed[stage]
-        k1, k2, k3, k4 = slopes[:, :m]
-        np.add(k2, k3, out=point)
+        current, point, k1, k2, k3, k4, out = by_active[active[k]]
+        w1, w2, w3, w4 = by_window[low[k]]
+        j1, j2, j3, j4 = state_parts[k]
+        p1, p2, p3, p4 = forced[k]
+        np.dot(current, j1, k1)
+        w1 += p1
+        np.multiply(k1, half, point)
+        point += current
+        np.dot(point, j2, k2)
+        w2 += p2
+        np.multiply(k2, half, point)
+        point += current
+        np.dot(point, j3, k3)
+        w3 += p3
+        np.multiply(k3, whole, point)
+        point += current
+        np.dot(point, j4, k4)
+        w4 += p4
+        np.add(k2, k3, point)
         point *= 2
-        np.add(k1, point, out=point)
+        np.add(k1, point, point)
         point += k4
-        point *= step / 6
+        point *= sixth
         current += point
-        ranked_out[k + 1, :m] = current[:, :kept]
+        out[k + 1] = current[:, :kept]
     sensitivities = np.empty((count + 1, size, kept))
     sensitivities[:, order] = ranked_out
     return sensitivities
