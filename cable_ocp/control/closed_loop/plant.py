@@ -181,6 +181,8 @@ class Plant:
         for sign, edge in ((1.0, high - band), (-1.0, low + band)):
             over = sign * (phi - edge)
             active = over > 0
+            if not active.any():
+                continue
             limited |= active
             bend = np.tanh(over[active] / band)
             slope = 1 - bend**2
