@@ -199,13 +199,13 @@ def propagate_sensitivities(
     # The loop is a few dozen small products and sums a step, so the views it works on are made
     # once per active count and per window, and np.dot (the same dgemm as np.matmul, bitwise)
     # takes a quarter less time per call: over a controller's 160 steps, 3.8 ms against 5.5 ms.
+    active, low = active.tolist(), low.tolist()
     by_active = {m: (work[:m], scratch[:m], *slopes[:, :m], ranked_out[:, :m]) for m in set(active)}
     by_window = {start: tuple(slopes[:, start : start + width]) for start in set(low)}
-    for k in range(count):
-        current, point, k1, k2, k3, k4, out = by_active[active[k]]
-        w1, w2, w3, w4 = by_window[low[k]]
-        j1, j2, j3, j4 = (part[k] for part in state_parts)
-        p1, p2, p3, p4 = (pushed[k] for pushed in forced)
+    steps = zip(active, low, *state_parts, *forced, strict=True)
+    for k, (m, start, j1, j2, j3, j4, p1, p2, p3, p4) in enumerate(steps):
+        current, point, k1, k2, k3, k4, out = by_active[m]
+        w1, w2, w3, w4 = by_window[start]
         np.dot(current, j1, k1)
         w1 += p1
         np.multiply(k1, half, point)
