@@ -406,5 +406,11 @@ class ErrorLinearisation:
         self, values: ProblemParameters, states: np.ndarray
     ) -> tuple[np.ndarray, np.ndarray]:
         """``e + bias`` (K + 1,) of a run's states and ``de/d end`` (3, K + 1) there."""
-        error, slope = self.slope(states[:, :3].T, values.end_offset, values.reference)
-        return np.asarray(error).ravel() + values.bias, np.asarray(slope)
+        count = self.steps + 1
+        error, slope = np.empty(count), np.empty((count, 3))  # CasADi's (1, K + 1), (3, K + 1)
+        # The mapped Function takes every point's offset and reference (a call through DM
+        # repeats them itself; the buffer does not).
+        offsets = np.broadcast_to(values.end_offset, (count, 3))
+        arguments = [states[:, :3], offsets, np.full(count, values.reference)]
+        evaluate_into(self.slope, arguments, [error, slope])
+        return error + values.bias, np.ascontiguousarray(slope.T)
