@@ -6,7 +6,11 @@ import numpy as np
 import pytest
 from scipy.linalg import expm
 
-from cable_ocp.control.linearisation import ErrorLinearisation, propagate_sensitivities
+from cable_ocp.control.linearisation import (
+    ErrorLinearisation,
+    propagate_sensitivities,
+    winch_map,
+)
 from cable_ocp.control.problem import WinchProblem
 from cable_ocp.drive.controls import HermiteIntervals
 from cable_ocp.drive.drive import stage_times
@@ -47,6 +51,21 @@ def test_sensitivities_of_a_linear_system_follow_its_rk4_step():
     assert np.all(sensitivities[0] == 0.0)
     np.testing.assert_allclose(sensitivities[1].T, first, atol=1e-13)
     np.testing.assert_allclose(sensitivities[2].T, (taylor + np.eye(nx)) @ first, atol=1e-13)
+
+
+def test_sensitivities_of_stages_given_apart_equal_those_of_the_stacked_stages():
+    """The step ends' form (four arrays, the middle two one array, as ErrorLinearisation's
+    "ends" sweep passes them) gives the same numbers, bit for bit, as the (K, 4, ...) array."""
+    rng = np.random.default_rng(5)
+    nx, h, steps = 8, 0.1, 30
+    control = HermiteIntervals(steps * h, 5, free_start=True)
+    times, left = stage_times(np.arange(steps) * h, h)
+    winch = winch_map(control, times, left, 0.7)
+    points = rng.normal(size=(steps + 1, nx + 3, nx))
+    mean = (points[:-1] + points[1:]) * 0.5
+    stacked = np.stack([points[:-1], mean, mean, points[1:]], axis=1)
+    apart = propagate_sensitivities((points[:-1], mean, mean, points[1:]), winch, h, kept=3)
+    assert np.array_equal(apart, propagate_sensitivities(stacked, winch, h, kept=3))
 
 
 def test_error_and_its_jacobian_match_the_simulation_and_central_differences(

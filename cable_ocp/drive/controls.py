@@ -31,12 +31,16 @@ def hermite_polynomials(s: np.ndarray) -> tuple[np.ndarray, ...]:
 
     Rows: the value and its first and second derivatives with respect to ``s``.
     """
-    return (
-        np.vstack([2 * s**3 - 3 * s**2 + 1, 6 * s**2 - 6 * s, 12 * s - 6]),
-        np.vstack([s**3 - 2 * s**2 + s, 3 * s**2 - 4 * s + 1, 6 * s - 4]),
-        np.vstack([-2 * s**3 + 3 * s**2, -6 * s**2 + 6 * s, -12 * s + 6]),
-        np.vstack([s**3 - s**2, 3 * s**2 - 2 * s, 6 * s - 2]),
-    )
+    s = np.atleast_1d(np.asarray(s, dtype=float))
+    square, cube = s**2, s**3
+    # Written row by row into one array: np.vstack's checks cost as much as the polynomials
+    # on the closed loop's few hundred times (same operations, the same numbers).
+    rows = np.empty((4, 3, *s.shape))
+    rows[0, 0], rows[0, 1], rows[0, 2] = 2 * cube - 3 * square + 1, 6 * square - 6 * s, 12 * s - 6
+    rows[1, 0], rows[1, 1], rows[1, 2] = cube - 2 * square + s, 3 * square - 4 * s + 1, 6 * s - 4
+    rows[2, 0], rows[2, 1], rows[2, 2] = -2 * cube + 3 * square, -6 * square + 6 * s, -12 * s + 6
+    rows[3, 0], rows[3, 1], rows[3, 2] = cube - square, 3 * square - 2 * s, 6 * s - 2
+    return rows[0], rows[1], rows[2], rows[3]
 
 
 @dataclass(frozen=True)
@@ -146,15 +150,16 @@ class HermiteIntervals:
         width = self.duration / self.intervals
         first = 0 if self.free_start else 1
         nodes = self.intervals + 1
+        parameters = np.asarray(parameters, dtype=float)
         angles = np.zeros(nodes)
         rates = np.zeros(nodes)
-        angles[first:], rates[first:] = np.split(np.asarray(parameters, dtype=float), 2)
+        angles[first:], rates[first:] = parameters[: nodes - first], parameters[nodes - first :]
         h00, h10, h01, h11 = hermite_polynomials(s)
-        scale = np.array([1.0, 1.0 / width, 1.0 / width**2])[:, None]
+        scale = np.array([[1.0], [1.0 / width], [1.0 / width**2]])
         out = scale * (
             h00 * angles[k] + h01 * angles[k + 1] + width * (h10 * rates[k] + h11 * rates[k + 1])
         )
-        if np.any(beyond):
+        if beyond.any():
             tail = self._extension(out[:, beyond, None], (t_given[beyond] - self.duration))
             out[:, beyond] = tail[..., 0]
         return out[0], out[1], out[2]
@@ -167,7 +172,7 @@ class HermiteIntervals:
         """
         t = t_given = np.atleast_1d(np.asarray(t, dtype=float))
         beyond = t > self.duration * (1 + 1e-9)
-        t = np.clip(t, 0.0, self.duration)
+        t = t.clip(0.0, self.duration)
         if left is not None:
             left = np.where(beyond, True, left)  # the end's rows from the last interval
         width = self.duration / self.intervals

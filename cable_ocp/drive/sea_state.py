@@ -143,13 +143,17 @@ def sea_state_motion(sea_state) -> Callable[[np.ndarray], tuple[np.ndarray, ...]
         cos_weight += direction * (amplitude * np.cos(phase))
         sin_weight -= direction * (amplitude * np.sin(phase))
 
+    # The rates' weights once, not at every call (the closed loop calls twice a sample).
+    cos_rate, sin_rate = cos_weight * w, sin_weight * w
+    cos_curvature, sin_curvature = cos_weight * w**2, sin_weight * w**2
+
     def motion(t):
         t = np.atleast_1d(np.asarray(t, dtype=float))
         angle = np.outer(w, t)
         cos, sin = np.cos(angle), np.sin(angle)
         position = cos_weight @ (cos - 1.0) + sin_weight @ sin
-        velocity = (sin_weight * w) @ cos - (cos_weight * w) @ sin
-        acceleration = -((cos_weight * w**2) @ cos + (sin_weight * w**2) @ sin)
+        velocity = sin_rate @ cos - cos_rate @ sin
+        acceleration = -(cos_curvature @ cos + sin_curvature @ sin)
         return position, velocity, acceleration
 
     return motion

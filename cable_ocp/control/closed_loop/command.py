@@ -46,11 +46,11 @@ class Plan:
         new = self.control.evaluate(self.parameters, t - self.start, left)
         if self.previous is None or self.blend <= 0:
             return tuple(new)
-        tau = np.clip((t - self.start) / self.blend, 0.0, 1.0)
+        tau = ((t - self.start) / self.blend).clip(0.0, 1.0)
         # Past the blend (tau = 1) the predecessor's weights are zero: it is evaluated only
         # where it still counts, most of a sample's times being past it.
         blending = tau < 1.0
-        if not np.any(blending):
+        if not blending.any():
             return tuple(new)
         if left is not None and np.ndim(left) > 0:
             left = np.asarray(left)[blending]
@@ -59,8 +59,8 @@ class Plan:
         keep = 1 - tau**3 * (10 - 15 * tau + 6 * tau**2)
         keep_rate = -30 * tau**2 * (1 - tau) ** 2 / self.blend
         keep_acc = -(60 * tau - 180 * tau**2 + 120 * tau**3) / self.blend**2
-        angle, rate, acceleration = (values.copy() for values in new)
         here = [values[blending] for values in new]
+        angle, rate, acceleration = new  # the evaluation's own rows, written over in place
         gap = [o - n for o, n in zip(old, here, strict=True)]
         angle[blending] = here[0] + keep * gap[0]
         rate[blending] = here[1] + keep * gap[1] + keep_rate * gap[0]

@@ -181,6 +181,8 @@ class Plant:
         for sign, edge in ((1.0, high - band), (-1.0, low + band)):
             over = sign * (phi - edge)
             active = over > 0
+            if not active.any():
+                continue
             limited |= active
             bend = np.tanh(over[active] / band)
             slope = 1 - bend**2
@@ -195,14 +197,14 @@ class Plant:
     def inputs(self, applied: Applied, t: np.ndarray) -> np.ndarray:
         """Model inputs (15, len(t)) under the true top motion and the applied angle."""
         position, velocity, acceleration = self.top(t)
-        length = np.vstack(
-            [
-                self.top_length + self.radius * applied.angle,
-                self.radius * applied.rate,
-                self.radius * applied.acceleration,
-            ]
-        )
-        return np.vstack([position, velocity, acceleration, length, end_force(self.scene.end, t)])
+        inputs = np.empty((INPUTS.end_force.stop, position.shape[1]))  # rows as INPUTS lays out
+        inputs[INPUTS.top], inputs[INPUTS.top_velocity] = position, velocity
+        inputs[INPUTS.top_acceleration] = acceleration
+        inputs[INPUTS.top_length] = self.top_length + self.radius * applied.angle
+        inputs[INPUTS.top_length_rate] = self.radius * applied.rate
+        inputs[INPUTS.top_length_acceleration] = self.radius * applied.acceleration
+        inputs[INPUTS.end_force] = end_force(self.scene.end, t)
+        return inputs
 
     def initial_state(self, applied: Applied) -> np.ndarray:
         """Static equilibrium at t = 0, set moving with the top and the winch (bonds held).
