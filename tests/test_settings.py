@@ -53,3 +53,13 @@ def test_an_mpc_result_keeps_its_settings_and_runs_again_from_its_file(solver, t
     assert abs(again.omega - first.omega) < 1e-9
     with pytest.raises(ValueError, match="not a record of MpcSettings"):
         MpcSettings.from_record({"horizon_s": 10.0})
+
+
+def test_a_derived_plan_interval_divides_the_horizon_the_user_fixed():
+    """Horizon 10 s at a 2 s sample: intervals of 5 s would not divide it, so the derived
+    interval is the multiple of the sample nearest 5 s that does (2 s; 10 s is farther)."""
+    scene = co.load_scene(scene_path("small_tow"), {"numerics.duration": 20.0})
+    settings, derived = MpcSettings(horizon=10.0, sample=2.0).resolved(scene)
+    assert (settings.horizon, settings.interval) == (10.0, 2.0)
+    assert "plan intervals of 2 s" in derived
+    assert MpcSettings(horizon=12.0, sample=2.0).resolved(scene)[0].interval == 4.0

@@ -36,6 +36,16 @@ def _multiple(value: float, unit: float) -> bool:
     return count >= 1 and abs(count * unit - value) <= 1e-9 * max(abs(value), 1.0)
 
 
+def _dividing_interval(horizon: float, sample: float, wanted: float) -> float:
+    """The multiple of ``sample`` nearest ``wanted`` (s) that divides a fixed ``horizon`` (s).
+
+    The sample itself when the horizon is no multiple of it (the timing check then says so).
+    """
+    samples = round(horizon / sample)
+    counts = [m for m in range(1, samples + 1) if samples % m == 0] or [1]
+    return sample * min(counts, key=lambda m: abs(m * sample - wanted))
+
+
 _RULES = {
     "horizon": Rule("number", above=0, unit="s", optional=True),
     "sample": Rule("number", above=0, unit="s", optional=True),
@@ -157,6 +167,8 @@ class MpcSettings:
         if interval is None:
             interval = sample * max(1, round(INTERVAL / sample))
             interval = min(interval, sample * max(1, math.floor(duration / sample + 1e-9)))
+            if self.horizon is not None and not _multiple(self.horizon, interval):
+                interval = _dividing_interval(self.horizon, sample, interval)
             notes.append(f"plan intervals of {interval:.4g} s")
         horizon = self.horizon
         if horizon is None:
