@@ -206,7 +206,7 @@ def mpc(scene, settings: MpcSettings | None = None, quiet: bool = False, **field
         limited_steps=sum(int(np.count_nonzero(run.applied.limited)) for run in runs[1:]),
         projected_samples=plant.projections,
         angle_range=plant.angle_range,
-        real_time_factor=duration / wall_time,
+        real_time_factor=float(trajectory.time[-1]) / wall_time,  # the time simulated
         wall_time=wall_time,
         build_time=build_time,
         settings={
