@@ -500,6 +500,48 @@ def _source_key(
     return key, cache_dir() / f"{names[0]}_{key}.so"
 
 
+def compiled_source(source: Path) -> Path | None:
+    """A hand-written C file compiled into a shared library in the cache, or None after a warning.
+
+    For kernels that are loaded with :mod:`ctypes` rather than as CasADi Functions. The key
+    hashes the file, the processor and the flags (those of an MX Function's code: -O3 for this
+    processor); a damaged library is rebuilt, and a compiler that fails or a cache that cannot
+    be written leaves the caller its own fallback, with a RuntimeWarning that says why.
+    """
+    flags = [*_flags(False), *COMPILER_FLAGS]
+    digest = hashlib.sha256(source.read_bytes())
+    digest.update("|".join([_processor(), *flags]).encode())
+    library = cache_dir() / f"{source.stem}_{digest.hexdigest()[:20]}.so"
+    if library.is_file() and damage(library) is None:
+        return library
+    compiler = find_compiler()
+    if compiler is None:
+        warnings.warn(
+            f"no C compiler found (set $CC or install gcc): {source.name} runs in numpy",
+            RuntimeWarning,
+            stacklevel=3,
+        )
+        return None
+    _remove(library)
+    try:
+        library.parent.mkdir(parents=True, exist_ok=True)
+        scratch = _scratch_folder(library.parent)
+        command = [compiler, *flags, str(source), "-o", str(scratch / library.name)]
+        try:
+            _compile_and_install(command, library, scratch)
+        finally:
+            shutil.rmtree(scratch, ignore_errors=True)
+    except (_CompilerFailed, OSError) as error:
+        warnings.warn(
+            f"compiling {source.name} into {library} failed ({error}): it runs in numpy (fix "
+            "the compiler, $CC or $CABLE_OCP_CACHE)",
+            RuntimeWarning,
+            stacklevel=3,
+        )
+        return None
+    return library
+
+
 def _first_line(error: Exception) -> str:
     """The first two lines of a CasADi error: a source location, then the reason."""
     lines = [line.strip() for line in str(error).splitlines() if line.strip()]
