@@ -37,6 +37,8 @@ example = load_sweep("tow_speeds")  # a bundled example by name; its scene besid
 assert example.scene_path == models_dir() / "small_tow.toml" and len(example.cases) == 6
 survey = cable_ocp.load_scene(models_dir() / "survey.toml")  # its bathymetry grid ships too
 assert Path(survey.seabed.grid.file) == models_dir() / "data" / "survey_grid.nc", survey.seabed
+from cable_ocp.control.step_end_tangent import SOURCE  # the closed loop's C kernel ships too
+assert SOURCE.is_file() and SOURCE.is_relative_to(site), SOURCE
 print("installed ok")
 """
 
