@@ -330,12 +330,8 @@ class ErrorLinearisation:
         self._inputs = np.zeros((steps, 3, INPUTS.end_force.stop))
         if self.at_ends:
             self._points = np.zeros((steps + 1, width, nx))
-            kernel = step_end_kernel()
-            size = self.winch.shape[2]
-            sparsity = rhs_jacobian(model)[0].sparsity_out(1)
-            pattern = np.zeros(sparsity.shape, bool)
-            pattern[sparsity.row(), sparsity.get_col()] = True
-            self._tangent = kernel and StepEndTangent(kernel, steps, nx, size, 3, step, pattern)
+            kernel, size = step_end_kernel(nx), self.winch.shape[2]
+            self._tangent = kernel and StepEndTangent(kernel, steps, nx, size, 3, step)
             return
         self._jacobians = np.zeros((steps, 4, width, nx))
         self._buffer, self._run = sweep_step_function(model, step).buffer()

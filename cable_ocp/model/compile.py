@@ -500,15 +500,17 @@ def _source_key(
     return key, cache_dir() / f"{names[0]}_{key}.so"
 
 
-def compiled_source(source: Path) -> Path | None:
+def compiled_source(source: Path, defines: dict[str, int] | None = None) -> Path | None:
     """A hand-written C file compiled into a shared library in the cache, or None after a warning.
 
-    For kernels that are loaded with :mod:`ctypes` rather than as CasADi Functions. The key
-    hashes the file, the processor and the flags (those of an MX Function's code: -O3 for this
+    For kernels that are loaded with :mod:`ctypes` rather than as CasADi Functions; ``defines``
+    are its macros (``-DNAME=value``: sizes fixed at compile time). The key hashes the file, the
+    macros, the processor and the flags (those of an MX Function's code: -O3 for this
     processor); a damaged library is rebuilt, and a compiler that fails or a cache that cannot
     be written leaves the caller its own fallback, with a RuntimeWarning that says why.
     """
-    flags = [*_flags(False), *COMPILER_FLAGS]
+    macros = [f"-D{name}={value}" for name, value in sorted((defines or {}).items())]
+    flags = [*_flags(False), *COMPILER_FLAGS, *macros]
     digest = hashlib.sha256(source.read_bytes())
     digest.update("|".join([_processor(), *flags]).encode())
     library = cache_dir() / f"{source.stem}_{digest.hexdigest()[:20]}.so"
