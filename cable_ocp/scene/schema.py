@@ -36,6 +36,7 @@ __all__ = [
     "Environment",
     "Hill",
     "Hydrodynamics",
+    "Lowering",
     "ModelOptions",
     "Numerics",
     "Heave",
@@ -772,6 +773,46 @@ class Numerics(_Validated):
             )
 
 
+@_section("lowering")
+@dataclass(frozen=True)
+class Lowering(_Validated):
+    """A landing: the end brought to a height above the seabed at a set time, slowly, then held.
+
+    The table is the switch. The end should be ``height`` above the seabed under it at
+    ``land_time`` (within ``height_tolerance``), arrive there no faster than ``landing_speed``,
+    stay within ``hold_band`` of that height until ``numerics.duration`` (the hold), and the top
+    tension should stay between ``tension_min`` (no slack) and ``tension_max`` all along
+    (CONVENTIONS.md §5, lowering).
+    """
+
+    land_time: float = _param(
+        kind="float", doc="T_land: when the end reaches its target height (<= duration).", gt=0,
+        unit="s",
+    )  # fmt: skip
+    height: float = _param(
+        kind="float", doc="Target height of the end above the seabed under it.", ge=0, unit="m"
+    )
+    height_tolerance: float = _param(
+        0.1, doc="Largest landing error |z_E - z_sb - height| at land_time.", gt=0, unit="m"
+    )
+    landing_speed: float = _param(
+        0.1, doc="Largest vertical speed of the end at land_time.", gt=0, unit="m/s"
+    )
+    tension_min: float = _param(0.0, doc="Least top tension (no slack).", ge=0, unit="N")
+    tension_max: float | None = _param(
+        None, doc="Largest top tension (the rope's working limit).", gt=0, unit="N",
+        optional=True,
+    )  # fmt: skip
+    hold_band: float = _param(
+        0.1, doc="Half-width of the band about the target height held after land_time.", gt=0,
+        unit="m",
+    )  # fmt: skip
+
+    def _check_relations(self) -> None:
+        if self.tension_max is not None and self.tension_max <= self.tension_min:
+            raise self._fail("tension_max", f"> lowering.tension_min = {self.tension_min!r}")
+
+
 @_section("")
 @dataclass(frozen=True)
 class Scene(_Validated):
@@ -792,6 +833,7 @@ class Scene(_Validated):
     winch: Winch = _param(kind="section", doc="[winch]", item=Winch)
     seabed: Seabed = _param(kind="section", doc="[seabed]", item=Seabed)
     numerics: Numerics = _param(kind="section", doc="[numerics]", item=Numerics)
+    lowering: Lowering | None = _param(None, "section", "[lowering]", item=Lowering, optional=True)
     source: str | None = field(default=None, compare=False)
 
     def mesh(self, elements: int | None = None) -> tuple[float, float]:
@@ -845,6 +887,10 @@ class Scene(_Validated):
                     f"floats. Add a payload of more than {lift - load:.4g} kg, or use a rope "
                     "denser than water",
                 )
+        if self.lowering is not None and self.lowering.land_time > self.numerics.duration:
+            raise self.lowering._fail(
+                "land_time", f"<= numerics.duration = {self.numerics.duration!r}"
+            )
         if self.winch.line is not None:
             self._check_line()
             return
@@ -907,7 +953,7 @@ def _apply_overrides(data: Mapping[str, Any], overrides: Mapping[str, Any] | Non
             if not isinstance(node, dict):
                 prefix = ".".join(parts[: depth + 1])
                 raise SceneError(key, f": cannot set a key inside {prefix}, which is not a table")
-        node[parts[-1]] = value
+        node[parts[-1]] = copy.deepcopy(value)  # a later key must not write into the caller's
     return data
 
 

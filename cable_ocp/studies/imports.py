@@ -25,6 +25,7 @@ LAYERS = (
     ("drive",),
     ("simulation",),
     ("control",),
+    ("lowering",),
     ("sweep", "studies"),
     ("cli", "plots", "__init__"),
 )

@@ -1,0 +1,278 @@
+"""The checks of a landing run, from the run's own samples and independent of any solver.
+
+:func:`check_landing` takes a simulated run of a ``[lowering]`` scene (a :class:`Trajectory` or
+a :class:`LineTrajectory`, typically the verified full-model run) and the winch profile that
+drove it, and measures each of the lowering's constraints on it (CONVENTIONS.md §5, lowering):
+the landing error and vertical speed at ``lowering.land_time``, the band of the hold after it,
+the least and the peak top tension, the least signed bond tension anywhere (a pushing bond is a
+slack rope), the drum's peak rate and acceleration between the samples, and the minimum
+clearance. Nothing here comes from a solver's own bookkeeping: positions, velocities and bond
+forces are recomputed from the saved states and inputs by the model's outputs.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from cable_ocp.control.verification import CLEARANCE_TOLERANCE
+from cable_ocp.drive.bounds import BOUND_TOLERANCE
+from cable_ocp.model.cable import CableModel, spec_from_scene
+from cable_ocp.model.layout import INPUTS
+from cable_ocp.model.line_models import LineModels
+from cable_ocp.simulation.line_run import pay_out_drive
+from cable_ocp.simulation.line_trajectory import LineTrajectory
+from cable_ocp.simulation.run import winch_function
+from cable_ocp.simulation.seabed import clearance, clearance_reference
+from cable_ocp.simulation.statics import _signed_tensions
+from cable_ocp.simulation.trajectory import Trajectory
+
+# Drum samples per output interval for the winch's rate and acceleration between the outputs.
+DRUM_SAMPLES = 16
+
+
+@dataclass(frozen=True)
+class Check:
+    """One constraint measured on a run.
+
+    Attributes
+    ----------
+    name : str
+        What is checked (``landing height``, ``top tension max``, ...).
+    value : float
+        The run's figure, in ``unit``.
+    limit : float
+        The bound it is held to, in ``unit``.
+    unit : str
+    passed : bool
+    where : str
+        When (and where) the figure was reached.
+    """
+
+    name: str
+    value: float
+    limit: float
+    unit: str
+    passed: bool
+    where: str
+
+    def __str__(self) -> str:
+        verdict = "ok" if self.passed else "FAILED"
+        return (
+            f"{self.name}: {self.value:.6g} {self.unit} against {self.limit:.6g} {self.unit} "
+            f"{self.where}: {verdict}"
+        )
+
+
+@dataclass(frozen=True)
+class LandingReport:
+    """The checks of one landing run (:func:`check_landing`).
+
+    Attributes
+    ----------
+    checks : tuple of Check
+    landing_error : float, m
+        ``z_E - z_sb - lowering.height`` at the landing time.
+    landing_speed : float, m/s
+        The end's vertical speed there (negative: going down).
+    least_tension, peak_tension : float, N
+        Of the top tension over the run.
+    least_bond_tension : float, N
+        The least signed tension of any bond at any sample (negative: a bond pushes).
+    hold_deviation : float, m
+        The largest ``|z_E - z_sb - lowering.height|`` from the landing time to the run's end.
+    """
+
+    checks: tuple[Check, ...]
+    landing_error: float
+    landing_speed: float
+    least_tension: float
+    peak_tension: float
+    least_bond_tension: float
+    hold_deviation: float
+
+    @property
+    def passed(self) -> bool:
+        """Whether every check passed."""
+        return all(check.passed for check in self.checks)
+
+    @property
+    def failures(self) -> tuple[Check, ...]:
+        """The checks that failed, in the order checked."""
+        return tuple(check for check in self.checks if not check.passed)
+
+    @property
+    def reason(self) -> str:
+        """One line per failed check; empty when every check passed."""
+        return "; ".join(str(check) for check in self.failures)
+
+    def __str__(self) -> str:
+        return "\n".join(str(check) for check in self.checks)
+
+
+def check_landing(run: Trajectory | LineTrajectory, winch=None, scene=None) -> LandingReport:
+    """Measure a ``[lowering]`` scene's constraints on a run of it.
+
+    Parameters
+    ----------
+    run : Trajectory or LineTrajectory
+        A run that reaches ``lowering.land_time``.
+    winch : None, callable or result
+        The winch profile that drove it, as :func:`cable_ocp.simulate` takes it: the drum's rate
+        and acceleration are checked on it between the run's samples.
+    scene : Scene, optional
+        Whose ``[lowering]``, ``[winch]`` limits and minimum clearance the run is held to
+        (default: the run's own scene). The model is always the run's own.
+
+    Returns
+    -------
+    LandingReport
+
+    Raises
+    ------
+    ValueError
+        The scene has no ``[lowering]``, or the run ends before the landing time.
+    """
+    scene = run.scene if scene is None else scene
+    lowering = scene.lowering
+    if lowering is None:
+        raise ValueError(f"scene {scene.name!r} has no [lowering] table: nothing to check")
+    time = run.time
+    if time[-1] < lowering.land_time - 1e-9 * max(1.0, lowering.land_time):
+        raise ValueError(
+            f"the run ends at {time[-1]:g} s, before lowering.land_time = {lowering.land_time!r} s"
+        )
+    end = run.end
+    height = clearance(scene.seabed, end, clearance_reference(scene.seabed, end[0]))
+    deviation = height - lowering.height
+    land = int(np.argmin(np.abs(time - lowering.land_time)))
+    speed = float(_end_velocity(run)[land, 2])
+    tensions, top = _bond_tensions(run)
+    after = slice(land, None)
+    worst_hold = land + int(np.argmax(np.abs(deviation[after])))
+    checks = [
+        _bounded("landing height error", abs(deviation[land]), lowering.height_tolerance, "m",
+                 f"at t = {time[land]:g} s"),
+        _bounded("landing speed", abs(speed), lowering.landing_speed, "m/s",
+                 f"at t = {time[land]:g} s"),
+        _bounded("hold band", abs(deviation[worst_hold]), lowering.hold_band, "m",
+                 f"at t = {time[worst_hold]:g} s"),
+        _least("top tension min", top, lowering.tension_min, "N", time),
+    ]  # fmt: skip
+    if lowering.tension_max is not None:
+        worst = int(np.argmax(top))
+        checks.append(
+            _bounded("top tension max", top[worst], lowering.tension_max, "N",
+                     f"at t = {time[worst]:g} s")
+        )  # fmt: skip
+    sample, bond = np.unravel_index(int(np.argmin(tensions)), tensions.shape)
+    checks.append(
+        Check("no slack bond", float(tensions[sample, bond]), 0.0, "N",
+              bool(tensions[sample, bond] > 0.0), f"at t = {time[sample]:g} s, bond {bond + 1}")
+    )  # fmt: skip
+    checks += _drum_checks(scene, winch, time)
+    if scene.seabed.minimum_clearance is not None:
+        k = int(np.argmin(height))
+        least = scene.seabed.minimum_clearance
+        where = f"at t = {time[k]:g} s, (x, y) = ({end[k, 0]:.1f}, {end[k, 1]:.1f}) m"
+        checks.append(
+            Check("minimum clearance", float(height[k]), least, "m",
+                  bool(height[k] >= least - CLEARANCE_TOLERANCE), where)
+        )  # fmt: skip
+    return LandingReport(
+        checks=tuple(checks),
+        landing_error=float(deviation[land]),
+        landing_speed=speed,
+        least_tension=float(top.min()),
+        peak_tension=float(top.max()),
+        least_bond_tension=float(tensions.min()),
+        hold_deviation=float(abs(deviation[worst_hold])),
+    )
+
+
+def _bounded(name: str, value: float, limit: float, unit: str, where: str) -> Check:
+    return Check(name, float(value), float(limit), unit, bool(value <= limit), where)
+
+
+def _least(name: str, values: np.ndarray, limit: float, unit: str, time: np.ndarray) -> Check:
+    k = int(np.argmin(values))
+    return Check(name, float(values[k]), float(limit), unit, bool(values[k] >= limit),
+                 f"at t = {time[k]:g} s")  # fmt: skip
+
+
+def _segments(run: Trajectory | LineTrajectory) -> list[Trajectory]:
+    return run.segments if isinstance(run, LineTrajectory) else [run]
+
+
+def _whole(run: Trajectory | LineTrajectory, parts: list[np.ndarray]) -> np.ndarray:
+    """Segment arrays joined as :class:`LineTrajectory` joins them (a change's sample once)."""
+    if not isinstance(run, LineTrajectory):
+        return parts[0]
+    return np.concatenate([p[:-1] for p in parts[:-1]] + [parts[-1]])
+
+
+def _end_velocity(run: Trajectory | LineTrajectory) -> np.ndarray:
+    """The end's velocity (k, 3), m/s: the rates of element 0's x, y, z in the states."""
+    parts = []
+    for segment in _segments(run):
+        positions = segment.states.shape[1] // 2
+        parts.append(segment.states[:, positions : positions + 3])
+    return _whole(run, parts)
+
+
+def _bond_tensions(run: Trajectory | LineTrajectory) -> tuple[np.ndarray, np.ndarray]:
+    """Signed bond tensions (k, largest n + 1; padded with +inf) and the top's (k,), N.
+
+    From the model's bond forces along the element axes at every saved state and input
+    (positive pulls, negative pushes: ``model.outputs`` and the run keep only the norms).
+    """
+    scene, segments = run.scene, _segments(run)
+    if isinstance(run, LineTrajectory):
+        model_of = LineModels(spec_from_scene(scene), run.element_length, compiled=True).model
+    else:
+        model_of = {run.tensions.shape[1] - 1: CableModel.from_scene(scene)}.__getitem__
+    width = max(s.tensions.shape[1] for s in segments)
+    parts, tops = [], []
+    for segment in segments:
+        n = segment.tensions.shape[1] - 1
+        model = model_of(n)
+        outputs = model.parametric.output_values(
+            segment.states.T, segment.inputs.T, model.parameters
+        )
+        count = segment.time.size
+        joints = np.array(outputs["joints"]).reshape(3, n + 2, count, order="F")
+        forces = np.array(outputs["bond_forces"]).reshape(3, n + 1, count, order="F")
+        signed = np.full((count, width), np.inf)
+        for k in range(count):
+            signed[k, : n + 1] = _signed_tensions(joints[:, :, k], forces[:, :, k])
+        parts.append(signed)
+        tops.append(signed[:, n])
+    return _whole(run, parts), _whole(run, tops)
+
+
+def _drum_checks(scene, winch, time: np.ndarray) -> list[Check]:
+    """The drum's peak rate and acceleration (heave compensation included) against its limits."""
+    limits = {"drum rate": scene.winch.rate_max, "drum acceleration": scene.winch.acceleration_max}
+    if all(limit is None for limit in limits.values()):
+        return []
+    dense = np.linspace(time[0], time[-1], (time.size - 1) * DRUM_SAMPLES + 1)
+    drive = pay_out_drive(scene, winch_function(scene, winch))
+    u = drive.inputs(dense)
+    r = scene.winch.drum_radius
+    rates = {
+        "drum rate": (u[INPUTS.top_length_rate] / r, "rad/s"),
+        "drum acceleration": (u[INPUTS.top_length_acceleration] / r, "rad/s^2"),
+    }
+    checks = []
+    for name, limit in limits.items():
+        if limit is None:
+            continue
+        values, unit = rates[name]
+        k = int(np.argmax(np.abs(values)))
+        peak = float(abs(values[k]))
+        checks.append(
+            Check(name, peak, limit, unit, bool(peak <= limit * (1 + BOUND_TOLERANCE)),
+                  f"at t = {dense[k]:g} s")
+        )  # fmt: skip
+    return checks

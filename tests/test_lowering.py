@@ -1,0 +1,200 @@
+"""Lowering a load to the seabed: the reference descent and the checks of a landing run.
+
+References independent of the code under test: the vertical drop of a rope in still water (the
+end falls by what the drum pays out), finite differences of the descent's line out, the winch's
+own limits, and runs broken on purpose (a short landing line, a haul-in after the landing, a
+pushing end force, limits below what the run reaches), each of which must be reported by the
+check it breaks and by no other.
+"""
+
+from __future__ import annotations
+
+from dataclasses import replace
+
+import numpy as np
+import pytest
+from conftest import MODELS
+
+import cable_ocp as co
+from cable_ocp.lowering.checks import check_landing
+from cable_ocp.lowering.descent import (
+    LIMIT_SHARE,
+    ReferenceDescent,
+    landing_line,
+    reference_descent,
+)
+from cable_ocp.model.layout import INPUTS
+from cable_ocp.simulation.line_trajectory import LineTrajectory
+
+START, DROP, HEIGHT = 20.0, 200.0, 5.0  # m: line out at the start, start above the seabed, target
+RATE_MAX, ACCELERATION_MAX = 4.0, 1.0  # rad/s, rad/s^2 on a 0.5 m drum
+LOWERING = {
+    "top.motion": "fixed",
+    "cable.length": START,
+    "end.payload": {"mass": 2000.0, "volume": 0.256, "drag_area": 1.0},
+    "winch.line": {"pay_out_max": 250.0, "element_length": 10.0},
+    "winch.rate_max": RATE_MAX,
+    "winch.acceleration_max": ACCELERATION_MAX,
+    "seabed.clearance": DROP,
+    "seabed.minimum_clearance": 4.9,
+    "lowering": {"land_time": 200.0, "height": HEIGHT, "tension_min": 1e3, "tension_max": 1e5},
+    "numerics.duration": 230.0,
+    "numerics.step": 0.05,
+    "numerics.output_every": 5,
+}
+SHEARED = [{"z": 0.0, "u": 0.5}, {"z": -300.0, "u": 0.1}]  # m, m/s
+
+
+def lowering_scene(**overrides) -> co.Scene:
+    return co.load_scene(MODELS / "paper_flat.toml", {**LOWERING, **overrides})
+
+
+@pytest.fixture(scope="module")
+def sheared():
+    """A 2 t load lowered 195 m through a sheared current on its reference descent, and its run."""
+    scene = lowering_scene(**{"environment.current_profile": SHEARED})
+    descent = reference_descent(scene)
+    return scene, descent, co.simulate(scene, winch=descent.angle)
+
+
+def test_landing_line_in_still_water_is_the_vertical_drop():
+    # Inextensible and hanging straight down: the end falls by exactly what is paid out.
+    scene = lowering_scene()
+    assert landing_line(scene) == pytest.approx(START + DROP - HEIGHT, abs=1e-6)
+
+
+def test_descent_line_out_rates_are_its_derivatives():
+    descent = ReferenceDescent(20.0, 1000.0, 900.0, 100.0, 0.5)
+    t = np.linspace(0.0, 950.0, 190_001)
+    line, rate, acceleration = descent.line_out(t)
+    dt = t[1] - t[0]
+    assert line[0] == 20.0 and line[-1] == pytest.approx(1000.0, abs=1e-9)
+    assert np.abs(np.gradient(line, dt) - rate).max() < 1e-6
+    assert np.abs(np.gradient(rate, dt) - acceleration).max() < 1e-6
+    assert rate.max() == pytest.approx(descent.cruise_rate, rel=1e-12)
+    assert np.abs(acceleration).max() == pytest.approx(descent.peak_acceleration, rel=1e-6)
+    # Arrives at rest and stays: rate and acceleration zero from the landing on.
+    assert np.all(rate[t >= 900.0] == 0.0) and np.all(acceleration[t >= 900.0] == 0.0)
+
+
+def test_descent_keeps_within_its_share_of_the_winch_limits(sheared):
+    scene, descent, _ = sheared
+    t = np.linspace(0.0, scene.numerics.duration, 20_001)
+    _, rate, acceleration = descent.angle(t)
+    assert np.abs(rate).max() <= LIMIT_SHARE * RATE_MAX * (1 + 1e-12)
+    assert np.abs(acceleration).max() <= LIMIT_SHARE * ACCELERATION_MAX
+    # The ramps are as long as the rate limit lets them be: the plateau at its share.
+    assert np.abs(rate).max() == pytest.approx(LIMIT_SHARE * RATE_MAX, rel=1e-9)
+
+
+@pytest.mark.parametrize(
+    ("overrides", "message"),
+    [
+        ({"lowering.land_time": 40.0}, "lowering.land_time = 40.0 s is out of range"),
+        ({"winch.acceleration_max": 0.01, "winch.rate_max": None}, "winch.acceleration_max"),
+        ({"lowering.height": -100.0}, "lowering.height"),
+        ({"winch.line": {"pay_out_max": 100.0, "element_length": 10.0}}, "winch.line.pay_out_max"),
+    ],
+)
+def test_an_impossible_descent_is_refused_naming_the_field(overrides, message):
+    with pytest.raises(ValueError, match=message.replace(".", r"\.")):
+        reference_descent(lowering_scene(**overrides))
+
+
+def test_reference_descent_lands_and_passes_every_check(sheared):
+    scene, descent, run = sheared
+    assert isinstance(run, LineTrajectory) and run.element_count.max() > run.element_count[0]
+    report = check_landing(run, descent.angle)
+    assert report.passed, str(report)
+    names = {check.name for check in report.checks}
+    assert names == {
+        "landing height error", "landing speed", "hold band", "top tension min",
+        "top tension max", "no slack bond", "drum rate", "drum acceleration", "minimum clearance",
+    }  # fmt: skip
+    # The static landing line lands the dynamic run within a centimetre, at rest.
+    assert abs(report.landing_error) < 0.01
+    assert abs(report.landing_speed) < 1e-3
+    # The checker's top tension is the run's own: the bond force along the top element there,
+    # its norm in the run (they differ by the force's small part across the element).
+    assert report.peak_tension == pytest.approx(run.top_tension.max(), rel=1e-6)
+    assert report.least_tension == pytest.approx(run.top_tension.min(), rel=1e-6)
+    assert report.least_bond_tension > 0
+
+
+def failed(report) -> set[str]:
+    return {check.name for check in report.failures}
+
+
+@pytest.mark.parametrize(
+    ("overrides", "broken"),
+    [
+        ({"lowering.tension_max": None}, set()),
+        ({"winch.rate_max": 3.0}, {"drum rate"}),
+        ({"winch.acceleration_max": 0.07}, {"drum acceleration"}),
+        ({"seabed.minimum_clearance": 5.5}, {"minimum clearance"}),
+        ({"lowering.land_time": 160.0}, {"landing height error", "landing speed", "hold band"}),
+    ],
+)
+def test_a_limit_the_run_breaks_is_reported_by_its_check(sheared, overrides, broken):
+    scene, descent, run = sheared
+    report = check_landing(run, descent.angle, scene.updated(overrides))
+    assert failed(report) == broken, str(report)
+    for check in report.failures:
+        assert "FAILED" in str(check) and check.name in report.reason
+
+
+def test_tension_limits_just_inside_the_run_are_broken(sheared):
+    scene, descent, run = sheared
+    first = check_landing(run, descent.angle)
+    tight = scene.updated(
+        {"lowering.tension_max": 0.999 * first.peak_tension,
+         "lowering.tension_min": 1.001 * first.least_tension}
+    )  # fmt: skip
+    assert failed(check_landing(run, descent.angle, tight)) == {
+        "top tension max", "top tension min"
+    }  # fmt: skip
+
+
+def test_a_short_landing_line_fails_the_landing(sheared):
+    scene, descent, _ = sheared
+    short = replace(descent, landing_line=descent.landing_line - 0.5)
+    report = check_landing(co.simulate(scene, winch=short.angle), short.angle)
+    assert failed(report) == {"landing height error", "hold band"}
+    assert report.landing_error == pytest.approx(0.5, abs=0.01)
+
+
+def test_a_haul_in_after_the_landing_leaves_the_hold_band(sheared):
+    scene, descent, _ = sheared
+    creep = -0.01 / scene.winch.drum_radius  # rad/s: 1 cm/s hauled in from 10 s after landing
+    begins = scene.lowering.land_time + 10.0
+
+    def creeping(t, left=None):
+        phi, rate, acceleration = descent.angle(t)
+        s = np.maximum(np.asarray(t, dtype=float) - begins, 0.0)  # a C2 start: s^3 / (s + 1)^2
+        phi = phi + creep * s**3 / (s + 1) ** 2
+        rate = rate + creep * s**2 * (s + 3) / (s + 1) ** 3
+        acceleration = acceleration + creep * 6 * s / (s + 1) ** 4
+        return phi, rate, acceleration
+
+    report = check_landing(co.simulate(scene, winch=creeping), creeping)
+    assert failed(report) == {"hold band"}
+    assert report.hold_deviation > 0.1
+
+
+def test_a_pushing_bond_is_reported_as_slack(sheared):
+    # The same states with an upward pull at the end of twice its load: the bonds must push.
+    scene, descent, run = sheared
+    segment = run.segments[-1]
+    inputs = segment.inputs.copy()
+    inputs[:, INPUTS.end_force.start + 2] = 2 * run.top_tension.max()
+    pushed = LineTrajectory([*run.segments[:-1], replace(segment, inputs=inputs)], 10.0)
+    report = check_landing(pushed, descent.angle)
+    assert "no slack bond" in failed(report)
+    assert report.least_bond_tension < 0
+
+
+def test_a_run_that_ends_before_the_landing_is_refused(sheared):
+    scene, _, _ = sheared
+    short = scene.updated({"numerics.duration": 50.0, "lowering.land_time": 50.0})
+    with pytest.raises(ValueError, match=r"ends at 50 s, before lowering\.land_time = 200\.0 s"):
+        check_landing(co.simulate(short), scene=scene)
