@@ -82,6 +82,10 @@ def test_overrides(flat):
         load_scene(MODELS / "paper_flat.toml", {"cable.lenght": 3.0})
     with pytest.raises(ValueError, match=r"^cable\.length\.x: cannot set"):
         flat.updated({"cable.length.x": 1.0})
+    # A table given as a value is copied: a later dotted key into it leaves the caller's alone.
+    table = {"land_time": 50.0, "height": 5.0}
+    lowered = flat.updated({"lowering": table, "lowering.height": 7.0})
+    assert lowered.lowering.height == 7.0 and table == {"land_time": 50.0, "height": 5.0}
 
 
 def test_direct_construction_is_validated(flat):
