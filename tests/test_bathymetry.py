@@ -402,6 +402,14 @@ def test_the_bundled_survey_grid_is_what_its_script_makes(models_dir):
     assert (models_dir / "data" / "survey_grid.nc").stat().st_size < 300_000
 
 
+def test_the_bundled_deploy_grid_is_what_its_script_makes(models_dir):
+    from cable_ocp.studies.deploy_grid import deploy_grid
+
+    shipped = xr.open_dataset(models_dir / "data" / "deploy_grid.nc")
+    xr.testing.assert_allclose(shipped, deploy_grid(), rtol=0, atol=1e-9)
+    assert (models_dir / "data" / "deploy_grid.nc").stat().st_size < 300_000
+
+
 def test_the_survey_figures_draw_the_grid_the_cable_and_c_min(models_dir, tmp_path):
     """plots.survey.seabed_view, cable_shapes and clearance on the bundled survey scene."""
     from cable_ocp import plots

@@ -13,10 +13,12 @@ else:
     import tomli as tomllib
 
 ROOT = Path(__file__).resolve().parent.parent
-SCENES = {"catenary", "end_force", "hanging", "paper_flat", "paper_hill", "small_tow", "survey"}
+SCENES = {
+    "catenary", "deploy", "end_force", "hanging", "paper_flat", "paper_hill", "small_tow", "survey",
+}  # fmt: skip
 
 
-def test_models_dir_holds_the_seven_scenes_and_each_loads():
+def test_models_dir_holds_the_eight_scenes_and_each_loads():
     folder = bundled.models_dir()
     assert folder.is_dir()
     assert SCENES <= set(bundled.scene_names())

@@ -198,3 +198,21 @@ def test_a_run_that_ends_before_the_landing_is_refused(sheared):
     short = scene.updated({"numerics.duration": 50.0, "lowering.land_time": 50.0})
     with pytest.raises(ValueError, match=r"ends at 50 s, before lowering\.land_time = 200\.0 s"):
         check_landing(co.simulate(short), scene=scene)
+
+
+@pytest.mark.slow
+def test_deploy_reference_descent_lands_and_the_heave_is_left_to_the_controller():
+    """The bundled deploy scene: 1000 m of line on the planner's descent, heave uncompensated.
+
+    The descent lands at the target height (the static landing line, 2 -> 100 elements) within
+    the tension and drum limits; the vessel's heave (H_s = 2 m), which no open-loop descent
+    compensates here, moves the frame at the landing and through the hold.
+    """
+    scene = co.load_scene(MODELS / "deploy.toml")
+    descent = reference_descent(scene)
+    run = co.simulate(scene, winch=descent.angle)
+    report = check_landing(run, descent.angle)
+    assert run.element_count[0] == 2 and run.element_count[-1] == 100
+    assert abs(report.landing_error) < scene.lowering.height_tolerance
+    assert failed(report) == {"landing speed", "hold band"}, str(report)
+    assert report.hold_deviation > 1.0  # m: the heave, through the rope

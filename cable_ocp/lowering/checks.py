@@ -18,6 +18,7 @@ import numpy as np
 
 from cable_ocp.control.verification import CLEARANCE_TOLERANCE
 from cable_ocp.drive.bounds import BOUND_TOLERANCE
+from cable_ocp.model import structured
 from cable_ocp.model.cable import CableModel, spec_from_scene
 from cable_ocp.model.layout import INPUTS
 from cable_ocp.model.line_models import LineModels
@@ -25,7 +26,6 @@ from cable_ocp.simulation.line_run import pay_out_drive
 from cable_ocp.simulation.line_trajectory import LineTrajectory
 from cable_ocp.simulation.run import winch_function
 from cable_ocp.simulation.seabed import clearance, clearance_reference
-from cable_ocp.simulation.statics import _signed_tensions
 from cable_ocp.simulation.trajectory import Trajectory
 
 # Drum samples per output interval for the winch's rate and acceleration between the outputs.
@@ -237,18 +237,29 @@ def _bond_tensions(run: Trajectory | LineTrajectory) -> tuple[np.ndarray, np.nda
     for segment in segments:
         n = segment.tensions.shape[1] - 1
         model = model_of(n)
-        outputs = model.parametric.output_values(
-            segment.states.T, segment.inputs.T, model.parameters
-        )
         count = segment.time.size
-        joints = np.array(outputs["joints"]).reshape(3, n + 2, count, order="F")
-        forces = np.array(outputs["bond_forces"]).reshape(3, n + 1, count, order="F")
+        joints, forces = _joints_and_forces(model, segment.states.T, segment.inputs.T)
+        joints = np.array(joints).reshape(3, n + 2, count, order="F")
+        forces = np.array(forces).reshape(3, n + 1, count, order="F")
+        axes = np.diff(joints, axis=1)
+        axes /= np.linalg.norm(axes, axis=0)
         signed = np.full((count, width), np.inf)
-        for k in range(count):
-            signed[k, : n + 1] = _signed_tensions(joints[:, :, k], forces[:, :, k])
+        signed[:, : n + 1] = -np.sum(forces * axes, axis=0).T  # as statics.bond_tensions
         parts.append(signed)
         tops.append(signed[:, n])
     return _whole(run, parts), _whole(run, tops)
+
+
+def _joints_and_forces(model: CableModel, states: np.ndarray, inputs: np.ndarray):
+    """Joints (3, (n + 2) k) and bond forces (3, (n + 1) k) of k states and inputs (columns).
+
+    By the structure's compiled loops where it has them (a line's models: no graph is built),
+    else by the model's own outputs.
+    """
+    if structured.supports(model):
+        return structured.compiled_structured(model, "joints_and_forces")(states, inputs)
+    outputs = model.parametric.output_values(states, inputs, model.parameters)
+    return outputs["joints"], outputs["bond_forces"]
 
 
 def _drum_checks(scene, winch, time: np.ndarray) -> list[Check]:

@@ -58,23 +58,45 @@ def survey_grid(seed: int = SEED) -> xr.Dataset:
     """The grid as a Dataset: ``elevation`` (m) over ``x``, ``y`` (m), CF attributes."""
     x = np.arange(X_RANGE[0], X_RANGE[1] + SPACING / 2, SPACING)
     y = np.arange(Y_RANGE[0], Y_RANGE[1] + SPACING / 2, SPACING)
+    return grid_dataset(
+        x, y, survey_elevation(x, y, seed), "synthetic bathymetry of the cable_ocp survey scene",
+        f"cable_ocp.studies.survey_grid (seed {seed})", ("along the tow", "across the tow"),
+    )  # fmt: skip
+
+
+def grid_dataset(
+    x: np.ndarray,
+    y: np.ndarray,
+    elevation: np.ndarray,
+    title: str,
+    source: str,
+    axes: tuple[str, str],
+) -> xr.Dataset:
+    """A bathymetry grid as the scenes read it: ``elevation`` (m, up) over ``x``, ``y`` (m).
+
+    Parameters
+    ----------
+    x, y : array, m
+    elevation : array (len(x), len(y)), m
+    title, source : str
+        The file's CF attributes.
+    axes : (str, str)
+        What the x and y axes run along (their long names).
+    """
     metres = {"units": "m"}
     return xr.Dataset(
         {
             "elevation": (
                 ("x", "y"),
-                survey_elevation(x, y, seed),
+                elevation,
                 {**metres, "long_name": "seabed elevation, up from the sea surface"},
             )
         },
         coords={
-            "x": ("x", x, {**metres, "long_name": "along the tow (local metric)"}),
-            "y": ("y", y, {**metres, "long_name": "across the tow (local metric)"}),
+            "x": ("x", x, {**metres, "long_name": f"{axes[0]} (local metric)"}),
+            "y": ("y", y, {**metres, "long_name": f"{axes[1]} (local metric)"}),
         },
-        attrs={
-            "title": "synthetic bathymetry of the cable_ocp survey scene",
-            "source": f"cable_ocp.studies.survey_grid (seed {seed})",
-        },
+        attrs={"title": title, "source": source},
     )
 
 
