@@ -216,3 +216,21 @@ def test_deploy_reference_descent_lands_and_the_heave_is_left_to_the_controller(
     assert abs(report.landing_error) < scene.lowering.height_tolerance
     assert failed(report) == {"landing speed", "hold band"}, str(report)
     assert report.hold_deviation > 1.0  # m: the heave, through the rope
+
+
+def test_the_landing_figure_shows_targets_limits_and_the_verdict(sheared, tmp_path):
+    import matplotlib
+
+    matplotlib.use("Agg")
+    from cable_ocp.plots.landing import landing
+
+    scene, descent, run = sheared
+    report = check_landing(run, descent.angle, scene.updated({"winch.rate_max": 3.0}))
+    figure = landing(run, descent, report)
+    assert "failed: drum rate" in figure.texts[0].get_text()
+    assert "scene paper_flat" in figure.texts[0].get_text()
+    for ax in figure.axes:
+        assert "[" in ax.get_ylabel()
+    path = tmp_path / "landing.png"
+    landing(run, descent, path=path)
+    assert path.stat().st_size > 10_000
