@@ -234,3 +234,39 @@ def test_the_landing_figure_shows_targets_limits_and_the_verdict(sheared, tmp_pa
     path = tmp_path / "landing.png"
     landing(run, descent, path=path)
     assert path.stat().st_size > 10_000
+
+
+HEAVING = {
+    "environment.current_profile": SHEARED,
+    "top.heave": {"sea_state": {"significant_height": 2.0, "peak_period": 8.0, "seed": 3}},
+}
+
+
+def test_the_closed_loop_holds_the_landed_load_in_its_band_against_the_heave():
+    from cable_ocp.lowering.hold import LINE_TOLERANCE, hold
+
+    scene = lowering_scene(**HEAVING)
+    held = hold(scene, duration=40.0)
+    assert held.success, held.status
+    assert held.deviation <= scene.lowering.hold_band
+    assert held.compensation_ratio > 90.0
+    # It starts on its target (trimmed for the heave at its start) with the landing's n.
+    run = held.mpc.trajectory
+    assert abs(run.clearance_error[0]) < LINE_TOLERANCE
+    assert held.scene.model.elements == scene.winch.line.mesh.starting_elements(
+        held.scene.cable.length
+    )
+    # The baseline in the same sea: the winch locked, the load rides the heave.
+    locked = co.simulate(held.scene)
+    assert np.abs(locked.clearance_error).max() > 5 * held.deviation
+    assert np.std(locked.end[:, 2]) > 0.8 * np.std(locked.top[:, 2])
+    assert "compensation ratio" in held.status
+
+
+def test_a_hold_refuses_a_moving_vessel_and_a_run_without_hold_time():
+    from cable_ocp.lowering.hold import hold_scene
+
+    with pytest.raises(ValueError, match="top.motion = 'tow'"):
+        hold_scene(lowering_scene(**{"top.motion": "tow"}))
+    with pytest.raises(ValueError, match="leaves no hold"):
+        hold_scene(lowering_scene(**{"numerics.duration": 200.0}))

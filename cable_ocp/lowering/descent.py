@@ -105,12 +105,13 @@ def _ramp_area(s):
     return s**4 * (2.5 - 3 * s + s**2)
 
 
-def landing_end(scene, line_out: float) -> np.ndarray:
-    """The end's hanging position (3,) with ``line_out`` (m) paid out, at the landing time, m.
+def landing_end(scene, line_out: float, time: float | None = None) -> np.ndarray:
+    """The end's hanging position (3,) with ``line_out`` (m) out, m.
 
     The static equilibrium of the line at that length under the vessel where the scene's top
-    motion has it at ``lowering.land_time``, in the scene's current.
+    motion has it at ``time`` (s; default ``lowering.land_time``), in the scene's current.
     """
+    time = scene.lowering.land_time if time is None else time
     mesh = scene.winch.line.mesh
     n = mesh.starting_elements(line_out)
     models = LineModels(spec_from_scene(scene), mesh.element_length, compiled=True)
@@ -120,10 +121,13 @@ def landing_end(scene, line_out: float) -> np.ndarray:
         zeros = np.zeros(np.atleast_1d(t).shape)
         return zeros + paid, zeros, zeros.copy()
 
-    drive = SegmentDrive(
-        pay_out_drive(scene, held), scene.lowering.land_time, scene.cable.length - mesh.below_top(n)
-    )
+    drive = SegmentDrive(pay_out_drive(scene, held), time, scene.cable.length - mesh.below_top(n))
     return starting_state(models.model(n), drive, compiled=True)[:3]
+
+
+def seabed_reference(scene) -> float:
+    """The seabed's reference ``r`` of the scene's runs (m): from the hanging start at t = 0."""
+    return clearance_reference(scene.seabed, landing_end(scene, scene.cable.length, 0.0))
 
 
 def landing_line(scene) -> float:
@@ -138,11 +142,10 @@ def landing_line(scene) -> float:
         The landing line lies outside what the drum can pay out and haul in.
     """
     lowering, line = scene.lowering, scene.winch.line
-    start = landing_end(scene, scene.cable.length)
-    reference = clearance_reference(scene.seabed, start)
+    reference = seabed_reference(scene)
 
     def miss(length: float) -> float:
-        end = start if length == scene.cable.length else landing_end(scene, length)
+        end = landing_end(scene, length)
         return float(clearance(scene.seabed, end, reference)) - lowering.height
 
     lengths = [scene.cable.length]

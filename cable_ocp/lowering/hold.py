@@ -1,0 +1,187 @@
+"""The hold after a landing: the closed loop keeps the load in a band above its target.
+
+Once landed, the line out stays near the landing line, so the hold is a scene of fixed ``n``:
+:func:`hold_scene` makes it from a ``[lowering]`` scene (the line at the landing as
+``cable.length``, the line's own ``n``, the drum free to haul in or pay out
+:data:`HOLD_RANGE` about it, the seabed's clearance ``delta`` set to ``lowering.height``, the
+hold's duration), and :func:`hold` runs the closed loop (:func:`cable_ocp.mpc`, the measured heave
+fed back) on it. The line is trimmed until the hanging end starts at the target height (the
+vessel's heave at the hold's start moves it), so that the closed loop starts on its target and
+is judged only on what the sea does. Reported: the largest deviation from the target height
+against ``lowering.hold_band``, and the compensation ratio ``1 - std(z_E) / std(z_top)`` in %,
+the load's vertical motion against the vessel's at the winch (CONVENTIONS.md §5, lowering).
+
+The hold's vessel must hold station (``top.motion = "fixed"``, heave allowed): a tow's profile
+starts again at the hold scene's t = 0. The sea state is the scene's, from its own start (the
+same spectrum and seed, so the same sea in distribution, not the same waves as at the landing).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from cable_ocp.lowering.descent import landing_line, seabed_reference
+from cable_ocp.scene.schema import Scene, scene_from_dict
+from cable_ocp.simulation.seabed import clearance
+
+HOLD_RANGE = 10.0  # m of line the drum may haul in or pay out about the landing line
+LINE_TOLERANCE = 1e-3  # m: the hold's start is trimmed to the target height within this
+TRIM_ITERATIONS = 8
+
+
+@dataclass(frozen=True)
+class HoldResult:
+    """A closed-loop hold above the target.
+
+    Attributes
+    ----------
+    mpc : MpcResult
+        The closed loop's result on the hold scene (its ``trajectory`` the plant's run).
+    scene : Scene
+        The hold scene.
+    deviation : float, m
+        The largest ``|z_E - z_sb - lowering.height|`` over the hold.
+    band : float, m
+        ``lowering.hold_band``.
+    compensation_ratio : float, %
+        ``100 (1 - std(z_E) / std(z_top))``: the share of the vessel's heave kept off the load.
+    heave_std, load_std : float, m
+        The standard deviations of the top's and the end's heights over the hold.
+    """
+
+    mpc: object
+    scene: Scene
+    deviation: float
+    band: float
+    compensation_ratio: float
+    heave_std: float
+    load_std: float
+
+    @property
+    def success(self) -> bool:
+        """Whether the closed loop succeeded and kept the load within the band."""
+        return bool(self.mpc.success) and self.deviation <= self.band
+
+    @property
+    def status(self) -> str:
+        """What happened, in one line."""
+        if not self.mpc.success:
+            return f"the closed loop failed: {self.mpc.status}"
+        verdict = "within" if self.deviation <= self.band else "outside"
+        return (
+            f"held {verdict} the band: largest deviation {self.deviation:.3g} m against "
+            f"+/- {self.band:g} m, compensation ratio {self.compensation_ratio:.1f} % (load "
+            f"{self.load_std:.3g} m against heave {self.heave_std:.3g} m, standard deviations)"
+        )
+
+
+def hold_scene(scene, line_out: float | None = None, duration: float | None = None) -> Scene:
+    """The fixed-``n`` scene of a ``[lowering]`` scene's line held at its landing.
+
+    Parameters
+    ----------
+    scene : Scene
+        With ``[lowering]`` and ``[winch.line]``, its vessel holding station.
+    line_out : float, optional, m
+        The line out to start from (default: :func:`~.descent.landing_line`); trimmed until the
+        hanging end starts within :data:`LINE_TOLERANCE` of the target height.
+    duration : float, optional, s
+        The hold (default: ``numerics.duration - lowering.land_time``).
+
+    Raises
+    ------
+    ValueError
+        A scene without ``[lowering]`` or ``[winch.line]``, a moving vessel, or no hold time.
+    """
+    if scene.lowering is None or scene.winch.line is None:
+        raise ValueError("a hold needs a scene with [lowering] and [winch.line]")
+    if scene.top.motion != "fixed":
+        raise ValueError(
+            f"top.motion = {scene.top.motion!r}: a hold needs the vessel holding station "
+            "(top.motion = 'fixed'; heave allowed)"
+        )
+    lowering = scene.lowering
+    duration = scene.numerics.duration - lowering.land_time if duration is None else duration
+    if not duration > 0:
+        raise ValueError(
+            f"numerics.duration = {scene.numerics.duration!r} s leaves no hold after "
+            f"lowering.land_time = {lowering.land_time!r} s: pass a hold duration"
+        )
+    reference = seabed_reference(scene)
+    length = landing_line(scene) if line_out is None else line_out
+    for _ in range(TRIM_ITERATIONS):
+        held = _fixed_line(scene, length, duration)
+        miss = _start_height(held, scene, reference) - lowering.height
+        if abs(miss) < LINE_TOLERANCE:
+            return held
+        length += miss  # too high by miss: pay out as much (the end falls by what is paid out)
+    raise ValueError(
+        f"lowering.height = {lowering.height!r} m: the held line's start stays {miss:+.3g} m off "
+        f"the target after {TRIM_ITERATIONS} trims (line out {length:.6g} m)"
+    )
+
+
+def _fixed_line(scene, length: float, duration: float) -> Scene:
+    """The scene's line as a fixed-``n`` scene of ``length`` (m) over ``duration`` (s)."""
+    data = scene.to_dict()
+    line = data["winch"].pop("line")
+    data.pop("lowering")
+    mesh = scene.winch.line.mesh
+    reach = HOLD_RANGE / scene.winch.drum_radius
+    data["cable"]["length"] = length
+    data["model"]["elements"] = mesh.starting_elements(length)
+    data["winch"].update(angle_min=-reach, angle_max=reach)
+    data["winch"]["top_length_min"] = line.get("top_length_min", mesh.element_length / 2)
+    seabed = data["seabed"]
+    seabed["clearance"] = scene.lowering.height
+    if seabed.get("minimum_clearance") is not None:
+        seabed["minimum_clearance"] = min(seabed["minimum_clearance"], scene.lowering.height)
+    data["numerics"]["duration"] = duration
+    data["name"] = f"{scene.name}_hold"
+    return scene_from_dict(data, base_dir=None)
+
+
+def _start_height(held: Scene, scene, reference: float) -> float:
+    """The held line's hanging end above the (lowering scene's) seabed, m."""
+    from cable_ocp.drive.drive import Drive
+    from cable_ocp.model.cable import CableModel
+    from cable_ocp.simulation.statics import starting_state
+
+    model = CableModel.from_scene(held)
+    end = starting_state(model, Drive.from_scene(held), compiled=True)[:3]
+    return float(clearance(scene.seabed, end, reference))
+
+
+def hold(
+    scene, line_out: float | None = None, duration: float | None = None, quiet: bool = True,
+    **settings,
+) -> HoldResult:  # fmt: skip
+    """Hold a landed load above its target by the closed loop, in the scene's sea state.
+
+    Parameters
+    ----------
+    scene : Scene
+        With ``[lowering]`` and ``[winch.line]`` (see :func:`hold_scene`).
+    line_out, duration
+        As for :func:`hold_scene`.
+    quiet : bool
+        No progress bar.
+    **settings
+        Fields of :class:`~cable_ocp.control.closed_loop.settings.MpcSettings`.
+
+    Returns
+    -------
+    HoldResult
+        Never raises for a closed loop that fails: ``success`` and ``status`` say so.
+    """
+    from cable_ocp.control.closed_loop.loop import mpc
+
+    held = hold_scene(scene, line_out, duration)
+    result = mpc(held, quiet=quiet, **settings)
+    run = result.trajectory
+    deviation = float(np.max(np.abs(run.clearance_error)))
+    heave_std, load_std = float(np.std(run.top[:, 2])), float(np.std(run.end[:, 2]))
+    ratio = 100.0 * (1.0 - load_std / heave_std) if heave_std > 0 else float("nan")
+    return HoldResult(result, held, deviation, scene.lowering.hold_band, ratio, heave_std, load_std)
