@@ -436,7 +436,7 @@ def _validate(args) -> int:
 
 
 def _bench(args) -> int:
-    from cable_ocp.studies import bench, bench_payout, bench_simulate, robustness
+    from cable_ocp.studies import bench, bench_lowering, bench_payout, bench_simulate, robustness
     from cable_ocp.studies.moordyn_compare import moordyn_report
 
     if args.hessian:
@@ -453,8 +453,12 @@ def _bench(args) -> int:
         "robustness": lambda _, quick: robustness.report(
             args.cases or (6 if quick else 50), args.seed
         ),
+        "lowering": lambda _, quick: bench_lowering.report(
+            args.cases or (3 if quick else 10), args.seed
+        ),
     }
-    for name in args.only or [part for part in parts if part != "robustness"]:
+    named_only = ("robustness", "lowering")
+    for name in args.only or [part for part in parts if part not in named_only]:
         parts[name](models_dir(), quick=args.quick)
         print()
     return 0
@@ -654,18 +658,21 @@ def build_parser() -> argparse.ArgumentParser:
     bench.add_argument(
         "--only",
         nargs="+",
-        choices=["rk4", "simulate", "moordyn", "payout", "ocp", "ocp-speed", "mpc", "robustness"],
-        help="run only these parts (robustness runs only when named)",
-    )
+        choices=["rk4", "simulate", "moordyn", "payout", "ocp", "ocp-speed", "mpc", "robustness",
+                 "lowering"],
+        help="run only these parts (robustness and lowering run only when named)",
+    )  # fmt: skip
     bench.add_argument(
         "--cases",
         type=integer(1, 10_000),
         default=None,
-        help="robustness: random scenes to draw (default 50, 6 with --quick)",
+        help="robustness, lowering: random scenes to draw (default 50 and 10; 6 and 3 with "
+        "--quick)",
     )
     bench.add_argument(
-        "--seed", type=int, default=0, help="robustness: seed of the random scenes (default 0)"
-    )
+        "--seed", type=int, default=0,
+        help="robustness, lowering: seed of the random scenes (default 0)",
+    )  # fmt: skip
     bench.add_argument(
         "--hessian", action="store_true", help="IPOPT exact vs limited-memory Hessian instead"
     )

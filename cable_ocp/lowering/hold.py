@@ -22,7 +22,9 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from cable_ocp.drive.bounds import BOUND_TOLERANCE
 from cable_ocp.lowering.descent import landing_line, seabed_reference
+from cable_ocp.model.layout import INPUTS
 from cable_ocp.scene.schema import Scene, scene_from_dict
 from cable_ocp.simulation.seabed import clearance
 
@@ -49,6 +51,8 @@ class HoldResult:
         ``100 (1 - std(z_E) / std(z_top))``: the share of the vessel's heave kept off the load.
     heave_std, load_std : float, m
         The standard deviations of the top's and the end's heights over the hold.
+    peak_rate, peak_acceleration : float, rad/s, rad/s^2
+        The drum's, from the plant's inputs at its output times (heave payout included).
     """
 
     mpc: object
@@ -58,11 +62,26 @@ class HoldResult:
     compensation_ratio: float
     heave_std: float
     load_std: float
+    peak_rate: float
+    peak_acceleration: float
+
+    @property
+    def drum_excess(self) -> str:
+        """The winch limits the drum went beyond, as text ('' when it kept within them)."""
+        winch = self.scene.winch
+        excess = []
+        for name, peak, limit, unit in (
+            ("rate", self.peak_rate, winch.rate_max, "rad/s"),
+            ("acceleration", self.peak_acceleration, winch.acceleration_max, "rad/s^2"),
+        ):
+            if limit is not None and peak > limit * (1 + BOUND_TOLERANCE):
+                excess.append(f"drum {name} {peak:.3g} {unit} over winch.{name}_max = {limit:g}")
+        return "; ".join(excess)
 
     @property
     def success(self) -> bool:
-        """Whether the closed loop succeeded and kept the load within the band."""
-        return bool(self.mpc.success) and self.deviation <= self.band
+        """Whether the closed loop succeeded, kept the load in the band and the drum in limits."""
+        return bool(self.mpc.success) and self.deviation <= self.band and not self.drum_excess
 
     @property
     def status(self) -> str:
@@ -70,11 +89,12 @@ class HoldResult:
         if not self.mpc.success:
             return f"the closed loop failed: {self.mpc.status}"
         verdict = "within" if self.deviation <= self.band else "outside"
-        return (
+        text = (
             f"held {verdict} the band: largest deviation {self.deviation:.3g} m against "
             f"+/- {self.band:g} m, compensation ratio {self.compensation_ratio:.1f} % (load "
             f"{self.load_std:.3g} m against heave {self.heave_std:.3g} m, standard deviations)"
         )
+        return f"{text}; beyond the winch: {self.drum_excess}" if self.drum_excess else text
 
 
 def hold_scene(scene, line_out: float | None = None, duration: float | None = None) -> Scene:
@@ -184,4 +204,7 @@ def hold(
     deviation = float(np.max(np.abs(run.clearance_error)))
     heave_std, load_std = float(np.std(run.top[:, 2])), float(np.std(run.end[:, 2]))
     ratio = 100.0 * (1.0 - load_std / heave_std) if heave_std > 0 else float("nan")
-    return HoldResult(result, held, deviation, scene.lowering.hold_band, ratio, heave_std, load_std)
+    drum = np.abs(run.inputs[:, [INPUTS.top_length_rate, INPUTS.top_length_acceleration]])
+    rate, acceleration = drum.max(axis=0) / held.winch.drum_radius
+    return HoldResult(result, held, deviation, scene.lowering.hold_band, ratio, heave_std,
+                      load_std, float(rate), float(acceleration))  # fmt: skip

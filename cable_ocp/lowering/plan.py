@@ -1,0 +1,164 @@
+"""The open-loop landing, corrected on the full model until its verified run lands.
+
+:func:`plan_landing` starts from :func:`~.descent.reference_descent` (the static landing line) and
+simulates it on the scene's own model, the line paid out by elements: the run that the checks
+(:func:`~.checks.check_landing`) judge. Where the vessel heaves and the scene does not compensate
+it, the heave is paid out by eq. 38 on the approach, faded in over the descent's last ramp
+(``w = S((t - T + t_r) / t_r)``, S the quintic smoothstep: the descent's own rate falls as
+``v (1 - w)``, so the drum's rate stays about the larger of the cruise and the heave's), and held
+from the landing on: the open loop knows the vessel's whole motion, as the clearance OCP's
+feedforward does. The dynamic run lands off the static line by what the rope's drag and the
+heave's offset leave, so the landing line is moved by the run's landing error and run again, up to
+:data:`CORRECTIONS` times, until the error is within :data:`CORRECTION_SHARE` of
+``lowering.height_tolerance`` (CONVENTIONS.md §5, lowering).
+"""
+
+from __future__ import annotations
+
+import time
+from dataclasses import dataclass, replace
+
+import numpy as np
+
+from cable_ocp.drive.vessel import top_motion
+from cable_ocp.lowering.checks import LandingReport, check_landing
+from cable_ocp.lowering.descent import ReferenceDescent, reference_descent
+from cable_ocp.simulation.integrate import SimulationError
+from cable_ocp.simulation.line_trajectory import LineTrajectory
+from cable_ocp.simulation.run import simulate
+
+CORRECTIONS = 4  # runs of the full model after the first
+CORRECTION_SHARE = 0.1  # of lowering.height_tolerance: a landing error this small stops them
+
+
+@dataclass(frozen=True)
+class LandingPlan:
+    """An open-loop landing and its verified run.
+
+    Attributes
+    ----------
+    scene : Scene
+    descent : ReferenceDescent
+        The descent flown, its landing line corrected.
+    heave_feedforward : bool
+        Whether the heave was paid out on the approach.
+    run : LineTrajectory or None
+        The verified run of the last descent (None if the full model failed).
+    report : LandingReport or None
+        Its checks.
+    landing_errors : tuple of float, m
+        The landing error of each run, first to last.
+    wall_time : float, s
+    failure : str
+        Why the full model failed ('' when it ran).
+    """
+
+    scene: object
+    descent: ReferenceDescent
+    heave_feedforward: bool
+    run: LineTrajectory | None
+    report: LandingReport | None
+    landing_errors: tuple[float, ...]
+    wall_time: float
+    failure: str = ""
+
+    @property
+    def success(self) -> bool:
+        """Whether the verified run passed every check."""
+        return self.report is not None and self.report.passed
+
+    @property
+    def status(self) -> str:
+        """What happened, in one line."""
+        if self.report is None:
+            return f"the full model failed: {self.failure}"
+        runs = len(self.landing_errors)
+        found = f"landing error {self.report.landing_error:+.3g} m after {runs} run(s)"
+        if self.report.passed:
+            return f"every check passed ({found})"
+        return f"{found}; failed: {self.report.reason}"
+
+    def angle(self, t, left=None) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """The winch angle flown (rad, rad/s, rad/s^2), the approach's heave included."""
+        return _landing_angle(self.scene, self.descent, self.heave_feedforward)(t)
+
+
+def approach_feedforward(scene, descent: ReferenceDescent):
+    """The descent's winch angle with the heave paid out on its approach (eq. 38, faded in).
+
+    ``phi = phi_descent + w(t) (z_A(t) - z_A(0)) / r_D`` with ``w`` the smoothstep over the
+    descent's last ramp (0 before it, 1 from the landing on), and its rates by the product rule.
+    """
+    top = top_motion(scene.top)
+    start = top(np.zeros(1))[0][2, 0]
+    radius, T, ramp = scene.winch.drum_radius, descent.land_time, descent.ramp
+
+    def angle(t, left=None):
+        t = np.atleast_1d(np.asarray(t, dtype=float))
+        phi, rate, acceleration = descent.angle(t)
+        s = np.clip((t - (T - ramp)) / ramp, 0.0, 1.0)
+        w = s**3 * (10 - 15 * s + 6 * s**2)
+        dw = 30 * s**2 * (1 - s) ** 2 / ramp
+        ddw = 60 * s * (1 - s) * (1 - 2 * s) / ramp**2
+        position, velocity, accel = top(t)
+        z, vz, az = position[2] - start, velocity[2], accel[2]
+        phi = phi + w * z / radius
+        rate = rate + (w * vz + dw * z) / radius
+        acceleration = acceleration + (w * az + 2 * dw * vz + ddw * z) / radius
+        return phi, rate, acceleration
+
+    return angle
+
+
+def _heaves(scene) -> bool:
+    heave = scene.top.heave
+    moving = heave is not None and (bool(heave.amplitude) or heave.sea_state is not None)
+    return moving and not scene.top.heave_compensated
+
+
+def _landing_angle(scene, descent: ReferenceDescent, feedforward: bool):
+    return approach_feedforward(scene, descent) if feedforward else descent.angle
+
+
+def plan_landing(scene, quiet: bool = True) -> LandingPlan:
+    """Land a ``[lowering]`` scene's load in open loop, verified on the scene's own model.
+
+    Parameters
+    ----------
+    scene : Scene
+        With ``[lowering]`` and ``[winch.line]``.
+    quiet : bool
+        No progress bars.
+
+    Returns
+    -------
+    LandingPlan
+        Never raises for a landing that fails on a valid scene: ``success`` and ``status`` say
+        why (a failed check, or the full model's failure).
+
+    Raises
+    ------
+    DescentError
+        Before any simulation: no descent within the winch's limits reaches the landing.
+    """
+    started = time.perf_counter()
+    descent = reference_descent(scene)
+    feedforward = _heaves(scene)
+    tolerance = CORRECTION_SHARE * scene.lowering.height_tolerance
+    errors: list[float] = []
+    run = report = None
+    for _ in range(CORRECTIONS + 1):
+        angle = _landing_angle(scene, descent, feedforward)
+        try:
+            run = simulate(scene, winch=angle, quiet=quiet)
+        except SimulationError as error:
+            return LandingPlan(scene, descent, feedforward, None, None, tuple(errors),
+                               time.perf_counter() - started, str(error))  # fmt: skip
+        report = check_landing(run, angle)
+        errors.append(report.landing_error)
+        if abs(report.landing_error) <= tolerance:
+            break
+        # Too high by the error: pay out as much more (the end falls by what is paid out).
+        descent = replace(descent, landing_line=descent.landing_line + report.landing_error)
+    return LandingPlan(scene, descent, feedforward, run, report, tuple(errors),
+                       time.perf_counter() - started)  # fmt: skip

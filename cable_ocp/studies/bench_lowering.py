@@ -1,0 +1,250 @@
+"""Random lowering scenes: the open-loop landing and the closed-loop hold, by default settings.
+
+``cable-ocp bench --only lowering [--cases N --seed S]`` draws N lowerings that an installation
+engineer would plan (:class:`LoweringRanges` states each range and why), lands each in open loop
+(:func:`cable_ocp.lowering.plan.plan_landing`: the reference descent, the heave fed forward on the
+approach, the landing line corrected on the full model, every constraint checked on the verified
+run) and holds it above its target by the closed loop (:func:`cable_ocp.lowering.hold.hold`), and
+prints how many succeeded, how many raised (which must be none), the landing errors and speeds,
+the hold's deviation and compensation ratio, the median wall time of a landing and the closed
+loop's real-time factor.
+
+A case is a dict of scene overrides of the bundled ``paper_flat`` (its water and its
+hydrodynamics), with a flat seabed ``depth`` below the end's start (``seabed.clearance``).
+"""
+
+from __future__ import annotations
+
+import math
+import time
+import traceback
+from dataclasses import dataclass
+
+import numpy as np
+
+from cable_ocp.lowering.hold import hold
+from cable_ocp.lowering.plan import plan_landing
+from cable_ocp.scene.bundled import scene_path
+from cable_ocp.scene.schema import load_scene
+
+WATER, GRAVITY = 1025.0, 9.81
+# A steel wire rope's breaking load per mm^2 of its diameter squared (1770 MPa grade, fill 0.45).
+BREAKING_LOAD_PER_MM2 = 800.0  # N
+SAFETY_FACTOR = 4.0  # the working limit, tension_max, is a quarter of the breaking load
+CRUISE_SHARE = 0.6  # of the winch's line speed: the landing time this leaves the descent
+ELEMENTS_AT_LANDING = 60  # the element length is the landing line over this (at least 10 m)
+HOLD = 60.0  # s
+
+
+@dataclass(frozen=True)
+class LoweringRanges:
+    """Where the random lowerings are drawn from (uniformly unless stated).
+
+    Attributes
+    ----------
+    depth : (float, float), m
+        200-2000 m of water below the load's start: shelf-edge to deep-water installations.
+    payload_mass : (float, float), kg
+        0.5-20 t: sensor frames and transponders to subsea modules and suction anchors.
+    payload_density : (float, float), kg/m^3
+        Of the payload's volume: steel frames with buoyancy, 3000-7850.
+    drag_coefficient : (float, float)
+        Of the payload's plan area (a frame's, 1.0-2.0).
+    steel_density : (float, float), kg/m^3
+        The wire rope (6000-7850, with lubricant and voids).
+    surface_current : (float, float), m/s
+        0-0.8 m/s at the surface, falling to 20-60 % at the seabed, in a random direction.
+    sea_share : float
+        Share in a JONSWAP sea state.
+    significant_height : (float, float), m
+        H_s 0.5-3 m: the workable sea states of an installation.
+    peak_period : (float, float), s
+    drum_radius : (float, float), m
+    line_speed : (float, float), m/s
+        The winch's top line speed: 1.0-2.0 m/s.
+    line_acceleration : (float, float), m/s^2
+    height : (float, float), m
+        The landing's target height above the seabed.
+    """
+
+    depth: tuple[float, float] = (200.0, 2000.0)
+    payload_mass: tuple[float, float] = (500.0, 20000.0)
+    payload_density: tuple[float, float] = (3000.0, 7850.0)
+    drag_coefficient: tuple[float, float] = (1.0, 2.0)
+    steel_density: tuple[float, float] = (6000.0, 7850.0)
+    surface_current: tuple[float, float] = (0.0, 0.8)
+    bottom_share: tuple[float, float] = (0.2, 0.6)
+    sea_share: float = 0.6
+    significant_height: tuple[float, float] = (0.5, 3.0)
+    peak_period: tuple[float, float] = (6.0, 12.0)
+    drum_radius: tuple[float, float] = (0.5, 1.5)
+    line_speed: tuple[float, float] = (1.0, 2.0)
+    line_acceleration: tuple[float, float] = (0.2, 0.5)
+    height: tuple[float, float] = (3.0, 10.0)
+
+
+def rope_diameter(load: float, depth: float, density: float) -> float:
+    """The smallest wire (m, 20-80 mm, whole mm) whose working limit carries the lowering.
+
+    ``load`` (N) is the payload's submerged weight; the rope's own over ``depth`` (m) is added.
+    """
+    for millimetres in range(20, 81):
+        d = millimetres / 1000.0
+        rope = (density - WATER) * GRAVITY * math.pi * d**2 / 4 * depth
+        if BREAKING_LOAD_PER_MM2 * millimetres**2 / SAFETY_FACTOR >= 1.3 * (load + rope):
+            return d
+    return 0.08
+
+
+def lowering_case(rng: np.random.Generator, ranges: LoweringRanges = LoweringRanges()) -> dict:
+    """Scene overrides of ``paper_flat`` for one random lowering."""
+
+    def uniform(bounds, digits=3):
+        return float(np.round(rng.uniform(*bounds), digits))
+
+    depth, mass = uniform(ranges.depth, 0), uniform(ranges.payload_mass, -1)
+    volume = round(mass / uniform(ranges.payload_density, 0), 3)
+    rope_density = uniform(ranges.steel_density, 0)
+    load = (mass - WATER * volume) * GRAVITY
+    diameter = rope_diameter(load, depth, rope_density)
+    element = max(10.0, round(depth / ELEMENTS_AT_LANDING))
+    start = max(20.0, 2 * element + 1.0)  # the line's shortest: 3/2 Delta + Delta/2
+    radius = uniform(ranges.drum_radius, 2)
+    speed, acceleration = uniform(ranges.line_speed, 2), uniform(ranges.line_acceleration, 2)
+    height = uniform(ranges.height, 1)
+    land_time = float(math.ceil((depth - height) / (CRUISE_SHARE * speed) / 10.0) * 10.0)
+    surface = uniform(ranges.surface_current, 2)
+    heading = rng.uniform(0.0, 2 * math.pi)
+    bottom = surface * uniform(ranges.bottom_share, 2)
+    case = {
+        "top.motion": "fixed",
+        "cable.length": start,
+        "cable.diameter": diameter,
+        "cable.density": rope_density,
+        "end.payload": {"mass": mass, "volume": volume, "drag_area": round(mass / 1000.0, 2),
+                        "drag": uniform(ranges.drag_coefficient, 2)},
+        "environment.current_profile": [
+            {"z": 0.0, "u": round(surface * math.cos(heading), 3),
+             "v": round(surface * math.sin(heading), 3)},
+            {"z": -depth, "u": round(bottom * math.cos(heading), 3),
+             "v": round(bottom * math.sin(heading), 3)},
+        ],
+        "winch.drum_radius": radius,
+        "winch.rate_max": round(speed / radius, 4),
+        "winch.acceleration_max": round(acceleration / radius, 4),
+        "winch.line": {"pay_out_max": depth + 50.0, "element_length": element},
+        "seabed.clearance": depth,
+        "lowering": {"land_time": land_time, "height": height,
+                     "tension_min": round(0.2 * load), "tension_max": round(
+                         BREAKING_LOAD_PER_MM2 * (1000 * diameter) ** 2 / SAFETY_FACTOR)},
+        "numerics.duration": land_time + HOLD,
+        "numerics.step": 0.05,
+        "numerics.output_every": 10,
+        "numerics.constraint_tolerance": 1e-4,
+    }  # fmt: skip
+    if rng.uniform() < ranges.sea_share:
+        sea = {
+            "significant_height": uniform(ranges.significant_height, 2),
+            "peak_period": uniform(ranges.peak_period, 1),
+            "seed": int(rng.integers(1000)),
+        }
+        case["top.heave"] = {"sea_state": sea}
+    return case
+
+
+def lowering_cases(count: int, seed: int, ranges: LoweringRanges = LoweringRanges()) -> list:
+    """``count`` random lowerings of ``seed``."""
+    rng = np.random.default_rng([seed, 27])
+    return [lowering_case(rng, ranges) for _ in range(count)]
+
+
+def run_case(overrides: dict) -> dict:
+    """Land and hold one case; a row of figures (never raises: an exception is a row too)."""
+    row = {"overrides": overrides}
+    try:
+        scene = load_scene(scene_path("paper_flat"), overrides)
+        started = time.perf_counter()
+        plan = plan_landing(scene)
+        row.update(wall=time.perf_counter() - started, success=plan.success, status=plan.status,
+                   runs=len(plan.landing_errors))  # fmt: skip
+        if plan.report is not None:
+            report = plan.report
+            row.update(landing_error=report.landing_error, landing_speed=report.landing_speed,
+                       peak_tension=report.peak_tension, least_tension=report.least_tension,
+                       elements=int(plan.run.element_count.max()))  # fmt: skip
+        held = hold(scene)
+        row.update(hold_success=held.success, hold_status=held.status,
+                   hold_deviation=held.deviation, ratio=held.compensation_ratio,
+                   rtf=held.mpc.real_time_factor)  # fmt: skip
+    except KeyboardInterrupt:
+        raise
+    except Exception as error:  # a raise is what the benchmark counts; its row says where
+        row.update(success=False, raised=f"{type(error).__name__}: {error}",
+                   trace=traceback.format_exc(limit=3))  # fmt: skip
+    return row
+
+
+def _line(k: int, row: dict) -> str:
+    o = row["overrides"]
+    payload = o["end.payload"]["mass"] / 1000
+    sea = o.get("top.heave", {}).get("sea_state")
+    head = (
+        f"case {k:3d}: depth {o['seabed.clearance']:.0f} m, payload {payload:.1f} t, "
+        f"d {1000 * o['cable.diameter']:.0f} mm, "
+        + (f"Hs {sea['significant_height']:.1f} m" if sea else "calm")
+    )
+    if "raised" in row:
+        return f"{head}: RAISED {row['raised']}"
+    land = "ok" if row["success"] else "FAILED " + row["status"]
+    text = f"{head}: landing {land}"
+    if "landing_error" in row:
+        text += (f" (error {row['landing_error']:+.3g} m, speed {row['landing_speed']:+.2g} m/s, "
+                 f"n -> {row['elements']}, {row['runs']} run(s), {row['wall']:.1f} s)")  # fmt: skip
+    if "hold_success" in row:
+        verdict = "ok" if row["hold_success"] else "FAILED"
+        text += (f"; hold {verdict} {row['hold_deviation']:.3g} m, ratio {row['ratio']:.1f} %, "
+                 f"RTF {row['rtf']:.0f}")  # fmt: skip
+    return text
+
+
+def summary(rows: list[dict]) -> dict:
+    """The benchmark's figures."""
+    landed = [r for r in rows if r.get("success")]
+    holds = [r for r in rows if "hold_success" in r]
+    return {
+        "cases": len(rows),
+        "raised": sum("raised" in r for r in rows),
+        "landed": len(landed),
+        "held": sum(r["hold_success"] for r in holds),
+        "both": sum(r.get("success", False) and r.get("hold_success", False) for r in rows),
+        "wall_median": float(np.median([r["wall"] for r in rows if "wall" in r] or [np.nan])),
+        "error_max": float(max((abs(r["landing_error"]) for r in landed), default=np.nan)),
+        "ratio_median": float(np.median([r["ratio"] for r in holds] or [np.nan])),
+        "rtf_min": float(min((r["rtf"] for r in holds), default=np.nan)),
+        "rtf_median": float(np.median([r["rtf"] for r in holds] or [np.nan])),
+    }
+
+
+def report(cases: int = 10, seed: int = 0, quiet: bool = False) -> tuple[list[dict], dict]:
+    """Run and print the lowering benchmark; returns its rows and :func:`summary`."""
+    rows = []
+    for k, overrides in enumerate(lowering_cases(cases, seed)):
+        rows.append(run_case(overrides))
+        if not quiet:
+            print(_line(k, rows[-1]), flush=True)
+    figures = summary(rows)
+    if not quiet:
+        n = figures["cases"]
+        print(
+            f"lowering: {n} random lowerings (seed {seed}), open-loop landing, closed-loop hold\n"
+            f"  landed             {figures['landed']}/{n} (every check on the verified run)\n"
+            f"  held               {figures['held']}/{n} (within the band, closed loop)\n"
+            f"  raised             {figures['raised']}\n"
+            f"  landing error      at most {figures['error_max']:.3g} m (landed cases)\n"
+            f"  landing wall       median {figures['wall_median']:.1f} s per case\n"
+            f"  compensation       median {figures['ratio_median']:.1f} %\n"
+            f"  hold real time     min {figures['rtf_min']:.0f}x, median "
+            f"{figures['rtf_median']:.0f}x faster than real time",
+            flush=True,
+        )
+    return rows, figures
