@@ -31,6 +31,7 @@ from cable_ocp.simulation.seabed import clearance
 HOLD_RANGE = 10.0  # m of line the drum may haul in or pay out about the landing line
 LINE_TOLERANCE = 1e-3  # m: the hold's start is trimmed to the target height within this
 TRIM_ITERATIONS = 8
+CALM = 1e-6  # m: a vessel heaving less (std) has no compensation ratio (NaN)
 
 
 @dataclass(frozen=True)
@@ -48,7 +49,8 @@ class HoldResult:
     band : float, m
         ``lowering.hold_band``.
     compensation_ratio : float, %
-        ``100 (1 - std(z_E) / std(z_top))``: the share of the vessel's heave kept off the load.
+        ``100 (1 - std(z_E) / std(z_top))``: the share of the vessel's heave kept off the load
+        (NaN in a calm, where the vessel does not heave).
     heave_std, load_std : float, m
         The standard deviations of the top's and the end's heights over the hold.
     peak_rate, peak_acceleration : float, rad/s, rad/s^2
@@ -203,7 +205,7 @@ def hold(
     run = result.trajectory
     deviation = float(np.max(np.abs(run.clearance_error)))
     heave_std, load_std = float(np.std(run.top[:, 2])), float(np.std(run.end[:, 2]))
-    ratio = 100.0 * (1.0 - load_std / heave_std) if heave_std > 0 else float("nan")
+    ratio = 100.0 * (1.0 - load_std / heave_std) if heave_std > CALM else float("nan")
     drum = np.abs(run.inputs[:, [INPUTS.top_length_rate, INPUTS.top_length_acceleration]])
     rate, acceleration = drum.max(axis=0) / held.winch.drum_radius
     return HoldResult(result, held, deviation, scene.lowering.hold_band, ratio, heave_std,
