@@ -57,10 +57,16 @@ def sheared():
     return scene, descent, co.simulate(scene, winch=descent.angle)
 
 
-def test_landing_line_in_still_water_is_the_vertical_drop():
+def test_landing_line_in_still_water_is_the_vertical_drop(validation):
     # Inextensible and hanging straight down: the end falls by exactly what is paid out.
     scene = lowering_scene()
-    assert landing_line(scene) == pytest.approx(START + DROP - HEIGHT, abs=1e-6)
+    error = abs(landing_line(scene) - (START + DROP - HEIGHT))
+    validation(
+        "landing line of a 2 t load on 10 m elements, still water, 200 m above a flat seabed",
+        "analytic", "the vertical drop L_0 + delta - height = 215 m", "|landing line - drop|",
+        f"{error:.1e} m", "<= 1e-6 m",
+    )  # fmt: skip
+    assert error <= 1e-6
 
 
 def test_descent_line_out_rates_are_its_derivatives():
@@ -101,7 +107,7 @@ def test_an_impossible_descent_is_refused_naming_the_field(overrides, message):
         reference_descent(lowering_scene(**overrides))
 
 
-def test_reference_descent_lands_and_passes_every_check(sheared):
+def test_reference_descent_lands_and_passes_every_check(sheared, validation):
     scene, descent, run = sheared
     assert isinstance(run, LineTrajectory) and run.element_count.max() > run.element_count[0]
     report = check_landing(run, descent.angle)
@@ -112,6 +118,13 @@ def test_reference_descent_lands_and_passes_every_check(sheared):
         "top tension max", "no slack bond", "drum rate", "drum acceleration", "minimum clearance",
     }  # fmt: skip
     # The static landing line lands the dynamic run within a centimetre, at rest.
+    validation(
+        "2 t load lowered 195 m (20 -> 215 m, n = 2 -> 21) through a sheared current "
+        "(0.5 -> 0.1 m/s) on the reference descent, 200 s",
+        "second formulation", "the static equilibrium of the landing line (statics solve)",
+        "landing error; vertical speed at the landing",
+        f"{report.landing_error:.1e} m; {report.landing_speed:.1e} m/s", "< 1 cm; < 1 mm/s",
+    )  # fmt: skip
     assert abs(report.landing_error) < 0.01
     assert abs(report.landing_speed) < 1e-3
     # The checker's top tension is the run's own: the bond force along the top element there,
