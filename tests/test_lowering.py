@@ -327,3 +327,36 @@ def test_an_open_loop_landing_whose_model_fails_says_so():
     plan = plan_landing(scene)
     assert not plan.success and plan.run is None
     assert plan.status.startswith("the full model failed: ")
+
+
+def toml_value(value) -> str:
+    """A Python value as the TOML of a ``--set`` (inline tables and arrays)."""
+    if isinstance(value, dict):
+        return "{" + ", ".join(f"{k} = {toml_value(v)}" for k, v in value.items()) + "}"
+    if isinstance(value, list):
+        return "[" + ", ".join(toml_value(v) for v in value) + "]"
+    return repr(value) if not isinstance(value, str) else f'"{value}"'
+
+
+def test_the_command_line_lands_holds_and_writes_its_figures(tmp_path, capsys):
+    import json
+
+    from cable_ocp import cli
+
+    sets = [f"{key}={toml_value(value)}" for key, value in {**LOWERING, **HEAVING}.items()]
+    out = tmp_path / "lowered"
+    args = ["lower", str(MODELS / "paper_flat.toml"), "--out", str(out), "--quiet"]
+    assert cli.main([*args, *(part for s in sets for part in ("--set", s))]) == 0
+    summary = json.loads((out / "summary.json").read_text())
+    assert summary["landing_success"] and summary["hold_success"]
+    assert abs(summary["landing_error"]) < 0.01 and summary["compensation_ratio"] > 90
+    assert summary["locked_hold_deviation"] > summary["closed_loop_deviation"]
+    assert summary["units"]["compensation_ratio"] == "%"
+    for name in ("landing.nc", "landing.png", "seabed_view.png", "line_run.png",
+                 "hold_clearance.png"):  # fmt: skip
+        assert (out / name).stat().st_size > 0, name
+    assert "every check passed" in capsys.readouterr().out
+    # A scene without [lowering] is refused before any work, naming what it needs.
+    code = cli.main(["lower", str(MODELS / "paper_flat.toml"), "--out", str(tmp_path / "x")])
+    assert code == 2 and "lower needs a scene with [lowering]" in capsys.readouterr().err
+    assert not (tmp_path / "x").exists()

@@ -1,4 +1,4 @@
-"""The command line: ``cable-ocp simulate|optimize|compare|mpc|sweep|validate|study|bench|...``.
+"""The command line: ``cable-ocp simulate|optimize|compare|mpc|lower|sweep|validate|study|bench``.
 
 ``cable-ocp scenes`` lists the bundled scenes, ``cable-ocp schema [KEY]`` the fields of a scene.
 
@@ -20,6 +20,7 @@ from pathlib import Path
 from cable_ocp.cli.arguments import OUT_HELP, SCENE_HELP, DefaultsShown, integer, positive
 from cable_ocp.cli.exports import winch_csv
 from cable_ocp.cli.files import results_folder
+from cable_ocp.cli.lower import add_lower_command
 from cable_ocp.cli.mpc import add_mpc_command
 from cable_ocp.cli.reference import add_reference_commands
 from cable_ocp.cli.sweep import add_sweep_command
@@ -621,6 +622,7 @@ def build_parser() -> argparse.ArgumentParser:
     _add_optimiser_options(cmp)
     cmp.set_defaults(run=_compare)
     add_mpc_command(commands)
+    add_lower_command(commands)
     add_sweep_command(commands)
     add_reference_commands(commands)
 

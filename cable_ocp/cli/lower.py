@@ -1,0 +1,116 @@
+"""``cable-ocp lower SCENE --out DIR``: an open-loop landing, its checks, the closed-loop hold."""
+
+from __future__ import annotations
+
+import argparse
+import math
+import sys
+from pathlib import Path
+
+from cable_ocp.cli.arguments import OUT_HELP, SCENE_HELP, DefaultsShown
+from cable_ocp.scene.bundled import scene_argument
+
+# Units of the figures in summary.json.
+UNITS = {
+    "landing_line": "m", "landing_error": "m", "landing_speed": "m/s", "least_tension": "N",
+    "peak_tension": "N", "least_bond_tension": "N", "hold_deviation": "m", "wall_time": "s",
+    "closed_loop_deviation": "m", "compensation_ratio": "%", "real_time_factor": "1",
+    "locked_hold_deviation": "m",
+}  # fmt: skip
+
+
+def add_lower_command(subparsers) -> None:
+    """Add the ``lower`` command to the ``cable-ocp`` sub-command parsers."""
+    parser = subparsers.add_parser(
+        "lower",
+        formatter_class=DefaultsShown,
+        help="land a [lowering] scene's load in open loop and hold it by the closed loop",
+        description="Lower the load of SCENE (a scene with [lowering] and [winch.line]) onto its "
+        "target: the reference descent simulated on the scene's own model, the heave fed "
+        "forward on the approach, the landing line corrected until the verified run lands; "
+        "every constraint measured on that run. Then the landed line held above the target by "
+        "the closed loop (mpc), with its compensation ratio. Writes landing.nc (the verified "
+        "run), summary.json and figures to --out.",
+    )
+    parser.add_argument("scene", type=scene_argument, help=SCENE_HELP)
+    parser.add_argument("--out", type=Path, required=True, help=OUT_HELP)
+    parser.add_argument(
+        "--set", action="append", default=[], metavar="KEY=VALUE",
+        help="override a scene field, e.g. --set lowering.land_time=1000",
+    )  # fmt: skip
+    parser.add_argument("--no-hold", action="store_true", help="leave out the closed-loop hold")
+    parser.add_argument(
+        "--animate", action="store_true",
+        help="also write animation.gif: the rope growing as it is paid out",
+    )  # fmt: skip
+    parser.add_argument("--quiet", action="store_true", help="no progress bars")
+    parser.set_defaults(run=run_lower_command)
+
+
+def run_lower_command(args: argparse.Namespace) -> int:
+    """Run ``cable-ocp lower``; 3 when the landing or the hold fails, 0 otherwise."""
+    from cable_ocp import plots
+    from cable_ocp.cli import parse_overrides
+    from cable_ocp.cli.files import results_folder
+    from cable_ocp.lowering.descent import reference_descent
+    from cable_ocp.lowering.hold import hold
+    from cable_ocp.lowering.plan import plan_landing
+    from cable_ocp.plots import landing, survey
+    from cable_ocp.scene.output import json_text
+    from cable_ocp.scene.schema import load_scene
+    from cable_ocp.simulation.run import simulate
+
+    scene = load_scene(args.scene, parse_overrides(args.set))
+    if scene.lowering is None or scene.winch.line is None:
+        raise ValueError(
+            f"{args.scene}: lower needs a scene with [lowering] and [winch.line] (see "
+            "models/deploy.toml)"
+        )
+    reference_descent(scene)  # a landing that no descent within the winch's limits reaches
+    plan = plan_landing(scene, quiet=args.quiet)
+    held = None if args.no_hold else hold(scene, quiet=args.quiet)
+    summary = {"scene": scene.name, "landing_success": plan.success, "landing": plan.status,
+               "landing_line": plan.descent.landing_line, "wall_time": plan.wall_time}  # fmt: skip
+    if plan.report is not None:
+        report = plan.report
+        summary.update(
+            landing_error=report.landing_error, landing_speed=report.landing_speed,
+            least_tension=report.least_tension, peak_tension=report.peak_tension,
+            least_bond_tension=report.least_bond_tension, hold_deviation=report.hold_deviation,
+            checks=[str(check) for check in report.checks],
+        )  # fmt: skip
+    if held is not None:
+        locked = simulate(held.scene, quiet=True)  # the hold's baseline: the same sea, no winch
+        ratio = held.compensation_ratio
+        summary.update(
+            hold_success=held.success, hold=held.status, closed_loop_deviation=held.deviation,
+            compensation_ratio=ratio if math.isfinite(ratio) else None,
+            real_time_factor=held.mpc.real_time_factor,
+            locked_hold_deviation=float(abs(locked.clearance_error).max()),
+        )  # fmt: skip
+    summary["units"] = {name: unit for name, unit in UNITS.items() if name in summary}
+    with results_folder(args.out) as folder:
+        (folder / "summary.json").write_text(json_text(summary))
+        if plan.run is not None:
+            plan.run.save(folder / "landing")
+            landing.landing(plan.run, plan.descent, plan.report, folder / "landing.png",
+                            label="open-loop landing")  # fmt: skip
+            survey.seabed_view(plan.run, scene.seabed, window=None,
+                               path=folder / "seabed_view.png")  # fmt: skip
+            plots.line_run(plan.run, path=folder / "line_run.png")
+            if args.animate:
+                plots.animate(plan.run, folder / "animation.gif", scene.seabed.clearance)
+        if held is not None:
+            plots.clearance([locked, held.mpc], held.scene.seabed.clearance,
+                            ["winch locked", "closed loop"], folder / "hold_clearance.png",
+                            zoom=True)  # fmt: skip
+    print(f"landing: {plan.status}")
+    if held is not None:
+        print(f"hold: {held.status}; {held.mpc.real_time_factor:.0f}x faster than real time")
+    print(f"results and figures written to {Path(args.out).resolve()}")
+    failed = [name for name, outcome in (("landing", plan), ("hold", held))
+              if outcome is not None and not outcome.success]  # fmt: skip
+    if failed:
+        print(f"cable-ocp lower: the {' and the '.join(failed)} failed", file=sys.stderr)
+        return 3
+    return 0
