@@ -10,7 +10,11 @@ from the landing on: the open loop knows the vessel's whole motion, as the clear
 feedforward does. The dynamic run lands off the static line by what the rope's drag and the
 heave's offset leave, so the landing line is moved by the run's landing error and run again, up to
 :data:`CORRECTIONS` times, until the error is within :data:`CORRECTION_SHARE` of
-``lowering.height_tolerance`` (CONVENTIONS.md §5, lowering).
+``lowering.height_tolerance``. After the landing the rope still settles (a light load on a long
+line bowed by the current rises or sinks by decimetres over a minute), so each run's settling is
+paid out in the next (:class:`HoldCorrection`, an iterative learning of the hold on the full
+model) until the hold stays within :data:`HOLD_SHARE` of ``lowering.hold_band``
+(CONVENTIONS.md §5, lowering).
 """
 
 from __future__ import annotations
@@ -26,9 +30,12 @@ from cable_ocp.lowering.descent import ReferenceDescent, reference_descent
 from cable_ocp.simulation.integrate import SimulationError
 from cable_ocp.simulation.line_trajectory import LineTrajectory
 from cable_ocp.simulation.run import simulate
+from cable_ocp.simulation.seabed import clearance, clearance_reference
 
 CORRECTIONS = 4  # runs of the full model after the first
 CORRECTION_SHARE = 0.1  # of lowering.height_tolerance: a landing error this small stops them
+HOLD_SHARE = 0.5  # of lowering.hold_band: a hold this close (and a landing as above) stops them
+HOLD_FADE = 10.0  # s after the landing over which the hold's correction fades in (C2)
 
 
 @dataclass(frozen=True)
@@ -51,6 +58,8 @@ class LandingPlan:
     wall_time : float, s
     failure : str
         Why the full model failed ('' when it ran).
+    hold : HoldCorrection or None
+        The line paid out after the landing, learnt from the runs before the last.
     """
 
     scene: object
@@ -61,6 +70,7 @@ class LandingPlan:
     landing_errors: tuple[float, ...]
     wall_time: float
     failure: str = ""
+    hold: HoldCorrection | None = None
 
     @property
     def success(self) -> bool:
@@ -80,7 +90,7 @@ class LandingPlan:
 
     def angle(self, t, left=None) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """The winch angle flown (rad, rad/s, rad/s^2), the approach's heave included."""
-        return _landing_angle(self.scene, self.descent, self.heave_feedforward)(t)
+        return _landing_angle(self.scene, self.descent, self.heave_feedforward, self.hold)(t)
 
 
 def approach_feedforward(scene, descent: ReferenceDescent):
@@ -110,14 +120,76 @@ def approach_feedforward(scene, descent: ReferenceDescent):
     return angle
 
 
+@dataclass(frozen=True)
+class HoldCorrection:
+    """Line paid out on top of the descent after the landing (m), learnt from full-model runs.
+
+    ``c(t)`` through ``values`` at ``times`` (s, from the landing on) by a C2 cubic spline,
+    0 before the first time; :meth:`learnt` adds ``w(t) (e(t) - e(T))``, the run's settling
+    after the landing (``e`` its height above the target, ``w`` a smoothstep over
+    :data:`HOLD_FADE` s), so that the next run pays it out: the end falls by what is paid out.
+    """
+
+    times: np.ndarray
+    values: np.ndarray
+
+    @classmethod
+    def none(cls, land_time: float) -> HoldCorrection:
+        """No correction."""
+        return cls(np.array([land_time, land_time + 1.0]), np.zeros(2))
+
+    def line(self, t) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """The correction (m) with its rate (m/s) and acceleration (m/s^2) at ``t`` (s)."""
+        from scipy.interpolate import CubicSpline
+
+        t = np.atleast_1d(np.asarray(t, dtype=float))
+        if not self.values.any():
+            zeros = np.zeros(t.shape)
+            return zeros, zeros.copy(), zeros.copy()
+        spline = CubicSpline(self.times, self.values, bc_type="natural")
+        inside = (t >= self.times[0]) * 1.0
+        held = np.clip(t, self.times[0], self.times[-1])
+        return (spline(held) * inside, spline(held, 1) * inside * (t <= self.times[-1]),
+                spline(held, 2) * inside * (t <= self.times[-1]))  # fmt: skip
+
+    def learnt(self, run, land_time: float, target: float, seabed_heights) -> HoldCorrection:
+        """The correction with the settling of ``run`` after ``land_time`` (s) added.
+
+        ``seabed_heights`` (k,) are the run's end heights above the seabed (m), ``target`` the
+        lowering's height (m).
+        """
+        time = run.time
+        after = time >= land_time
+        error = seabed_heights[after] - target
+        s = np.clip((time[after] - land_time) / HOLD_FADE, 0.0, 1.0)
+        fade = s**3 * (10 - 15 * s + 6 * s**2)
+        values = self.line(time[after])[0] + fade * (error - error[0])
+        return HoldCorrection(time[after], values)
+
+
 def _heaves(scene) -> bool:
     heave = scene.top.heave
     moving = heave is not None and (bool(heave.amplitude) or heave.sea_state is not None)
     return moving and not scene.top.heave_compensated
 
 
-def _landing_angle(scene, descent: ReferenceDescent, feedforward: bool):
-    return approach_feedforward(scene, descent) if feedforward else descent.angle
+def _landing_angle(scene, descent: ReferenceDescent, feedforward: bool,
+                   hold: HoldCorrection | None = None):  # fmt: skip
+    angle = approach_feedforward(scene, descent) if feedforward else descent.angle
+    if hold is None or not hold.values.any():
+        return angle
+    radius = scene.winch.drum_radius
+
+    def corrected(t, left=None):
+        phi, rate, acceleration = angle(t)
+        line, line_rate, line_acceleration = hold.line(t)
+        return (
+            phi + line / radius,
+            rate + line_rate / radius,
+            acceleration + line_acceleration / radius,
+        )
+
+    return corrected
 
 
 def plan_landing(scene, quiet: bool = True) -> LandingPlan:
@@ -142,23 +214,32 @@ def plan_landing(scene, quiet: bool = True) -> LandingPlan:
         Before any simulation: no descent within the winch's limits reaches the landing.
     """
     started = time.perf_counter()
+    lowering = scene.lowering
     descent = reference_descent(scene)
     feedforward = _heaves(scene)
-    tolerance = CORRECTION_SHARE * scene.lowering.height_tolerance
+    hold = HoldCorrection.none(lowering.land_time)
     errors: list[float] = []
     run = report = None
     for _ in range(CORRECTIONS + 1):
-        angle = _landing_angle(scene, descent, feedforward)
+        angle = _landing_angle(scene, descent, feedforward, hold)
         try:
             run = simulate(scene, winch=angle, quiet=quiet)
         except SimulationError as error:
             return LandingPlan(scene, descent, feedforward, None, None, tuple(errors),
-                               time.perf_counter() - started, str(error))  # fmt: skip
+                               time.perf_counter() - started, str(error), hold)  # fmt: skip
         report = check_landing(run, angle)
         errors.append(report.landing_error)
-        if abs(report.landing_error) <= tolerance:
+        landed = abs(report.landing_error) <= CORRECTION_SHARE * lowering.height_tolerance
+        if landed and report.hold_deviation <= HOLD_SHARE * lowering.hold_band:
             break
         # Too high by the error: pay out as much more (the end falls by what is paid out).
         descent = replace(descent, landing_line=descent.landing_line + report.landing_error)
+        hold = hold.learnt(run, lowering.land_time, lowering.height, _heights(run, scene))
     return LandingPlan(scene, descent, feedforward, run, report, tuple(errors),
-                       time.perf_counter() - started)  # fmt: skip
+                       time.perf_counter() - started, hold=hold)  # fmt: skip
+
+
+def _heights(run, scene) -> np.ndarray:
+    """The end's height above the seabed over a run (k,), m."""
+    end = run.end
+    return clearance(scene.seabed, end, clearance_reference(scene.seabed, end[0]))

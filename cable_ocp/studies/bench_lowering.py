@@ -64,8 +64,12 @@ class LoweringRanges:
     line_speed : (float, float), m/s
         The winch's top line speed: 1.0-2.0 m/s.
     line_acceleration : (float, float), m/s^2
-        1.0-2.5 m/s^2: an active heave-compensating winch's (paying out the heave of
-        H_s = 2.5 m at T_p = 7 s asks about 2 m/s^2 at its peaks).
+        1.0-2.5 m/s^2.
+    heave_margin : (float, float)
+        In a sea state the winch is one sized for it, as an installation is planned: its line
+        speed and acceleration at least this many times the peaks of the vessel's heave over
+        the run (4 standard deviations of its speed and acceleration), beside what the descent
+        asks (the drawn line speed and acceleration).
     height : (float, float), m
         The landing's target height above the seabed.
     """
@@ -84,6 +88,7 @@ class LoweringRanges:
     line_speed: tuple[float, float] = (1.0, 2.0)
     line_acceleration: tuple[float, float] = (1.0, 2.5)
     height: tuple[float, float] = (3.0, 10.0)
+    heave_margin: tuple[float, float] = (1.1, 1.5)
 
 
 def rope_diameter(load: float, depth: float, density: float) -> float:
@@ -152,7 +157,22 @@ def lowering_case(rng: np.random.Generator, ranges: LoweringRanges = LoweringRan
             "seed": int(rng.integers(1000)),
         }
         case["top.heave"] = {"sea_state": sea}
+        speed_peak, acceleration_peak = heave_peaks(sea, case["numerics.duration"])
+        margin = uniform(ranges.heave_margin, 2)
+        case["winch.rate_max"] = round(max(speed, margin * speed_peak) / radius, 4)
+        case["winch.acceleration_max"] = round(
+            max(acceleration, margin * acceleration_peak) / radius, 4
+        )
     return case
+
+
+def heave_peaks(sea: dict, duration: float) -> tuple[float, float]:
+    """4 standard deviations of the heave's speed (m/s) and acceleration (m/s^2) over a run."""
+    from cable_ocp.drive.sea_state import sea_state_motion
+    from cable_ocp.scene.schema import SeaState
+
+    _, velocity, acceleration = sea_state_motion(SeaState(**sea))(np.arange(0.0, duration, 0.25))
+    return 4 * float(np.std(velocity[2])), 4 * float(np.std(acceleration[2]))
 
 
 def lowering_cases(count: int, seed: int, ranges: LoweringRanges = LoweringRanges()) -> list:
