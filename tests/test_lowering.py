@@ -360,3 +360,28 @@ def test_the_command_line_lands_holds_and_writes_its_figures(tmp_path, capsys):
     code = cli.main(["lower", str(MODELS / "paper_flat.toml"), "--out", str(tmp_path / "x")])
     assert code == 2 and "lower needs a scene with [lowering]" in capsys.readouterr().err
     assert not (tmp_path / "x").exists()
+
+
+def test_the_hold_correction_is_c2_zero_before_the_landing_and_learns_the_settling():
+    from types import SimpleNamespace
+
+    from cable_ocp.lowering.plan import HOLD_FADE, HoldCorrection
+
+    land, target = 100.0, 5.0
+    time = np.arange(0.0, 160.0 + 1e-9, 0.5)
+    settling = 0.3 * (1 - np.exp(-np.maximum(time - land, 0.0) / 20.0))  # the end rises 0.3 m
+    run = SimpleNamespace(time=time)
+    learnt = HoldCorrection.none(land).learnt(run, target, target + 0.01 + settling)
+    t = np.linspace(90.0, 159.0, 69_001)
+    line, rate, acceleration = learnt.line(t)
+    dt = t[1] - t[0]
+    assert np.all(line[t < land] == 0.0)
+    assert np.abs(np.gradient(line, dt) - rate).max() < 1e-5
+    assert np.abs(np.gradient(rate, dt) - acceleration).max() < 1e-3
+    # Past the fade it pays out what the run rose after its landing (the landing's own 1 cm is
+    # the landing line's to correct, not the hold's).
+    late = time > land + HOLD_FADE
+    assert np.abs(learnt.line(time[late])[0] - settling[late]).max() < 1e-9
+    # Learning again adds the next run's settling to it.
+    again = learnt.learnt(run, target, target + settling / 10)
+    assert np.abs(again.line(time[late])[0] - 1.1 * settling[late]).max() < 1e-9

@@ -124,47 +124,57 @@ def approach_feedforward(scene, descent: ReferenceDescent):
 class HoldCorrection:
     """Line paid out on top of the descent after the landing (m), learnt from full-model runs.
 
-    ``c(t)`` through ``values`` at ``times`` (s, from the landing on) by a C2 cubic spline,
-    0 before the first time; :meth:`learnt` adds ``w(t) (e(t) - e(T))``, the run's settling
-    after the landing (``e`` its height above the target, ``w`` a smoothstep over
-    :data:`HOLD_FADE` s), so that the next run pays it out: the end falls by what is paid out.
+    ``c(t) = w(t) g(t)``: ``g`` the runs' settling after the landing (``e(t) - e(T)``, ``e``
+    the end's height above the target; a C2 cubic spline through ``values`` at ``times``, held
+    after the last), ``w`` the quintic smoothstep over :data:`HOLD_FADE` s from ``land_time``,
+    whose value, slope and curvature vanish there, so that ``c`` is C2 and zero before the
+    landing. :meth:`learnt` adds a run's settling to ``g``: the next run pays it out, as the end
+    falls by what is paid out.
     """
 
+    land_time: float
     times: np.ndarray
     values: np.ndarray
 
     @classmethod
     def none(cls, land_time: float) -> HoldCorrection:
         """No correction."""
-        return cls(np.array([land_time, land_time + 1.0]), np.zeros(2))
+        return cls(land_time, np.array([land_time, land_time + 1.0]), np.zeros(2))
+
+    def _settling(self, t: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        from scipy.interpolate import CubicSpline
+
+        spline = CubicSpline(self.times, self.values, bc_type="natural")
+        inside = (t <= self.times[-1]) * 1.0
+        held = np.clip(t, self.times[0], self.times[-1])
+        return spline(held), spline(held, 1) * inside, spline(held, 2) * inside
 
     def line(self, t) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """The correction (m) with its rate (m/s) and acceleration (m/s^2) at ``t`` (s)."""
-        from scipy.interpolate import CubicSpline
-
         t = np.atleast_1d(np.asarray(t, dtype=float))
         if not self.values.any():
             zeros = np.zeros(t.shape)
             return zeros, zeros.copy(), zeros.copy()
-        spline = CubicSpline(self.times, self.values, bc_type="natural")
-        inside = (t >= self.times[0]) * 1.0
-        held = np.clip(t, self.times[0], self.times[-1])
-        return (spline(held) * inside, spline(held, 1) * inside * (t <= self.times[-1]),
-                spline(held, 2) * inside * (t <= self.times[-1]))  # fmt: skip
+        g, dg, ddg = self._settling(t)
+        s = np.clip((t - self.land_time) / HOLD_FADE, 0.0, 1.0)
+        w = s**3 * (10 - 15 * s + 6 * s**2)
+        dw = 30 * s**2 * (1 - s) ** 2 / HOLD_FADE
+        ddw = 60 * s * (1 - s) * (1 - 2 * s) / HOLD_FADE**2
+        return w * g, dw * g + w * dg, ddw * g + 2 * dw * dg + w * ddg
 
-    def learnt(self, run, land_time: float, target: float, seabed_heights) -> HoldCorrection:
-        """The correction with the settling of ``run`` after ``land_time`` (s) added.
+    def learnt(self, run, target: float, seabed_heights: np.ndarray) -> HoldCorrection:
+        """The correction with the settling of ``run`` after the landing added.
 
         ``seabed_heights`` (k,) are the run's end heights above the seabed (m), ``target`` the
         lowering's height (m).
         """
-        time = run.time
-        after = time >= land_time
+        after = run.time >= self.land_time
+        times = run.time[after]
         error = seabed_heights[after] - target
-        s = np.clip((time[after] - land_time) / HOLD_FADE, 0.0, 1.0)
-        fade = s**3 * (10 - 15 * s + 6 * s**2)
-        values = self.line(time[after])[0] + fade * (error - error[0])
-        return HoldCorrection(time[after], values)
+        settling = error - error[0]
+        if self.values.any():
+            settling = settling + self._settling(times)[0]
+        return HoldCorrection(self.land_time, times, settling)
 
 
 def _heaves(scene) -> bool:
@@ -234,7 +244,7 @@ def plan_landing(scene, quiet: bool = True) -> LandingPlan:
             break
         # Too high by the error: pay out as much more (the end falls by what is paid out).
         descent = replace(descent, landing_line=descent.landing_line + report.landing_error)
-        hold = hold.learnt(run, lowering.land_time, lowering.height, _heights(run, scene))
+        hold = hold.learnt(run, lowering.height, _heights(run, scene))
     return LandingPlan(scene, descent, feedforward, run, report, tuple(errors),
                        time.perf_counter() - started, hold=hold)  # fmt: skip
 
