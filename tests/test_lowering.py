@@ -385,3 +385,16 @@ def test_the_hold_correction_is_c2_zero_before_the_landing_and_learns_the_settli
     # Learning again adds the next run's settling to it.
     again = learnt.learnt(run, target, target + settling / 10)
     assert np.abs(again.line(time[late])[0] - 1.1 * settling[late]).max() < 1e-9
+
+
+def test_the_readmes_lowering_table_loads(tmp_path):
+    import re
+
+    readme = (MODELS.parent / "README.md").read_text(encoding="utf-8")
+    example = next(b for b in re.findall(r"```toml\n(.*?)```", readme, re.S) if "[lowering]" in b)
+    path = tmp_path / "lowering.toml"
+    path.write_text("[model]\n[top]\n[numerics]\nduration = 960.0\n" + example, encoding="utf-8")
+    lowering = co.load_scene(path).lowering
+    assert (lowering.land_time, lowering.height, lowering.tension_max) == (900.0, 5.0, 250000.0)
+    deploy = co.load_scene(MODELS / "deploy.toml").lowering
+    assert lowering == deploy  # the README shows the bundled scene's table
