@@ -1,7 +1,8 @@
 """cable_ocp: dynamics and optimal winch control of a cable-suspended load.
 
 The front door: load a scene, build its model, simulate it, optimise its winch
-(open loop or closed loop) and sweep scenes on Dask (:mod:`cable_ocp.sweep`). Conventions and
+(open loop or closed loop), land a load on the seabed and hold it there (:mod:`cable_ocp.lowering`),
+and sweep scenes on Dask (:mod:`cable_ocp.sweep`). Conventions and
 errata: ``cable_ocp/CONVENTIONS.md``.
 
 The names below are imported on first use (PEP 562): ``import cable_ocp``, which every
@@ -27,6 +28,9 @@ if TYPE_CHECKING:  # what __getattr__ imports, for type checkers and the import 
     from cable_ocp.control.settings import GridSettings, ModelSettings, TranscriptionSettings
     from cable_ocp.control.solvers import SOLVERS
     from cable_ocp.drive.drive import Drive
+    from cable_ocp.lowering.checks import check_landing
+    from cable_ocp.lowering.hold import hold
+    from cable_ocp.lowering.plan import plan_landing
     from cable_ocp.model.cable import INPUT_NAMES, CableModel
     from cable_ocp.scene.schema import Scene, load_scene
     from cable_ocp.simulation.integrate import SimulationError, integrate, reference_solution
@@ -58,6 +62,9 @@ _SOURCES = {
     "SimulationError": "cable_ocp.simulation.integrate",
     "Trajectory": "cable_ocp.simulation.trajectory",
     "catenary_check": "cable_ocp.studies.validation",
+    "check_landing": "cable_ocp.lowering.checks",
+    "hold": "cable_ocp.lowering.hold",
+    "plan_landing": "cable_ocp.lowering.plan",
     "catenary_shape": "cable_ocp.studies.catenary",
     "equilibrium": "cable_ocp.simulation.statics",
     "integrate": "cable_ocp.simulation.integrate",
@@ -91,12 +98,15 @@ __all__ = [
     "Trajectory",
     "catenary_check",
     "catenary_shape",
+    "check_landing",
     "equilibrium",
+    "hold",
     "integrate",
     "load_result",
     "load_scene",
     "mpc",
     "optimize",
+    "plan_landing",
     "plots",
     "reference_solution",
     "simulate",
