@@ -398,3 +398,17 @@ def test_the_readmes_lowering_table_loads(tmp_path):
     assert (lowering.land_time, lowering.height, lowering.tension_max) == (900.0, 5.0, 250000.0)
     deploy = co.load_scene(MODELS / "deploy.toml").lowering
     assert lowering == deploy  # the README shows the bundled scene's table
+
+
+def test_the_checks_take_a_run_of_fixed_n_too():
+    # A scene without [winch.line]: one Trajectory, its own model's bond forces.
+    scene = co.load_scene(MODELS / "hanging.toml", {
+        "numerics.duration": 10.0, "seabed.clearance": 5.0,
+        "lowering": {"land_time": 5.0, "height": 5.0, "tension_min": 1.0},
+    })  # fmt: skip
+    run = co.simulate(scene)
+    report = check_landing(run)
+    assert report.passed, str(report)
+    assert abs(report.landing_error) < 1e-9 and abs(report.landing_speed) < 1e-9
+    assert report.least_tension == pytest.approx(run.top_tension.min(), rel=1e-9)
+    assert report.least_bond_tension > 0
