@@ -52,7 +52,6 @@ def run_lower_command(args: argparse.Namespace) -> int:
     from cable_ocp import plots
     from cable_ocp.cli import parse_overrides
     from cable_ocp.cli.files import results_folder
-    from cable_ocp.lowering.descent import reference_descent
     from cable_ocp.lowering.hold import hold
     from cable_ocp.lowering.plan import plan_landing
     from cable_ocp.plots import landing, survey
@@ -66,7 +65,6 @@ def run_lower_command(args: argparse.Namespace) -> int:
             f"{args.scene}: lower needs a scene with [lowering] and [winch.line] (see "
             "models/deploy.toml)"
         )
-    reference_descent(scene)  # a landing that no descent within the winch's limits reaches
     plan = plan_landing(scene, quiet=args.quiet)
     held = None if args.no_hold else hold(scene, quiet=args.quiet)
     summary = {"scene": scene.name, "landing_success": plan.success, "landing": plan.status,

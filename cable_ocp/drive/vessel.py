@@ -31,6 +31,12 @@ def smoothstep(tau: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     return value, slope, integral
 
 
+def smoothstep_curvature(tau: np.ndarray) -> np.ndarray:
+    """Second derivative of :func:`smoothstep` (per unit tau squared): 0 outside [0, 1]."""
+    s = np.clip(tau, 0.0, 1.0)
+    return 60 * s * (1 - s) * (1 - 2 * s)
+
+
 def fixed_top(start) -> TopMotionFunction:
     """Top held at ``start`` (m)."""
     start = np.asarray(start, dtype=float).reshape(3, 1)

@@ -21,7 +21,7 @@ from cable_ocp.drive.bounds import BOUND_TOLERANCE
 from cable_ocp.model import structured
 from cable_ocp.model.cable import CableModel, spec_from_scene
 from cable_ocp.model.layout import INPUTS
-from cable_ocp.model.line_models import LineModels
+from cable_ocp.model.line_models import line_models
 from cable_ocp.simulation.line_run import pay_out_drive
 from cable_ocp.simulation.line_trajectory import LineTrajectory
 from cable_ocp.simulation.run import winch_function
@@ -201,24 +201,14 @@ def _least(name: str, values: np.ndarray, limit: float, unit: str, time: np.ndar
                  f"at t = {time[k]:g} s")  # fmt: skip
 
 
-def _segments(run: Trajectory | LineTrajectory) -> list[Trajectory]:
-    return run.segments if isinstance(run, LineTrajectory) else [run]
-
-
-def _whole(run: Trajectory | LineTrajectory, parts: list[np.ndarray]) -> np.ndarray:
-    """Segment arrays joined as :class:`LineTrajectory` joins them (a change's sample once)."""
-    if not isinstance(run, LineTrajectory):
-        return parts[0]
-    return np.concatenate([p[:-1] for p in parts[:-1]] + [parts[-1]])
+def _over_run(run: Trajectory | LineTrajectory, values) -> np.ndarray:
+    """``values(segment)`` over the whole run, joined as :meth:`LineTrajectory.joined` joins."""
+    return run.joined(values) if isinstance(run, LineTrajectory) else values(run)
 
 
 def _end_velocity(run: Trajectory | LineTrajectory) -> np.ndarray:
     """The end's velocity (k, 3), m/s: the rates of element 0's x, y, z in the states."""
-    parts = []
-    for segment in _segments(run):
-        positions = segment.states.shape[1] // 2
-        parts.append(segment.states[:, positions : positions + 3])
-    return _whole(run, parts)
+    return _over_run(run, lambda s: s.states[:, s.states.shape[1] // 2 :][:, :3])
 
 
 def _bond_tensions(run: Trajectory | LineTrajectory) -> tuple[np.ndarray, np.ndarray]:
@@ -227,27 +217,28 @@ def _bond_tensions(run: Trajectory | LineTrajectory) -> tuple[np.ndarray, np.nda
     From the model's bond forces along the element axes at every saved state and input
     (positive pulls, negative pushes: ``model.outputs`` and the run keep only the norms).
     """
-    scene, segments = run.scene, _segments(run)
+    scene = run.scene
     if isinstance(run, LineTrajectory):
-        model_of = LineModels(spec_from_scene(scene), run.element_length, compiled=True).model
+        model_of = line_models(spec_from_scene(scene), run.element_length, compiled=True).model
+        counts = run.element_count
     else:
         model_of = {run.tensions.shape[1] - 1: CableModel.from_scene(scene)}.__getitem__
-    width = max(s.tensions.shape[1] for s in segments)
-    parts, tops = [], []
-    for segment in segments:
-        n = segment.tensions.shape[1] - 1
-        model = model_of(n)
-        count = segment.time.size
-        joints, forces = _joints_and_forces(model, segment.states.T, segment.inputs.T)
+        counts = np.full(run.time.size, run.tensions.shape[1] - 1)
+    width = int(counts.max()) + 1
+
+    def signed(segment: Trajectory) -> np.ndarray:
+        n, count = segment.tensions.shape[1] - 1, segment.time.size
+        joints, forces = _joints_and_forces(model_of(n), segment.states.T, segment.inputs.T)
         joints = np.array(joints).reshape(3, n + 2, count, order="F")
         forces = np.array(forces).reshape(3, n + 1, count, order="F")
         axes = np.diff(joints, axis=1)
         axes /= np.linalg.norm(axes, axis=0)
-        signed = np.full((count, width), np.inf)
-        signed[:, : n + 1] = -np.sum(forces * axes, axis=0).T  # as statics.bond_tensions
-        parts.append(signed)
-        tops.append(signed[:, n])
-    return _whole(run, parts), _whole(run, tops)
+        padded = np.full((count, width), np.inf)
+        padded[:, : n + 1] = -np.sum(forces * axes, axis=0).T  # as statics.bond_tensions
+        return padded
+
+    tensions = _over_run(run, signed)
+    return tensions, tensions[np.arange(counts.size), counts]
 
 
 def _joints_and_forces(model: CableModel, states: np.ndarray, inputs: np.ndarray):
@@ -264,26 +255,41 @@ def _joints_and_forces(model: CableModel, states: np.ndarray, inputs: np.ndarray
 
 def _drum_checks(scene, winch, time: np.ndarray) -> list[Check]:
     """The drum's peak rate and acceleration (heave compensation included) against its limits."""
-    limits = {"drum rate": scene.winch.rate_max, "drum acceleration": scene.winch.acceleration_max}
-    if all(limit is None for limit in limits.values()):
+    if scene.winch.rate_max is None and scene.winch.acceleration_max is None:
         return []
     dense = np.linspace(time[0], time[-1], (time.size - 1) * DRUM_SAMPLES + 1)
-    drive = pay_out_drive(scene, winch_function(scene, winch))
-    u = drive.inputs(dense)
-    r = scene.winch.drum_radius
-    rates = {
-        "drum rate": (u[INPUTS.top_length_rate] / r, "rad/s"),
-        "drum acceleration": (u[INPUTS.top_length_acceleration] / r, "rad/s^2"),
-    }
+    u = pay_out_drive(scene, winch_function(scene, winch)).inputs(dense)
+    return drum_checks(scene.winch, dense, u[INPUTS.top_length_rate],
+                       u[INPUTS.top_length_acceleration])  # fmt: skip
+
+
+def drum_checks(winch, time: np.ndarray, line_rate: np.ndarray, line_acceleration: np.ndarray):
+    """The drum's peak rate and acceleration against the winch's limits, those it has.
+
+    Parameters
+    ----------
+    winch : Winch
+        The scene's ``[winch]`` (its radius and its limits, rad/s and rad/s^2).
+    time : array (k,), s
+    line_rate, line_acceleration : arrays (k,), m/s, m/s^2
+        The top element's (the line's pay-out), heave compensation included.
+
+    Returns
+    -------
+    list of Check
+        ``drum rate`` and ``drum acceleration``, each where the winch sets its limit.
+    """
     checks = []
-    for name, limit in limits.items():
+    for name, line, limit, unit in (
+        ("drum rate", line_rate, winch.rate_max, "rad/s"),
+        ("drum acceleration", line_acceleration, winch.acceleration_max, "rad/s^2"),
+    ):
         if limit is None:
             continue
-        values, unit = rates[name]
-        k = int(np.argmax(np.abs(values)))
-        peak = float(abs(values[k]))
+        values = np.abs(line) / winch.drum_radius
+        k = int(np.argmax(values))
         checks.append(
-            Check(name, peak, limit, unit, bool(peak <= limit * (1 + BOUND_TOLERANCE)),
-                  f"at t = {dense[k]:g} s")
+            Check(name, float(values[k]), limit, unit,
+                  bool(values[k] <= limit * (1 + BOUND_TOLERANCE)), f"at t = {time[k]:g} s")
         )  # fmt: skip
     return checks

@@ -17,8 +17,9 @@ from dataclasses import dataclass
 import numpy as np
 
 from cable_ocp.drive.bounds import BOUND_TOLERANCE
+from cable_ocp.drive.vessel import smoothstep
 from cable_ocp.model.cable import spec_from_scene
-from cable_ocp.model.line_models import LineModels
+from cable_ocp.model.line_models import line_models
 from cable_ocp.simulation.line_run import SegmentDrive, pay_out_drive
 from cable_ocp.simulation.seabed import clearance, clearance_reference
 from cable_ocp.simulation.statics import starting_state
@@ -70,15 +71,16 @@ class ReferenceDescent:
         """Line out (m) with its rate (m/s) and acceleration (m/s^2) at times ``t`` (s)."""
         t = np.atleast_1d(np.asarray(t, dtype=float))
         T, ramp, v = self.land_time, self.ramp, self.cruise_rate
-        rise = np.clip(t / ramp, 0.0, 1.0)
-        fall = np.clip((T - t) / ramp, 0.0, 1.0)
+        rise, rise_slope, rise_area = smoothstep(np.clip(t / ramp, 0.0, 1.0))
+        fall, fall_slope, fall_area = smoothstep(np.clip((T - t) / ramp, 0.0, 1.0))
         # The rate is v times the product of a rising and a falling ramp (each 1 where the
-        # other works, since t_r <= T/2); the line out is its integral, in closed form.
-        rate = v * _smoothstep(rise) * _smoothstep(fall)
-        slope = v * (_smoothstep_slope(rise) / ramp * (t < ramp) * (t > 0))
-        slope -= v * (_smoothstep_slope(fall) / ramp * (t > T - ramp) * (t < T))
-        paid = v * (ramp * _ramp_area(rise) + np.clip(t - ramp, 0.0, T - 2 * ramp))
-        paid += v * ramp * (_ramp_area(1.0) - _ramp_area(fall)) * (t > T - ramp)
+        # other works, since t_r <= T/2); the line out is its integral, in closed form (the
+        # smoothstep's area over a whole ramp is 1/2).
+        rate = v * rise * fall
+        slope = v * (rise_slope / ramp * (t < ramp) * (t > 0))
+        slope -= v * (fall_slope / ramp * (t > T - ramp) * (t < T))
+        paid = v * (ramp * rise_area + np.clip(t - ramp, 0.0, T - 2 * ramp))
+        paid += v * ramp * (0.5 - fall_area) * (t > T - ramp)
         return self.start_line + paid, rate, slope
 
     def angle(self, t, left=None) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
@@ -92,19 +94,6 @@ class ReferenceDescent:
         return (line - self.start_line) / r, rate / r, acceleration / r
 
 
-def _smoothstep(s):
-    return s**3 * (10 - 15 * s + 6 * s**2)
-
-
-def _smoothstep_slope(s):
-    return 30 * s**2 * (1 - s) ** 2
-
-
-def _ramp_area(s):
-    """Integral of the smoothstep from 0 to ``s``: ``5/2 s^4 - 3 s^5 + s^6``."""
-    return s**4 * (2.5 - 3 * s + s**2)
-
-
 def landing_end(scene, line_out: float, time: float | None = None) -> np.ndarray:
     """The end's hanging position (3,) with ``line_out`` (m) out, m.
 
@@ -114,7 +103,7 @@ def landing_end(scene, line_out: float, time: float | None = None) -> np.ndarray
     time = scene.lowering.land_time if time is None else time
     mesh = scene.winch.line.mesh
     n = mesh.starting_elements(line_out)
-    models = LineModels(spec_from_scene(scene), mesh.element_length, compiled=True)
+    models = line_models(spec_from_scene(scene), mesh.element_length, compiled=True)
     paid = (line_out - scene.cable.length) / scene.winch.drum_radius
 
     def held(t, left=None):

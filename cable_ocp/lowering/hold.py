@@ -22,11 +22,15 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from cable_ocp.drive.bounds import BOUND_TOLERANCE
+from cable_ocp.control.closed_loop.loop import mpc
+from cable_ocp.drive.drive import Drive
+from cable_ocp.lowering.checks import Check, drum_checks
 from cable_ocp.lowering.descent import landing_line, seabed_reference
+from cable_ocp.model.cable import CableModel
 from cable_ocp.model.layout import INPUTS
 from cable_ocp.scene.schema import Scene, scene_from_dict
 from cable_ocp.simulation.seabed import clearance
+from cable_ocp.simulation.statics import starting_state
 
 HOLD_RANGE = 10.0  # m of line the drum may haul in or pay out about the landing line
 LINE_TOLERANCE = 1e-3  # m: the hold's start is trimmed to the target height within this
@@ -55,6 +59,8 @@ class HoldResult:
         The standard deviations of the top's and the end's heights over the hold.
     peak_rate, peak_acceleration : float, rad/s, rad/s^2
         The drum's, from the plant's inputs at its output times (heave payout included).
+    drum : tuple of Check
+        Those peaks against the winch's limits (:func:`~.checks.drum_checks`).
     """
 
     mpc: object
@@ -66,19 +72,12 @@ class HoldResult:
     load_std: float
     peak_rate: float
     peak_acceleration: float
+    drum: tuple[Check, ...]
 
     @property
     def drum_excess(self) -> str:
         """The winch limits the drum went beyond, as text ('' when it kept within them)."""
-        winch = self.scene.winch
-        excess = []
-        for name, peak, limit, unit in (
-            ("rate", self.peak_rate, winch.rate_max, "rad/s"),
-            ("acceleration", self.peak_acceleration, winch.acceleration_max, "rad/s^2"),
-        ):
-            if limit is not None and peak > limit * (1 + BOUND_TOLERANCE):
-                excess.append(f"drum {name} {peak:.3g} {unit} over winch.{name}_max = {limit:g}")
-        return "; ".join(excess)
+        return "; ".join(str(check) for check in self.drum if not check.passed)
 
     @property
     def success(self) -> bool:
@@ -167,10 +166,6 @@ def _fixed_line(scene, length: float, duration: float) -> Scene:
 
 def _start_height(held: Scene, scene, reference: float) -> float:
     """The held line's hanging end above the (lowering scene's) seabed, m."""
-    from cable_ocp.drive.drive import Drive
-    from cable_ocp.model.cable import CableModel
-    from cable_ocp.simulation.statics import starting_state
-
     model = CableModel.from_scene(held)
     end = starting_state(model, Drive.from_scene(held), compiled=True)[:3]
     return float(clearance(scene.seabed, end, reference))
@@ -198,15 +193,14 @@ def hold(
     HoldResult
         Never raises for a closed loop that fails: ``success`` and ``status`` say so.
     """
-    from cable_ocp.control.closed_loop.loop import mpc
-
     held = hold_scene(scene, line_out, duration)
     result = mpc(held, quiet=quiet, **settings)
     run = result.trajectory
     deviation = float(np.max(np.abs(run.clearance_error)))
     heave_std, load_std = float(np.std(run.top[:, 2])), float(np.std(run.end[:, 2]))
     ratio = 100.0 * (1.0 - load_std / heave_std) if heave_std > CALM else float("nan")
-    drum = np.abs(run.inputs[:, [INPUTS.top_length_rate, INPUTS.top_length_acceleration]])
-    rate, acceleration = drum.max(axis=0) / held.winch.drum_radius
+    line = run.inputs[:, INPUTS.top_length_rate], run.inputs[:, INPUTS.top_length_acceleration]
+    rate, acceleration = (float(np.abs(v).max()) / held.winch.drum_radius for v in line)
+    drum = tuple(drum_checks(held.winch, run.time, *line))
     return HoldResult(result, held, deviation, scene.lowering.hold_band, ratio, heave_std,
-                      load_std, float(rate), float(acceleration))  # fmt: skip
+                      load_std, rate, acceleration, drum)  # fmt: skip

@@ -24,7 +24,7 @@ from dataclasses import dataclass, replace
 
 import numpy as np
 
-from cable_ocp.drive.vessel import top_motion
+from cable_ocp.drive.vessel import smoothstep, smoothstep_curvature, top_motion
 from cable_ocp.lowering.checks import LandingReport, check_landing
 from cable_ocp.lowering.descent import ReferenceDescent, reference_descent
 from cable_ocp.simulation.integrate import SimulationError
@@ -93,6 +93,18 @@ class LandingPlan:
         return _landing_angle(self.scene, self.descent, self.heave_feedforward, self.hold)(t)
 
 
+def _faded(t: np.ndarray, start: float, length: float, value, rate, acceleration):
+    """``w(t) f(t)`` with its rate and acceleration, ``f`` given with its own (m, m/s, m/s^2).
+
+    ``w`` is the smoothstep over ``[start, start + length]`` (s): 0 before, 1 after, and its
+    value, slope and curvature are 0 at ``start``, so the product is C2 wherever ``f`` is.
+    """
+    tau = (t - start) / length
+    w, slope, _ = smoothstep(tau)
+    dw, ddw = slope / length, smoothstep_curvature(tau) / length**2
+    return w * value, dw * value + w * rate, ddw * value + 2 * dw * rate + w * acceleration
+
+
 def approach_feedforward(scene, descent: ReferenceDescent):
     """The descent's winch angle with the heave paid out on its approach (eq. 38, faded in).
 
@@ -101,23 +113,13 @@ def approach_feedforward(scene, descent: ReferenceDescent):
     """
     top = top_motion(scene.top)
     start = top(np.zeros(1))[0][2, 0]
-    radius, T, ramp = scene.winch.drum_radius, descent.land_time, descent.ramp
+    begins, ramp = descent.land_time - descent.ramp, descent.ramp
 
-    def angle(t, left=None):
-        t = np.atleast_1d(np.asarray(t, dtype=float))
-        phi, rate, acceleration = descent.angle(t)
-        s = np.clip((t - (T - ramp)) / ramp, 0.0, 1.0)
-        w = s**3 * (10 - 15 * s + 6 * s**2)
-        dw = 30 * s**2 * (1 - s) ** 2 / ramp
-        ddw = 60 * s * (1 - s) * (1 - 2 * s) / ramp**2
-        position, velocity, accel = top(t)
-        z, vz, az = position[2] - start, velocity[2], accel[2]
-        phi = phi + w * z / radius
-        rate = rate + (w * vz + dw * z) / radius
-        acceleration = acceleration + (w * az + 2 * dw * vz + ddw * z) / radius
-        return phi, rate, acceleration
+    def heave(t):
+        position, velocity, acceleration = top(t)
+        return _faded(t, begins, ramp, position[2] - start, velocity[2], acceleration[2])
 
-    return angle
+    return _paying_out(descent.angle, heave, scene.winch.drum_radius)
 
 
 @dataclass(frozen=True)
@@ -155,12 +157,7 @@ class HoldCorrection:
         if not self.values.any():
             zeros = np.zeros(t.shape)
             return zeros, zeros.copy(), zeros.copy()
-        g, dg, ddg = self._settling(t)
-        s = np.clip((t - self.land_time) / HOLD_FADE, 0.0, 1.0)
-        w = s**3 * (10 - 15 * s + 6 * s**2)
-        dw = 30 * s**2 * (1 - s) ** 2 / HOLD_FADE
-        ddw = 60 * s * (1 - s) * (1 - 2 * s) / HOLD_FADE**2
-        return w * g, dw * g + w * dg, ddw * g + 2 * dw * dg + w * ddg
+        return _faded(t, self.land_time, HOLD_FADE, *self._settling(t))
 
     def learnt(self, run, target: float, seabed_heights: np.ndarray) -> HoldCorrection:
         """The correction with the settling of ``run`` after the landing added.
@@ -188,18 +185,17 @@ def _landing_angle(scene, descent: ReferenceDescent, feedforward: bool,
     angle = approach_feedforward(scene, descent) if feedforward else descent.angle
     if hold is None or not hold.values.any():
         return angle
-    radius = scene.winch.drum_radius
+    return _paying_out(angle, hold.line, scene.winch.drum_radius)
 
-    def corrected(t, left=None):
-        phi, rate, acceleration = angle(t)
-        line, line_rate, line_acceleration = hold.line(t)
-        return (
-            phi + line / radius,
-            rate + line_rate / radius,
-            acceleration + line_acceleration / radius,
-        )
 
-    return corrected
+def _paying_out(angle, line, radius: float):
+    """The winch angle ``angle`` with the drum paying ``line(t)`` more out (m, m/s, m/s^2)."""
+
+    def paid(t, left=None):
+        t = np.atleast_1d(np.asarray(t, dtype=float))
+        return tuple(a + m / radius for a, m in zip(angle(t), line(t), strict=True))
+
+    return paid
 
 
 def plan_landing(scene, quiet: bool = True) -> LandingPlan:

@@ -19,7 +19,7 @@ from __future__ import annotations
 import dataclasses
 from collections.abc import Callable
 from dataclasses import dataclass, field, replace
-from functools import partial
+from functools import lru_cache, partial
 
 import casadi as ca
 
@@ -43,6 +43,7 @@ KERNEL_FIELDS = (
 # Columns per call of the compiled loops: n columns are covered greedily by these (100 = 64 +
 # 2 x 16 + 4), so a loop over n costs a few calls from CasADi's virtual machine, not n.
 BLOCKS = (64, 16, 4, 1)
+LINE_MODELS_KEPT = 4  # lines whose models a process keeps (line_models)
 MAPPED = ("joint", "element", "bond", "accelerations")
 ACCUMULATED = ("forward", "backward")
 
@@ -221,3 +222,14 @@ class LineModels:
         report = self.report or CompileReport(False, 0.0, None)
         parametric.memo(("structured", "compiled"), lambda: (functions, report))
         return CableModel(spec, parametric=parametric)
+
+
+@lru_cache(maxsize=LINE_MODELS_KEPT)
+def line_models(template: ModelSpec, element_length: float, compiled: bool) -> LineModels:
+    """The :class:`LineModels` of a line, built once per process and shared by later calls.
+
+    A run, the statics of its landing line and the checks of the run all ask for the models of
+    the same line; each ``n``'s model costs 10-20 ms to build (1 s for the 100 counts of a
+    1000 m line), so they are kept. Models are immutable once built (their memos only add).
+    """
+    return LineModels(template, element_length, compiled)

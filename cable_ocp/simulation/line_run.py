@@ -24,7 +24,7 @@ from cable_ocp.drive.drive import Drive, stage_times
 from cable_ocp.drive.vessel import top_motion
 from cable_ocp.model.cable import spec_from_scene
 from cable_ocp.model.layout import INPUTS
-from cable_ocp.model.line_models import LineModels
+from cable_ocp.model.line_models import line_models
 from cable_ocp.model.line_state import merge, split
 from cable_ocp.simulation.budget import check_simulation_memory
 from cable_ocp.simulation.integrate import integrate, step_count
@@ -161,7 +161,7 @@ def simulate_line(scene, winch=None, quiet: bool = True, compiled: bool = True) 
     lines = scene.cable.length + drive.inputs(times)[INPUTS.top_length]
     counts = mesh.schedule(lines, mesh.starting_elements(scene.cable.length))
     check_simulation_memory(scene, int(counts.max()))  # as if every output had the most
-    models = LineModels(spec_from_scene(scene), mesh.element_length, compiled)
+    models = line_models(spec_from_scene(scene), mesh.element_length, compiled)
     changes = [0, *np.flatnonzero(np.diff(counts)) + 1, len(times) - 1]
     changes = sorted(set(changes))
     state, segments = None, []

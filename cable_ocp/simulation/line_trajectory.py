@@ -24,8 +24,8 @@ KIND = "LineTrajectory"
 
 
 def _joined(name: str, doc: str) -> property:
-    """A whole-run view of the segments' attribute ``name``, by :meth:`LineTrajectory._whole`."""
-    return property(lambda self: self._whole(lambda s: getattr(s, name)), doc=doc)
+    """A whole-run view of the segments' attribute ``name``, by :meth:`LineTrajectory.joined`."""
+    return property(lambda self: self.joined(lambda s: getattr(s, name)), doc=doc)
 
 
 @dataclass(frozen=True, eq=False)
@@ -47,8 +47,12 @@ class LineTrajectory:
     element_length: float
     bond_residual: float = float("nan")
 
-    def _whole(self, values) -> np.ndarray:
-        """One array over the whole run: each segment's first sample (after a change) kept."""
+    def joined(self, values) -> np.ndarray:
+        """``values(segment)`` (an array per segment, samples first) as one array over the run.
+
+        A change's instant ends one segment and starts the next: it is kept once, from the
+        segment after it (the state after the change).
+        """
         parts = [values(s) for s in self.segments]
         return np.concatenate([p[:-1] for p in parts[:-1]] + [parts[-1]])
 
@@ -57,7 +61,7 @@ class LineTrajectory:
     @property
     def element_count(self) -> np.ndarray:
         """``n`` at each output (k,): the model has ``n + 1`` elements."""
-        return self._whole(lambda s: np.full(s.time.size, s.tensions.shape[1] - 1))
+        return self.joined(lambda s: np.full(s.time.size, s.tensions.shape[1] - 1))
 
     top_length = _joined("top_length", "Length of the top element (k,), m.")
 
@@ -82,7 +86,7 @@ class LineTrajectory:
             out[:, :, : s.joints.shape[2]] = s.joints
             return out
 
-        return self._whole(padded)
+        return self.joined(padded)
 
     @property
     def scene_name(self) -> str:

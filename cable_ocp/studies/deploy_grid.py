@@ -13,14 +13,11 @@ Regenerate the file (bit for bit, by its seed)::
 
 from __future__ import annotations
 
-import argparse
-from pathlib import Path
-
 import numpy as np
 import xarray as xr
 from scipy.ndimage import gaussian_filter
 
-from cable_ocp.studies.survey_grid import grid_dataset
+from cable_ocp.studies.survey_grid import grid_dataset, write_grid
 
 SPACING = 10.0  # m
 X_RANGE = (-100.0, 400.0)  # m, down-current
@@ -60,12 +57,7 @@ def deploy_grid(seed: int = SEED) -> xr.Dataset:
 
 def main(argv: list[str] | None = None) -> int:
     """Write the grid to the netCDF file named on the command line."""
-    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("path", type=Path, help="netCDF file to write")
-    args = parser.parse_args(argv)
-    deploy_grid().to_netcdf(args.path)
-    print(f"wrote {args.path} ({args.path.stat().st_size / 1024:.0f} KiB)")
-    return 0
+    return write_grid(deploy_grid, __doc__.splitlines()[0], argv)
 
 
 if __name__ == "__main__":

@@ -14,6 +14,7 @@ Regenerate the file (bit for bit, by its seed)::
 from __future__ import annotations
 
 import argparse
+from collections.abc import Callable
 from pathlib import Path
 
 import numpy as np
@@ -100,14 +101,19 @@ def grid_dataset(
     )
 
 
-def main(argv: list[str] | None = None) -> int:
-    """Write the grid to the netCDF file named on the command line."""
-    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+def write_grid(build: Callable[[], xr.Dataset], description: str, argv: list[str] | None) -> int:
+    """A grid script's command line: write ``build()`` to the netCDF file named in ``argv``."""
+    parser = argparse.ArgumentParser(description=description)
     parser.add_argument("path", type=Path, help="netCDF file to write")
     args = parser.parse_args(argv)
-    survey_grid().to_netcdf(args.path)
+    build().to_netcdf(args.path)
     print(f"wrote {args.path} ({args.path.stat().st_size / 1024:.0f} KiB)")
     return 0
+
+
+def main(argv: list[str] | None = None) -> int:
+    """Write the grid to the netCDF file named on the command line."""
+    return write_grid(survey_grid, __doc__.splitlines()[0], argv)
 
 
 if __name__ == "__main__":
