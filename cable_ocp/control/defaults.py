@@ -104,8 +104,9 @@ def on_nodes(scene, intervals: int):
     """The scene with its step shortened so that ``intervals`` nodes fall on step ends.
 
     The full model's runs (the verification, the model correction) then take the largest
-    whole fraction of an interval up to ``numerics.step``, so that the Hermite acceleration
-    jumps only on step ends (inside a step it kicks the bonds).
+    whole fraction of an interval up to ``numerics.step`` whose step count
+    ``numerics.output_every`` divides, so that the Hermite acceleration jumps only on step ends
+    (inside a step it kicks the bonds).
 
     Returns
     -------
@@ -117,7 +118,12 @@ def on_nodes(scene, intervals: int):
     if step_count(numerics.duration, numerics.step) % intervals == 0:
         return scene, ""
     width = numerics.duration / intervals
-    step = width / math.ceil(width / numerics.step * (1 - 1e-12))
+    per_interval = math.ceil(width / numerics.step * (1 - 1e-12))
+    # The run's samples (numerics.output_every steps apart) must divide its steps too: a
+    # 79 s landing took 1584 steps, which 10 does not divide.
+    while (intervals * per_interval) % numerics.output_every:
+        per_interval += 1
+    step = width / per_interval
     note = (
         f"the full model's runs at h = {step:.6g} s instead of the scene's {numerics.step:g} s, "
         f"so that the {intervals} control nodes ({width:.4g} s apart) fall on step ends"

@@ -373,6 +373,7 @@ def solve_verified(
     verified: list[float] = []
     best_outcome, best, checked, failure = None, None, None, None
     values = problem.parameter_values()
+    landing_bias = values.bias  # a landing's reference (-e_ref), zero on other scenes
     parameters = problem.first_guess(compiled=settings.compiled)
     solver_name = solver.label
     solves = 1 + (refinements if problem.reduced else 0)
@@ -392,7 +393,7 @@ def solve_verified(
             if states is None:
                 states = problem.simulate(source.parameters, compiled=settings.compiled)
             parameters = source.parameters
-            values = replace(values, bias=full_error - problem.clearance(states))
+            values = replace(values, bias=landing_bias + full_error - problem.clearance(states))
         outcome = nlp.solve(values, parameters)
         outcomes.append(outcome)
         if not outcome.success:

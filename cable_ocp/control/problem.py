@@ -11,7 +11,7 @@ it into an NLP, Nelder-Mead (:mod:`cable_ocp.control.nelder_mead`) searches it d
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import numpy as np
 
@@ -23,6 +23,7 @@ from cable_ocp.drive.controls import HermiteIntervals, KnotSpline
 from cable_ocp.drive.drive import Drive
 from cable_ocp.model.cable import CableModel
 from cable_ocp.simulation.integrate import integrate, stage_inputs, step_count
+from cable_ocp.simulation.landing_reference import reference_error
 from cable_ocp.simulation.seabed import (
     bathymetry,
     clearance_error,
@@ -186,7 +187,10 @@ class WinchProblem:
         """The named parameters from the scene: its start, top motion and end force."""
         inputs = stage_inputs(self.drive, self.grid[:-1], self.step)
         reference = clearance_reference(self.scene.seabed, self.x0)
-        return ProblemParameters.from_stage_inputs(self.x0, inputs, reference)
+        values = ProblemParameters.from_stage_inputs(self.x0, inputs, reference)
+        start_error = float(clearance_error(self.scene.seabed, self.x0[None, :3])[0])
+        # A landing's error is the deviation from its reference (the bias carries -e_ref).
+        return replace(values, bias=-reference_error(self.scene, self.grid, start_error))
 
     @property
     def reduced(self) -> bool:
@@ -224,14 +228,16 @@ class WinchProblem:
 
         Off a bathymetry grid the seabed is held at the grid's edge, as in the transcriptions'
         symbolic error: the optimisation model's runs (the first guess, a trial) may leave the
-        grid; only the verified profile must stay on it.
+        grid; only the verified profile must stay on it. On a landing, the deviation from its
+        reference (:mod:`~cable_ocp.simulation.landing_reference`).
         """
         positions = np.array(states[:, :3], dtype=float)
         grid = bathymetry(self.scene.seabed)
         if grid is not None:
             positions[:, 0] = np.clip(positions[:, 0], grid.x[0], grid.x[-1])
             positions[:, 1] = np.clip(positions[:, 1], grid.y[0], grid.y[-1])
-        return clearance_error(self.scene.seabed, positions)
+        error = clearance_error(self.scene.seabed, positions)
+        return error - reference_error(self.scene, self.grid[: error.size], error[0])
 
     def omega(self, states: np.ndarray) -> float:
         """Omega (eq. 39, m) of states of the optimisation model on the grid."""

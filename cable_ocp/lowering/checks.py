@@ -120,7 +120,9 @@ def check_landing(run: Trajectory | LineTrajectory, winch=None, scene=None) -> L
         A run that reaches ``lowering.land_time``.
     winch : None, callable or result
         The winch profile that drove it, as :func:`cable_ocp.simulate` takes it: the drum's rate
-        and acceleration are checked on it between the run's samples.
+        and acceleration are checked on it between the run's samples. A closed loop's profile
+        is known only at its samples: pass ``"inputs"`` to check the run's own line rate and
+        acceleration there.
     scene : Scene, optional
         Whose ``[lowering]``, ``[winch]`` limits and minimum clearance the run is held to
         (default: the run's own scene). The model is always the run's own.
@@ -171,7 +173,12 @@ def check_landing(run: Trajectory | LineTrajectory, winch=None, scene=None) -> L
         Check("no slack bond", float(tensions[sample, bond]), 0.0, "N",
               bool(tensions[sample, bond] > 0.0), f"at t = {time[sample]:g} s, bond {bond + 1}")
     )  # fmt: skip
-    checks += _drum_checks(scene, winch, time)
+    if isinstance(winch, str) and winch == "inputs":
+        inputs = run.inputs
+        checks += drum_checks(scene.winch, time, inputs[:, INPUTS.top_length_rate],
+                              inputs[:, INPUTS.top_length_acceleration])  # fmt: skip
+    else:
+        checks += _drum_checks(scene, winch, time)
     if scene.seabed.minimum_clearance is not None:
         k = int(np.argmin(height))
         least = scene.seabed.minimum_clearance

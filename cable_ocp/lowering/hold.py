@@ -130,37 +130,60 @@ def hold_scene(scene, line_out: float | None = None, duration: float | None = No
             f"numerics.duration = {scene.numerics.duration!r} s leaves no hold after "
             f"lowering.land_time = {lowering.land_time!r} s: pass a hold duration"
         )
-    reference = seabed_reference(scene)
     length = landing_line(scene) if line_out is None else line_out
+    return trimmed_line(scene, lowering.height, length, duration, HOLD_RANGE)
+
+
+def trimmed_line(
+    scene, height: float, line_out: float, duration: float, pay_out: float,
+    lowering: dict | None = None,
+) -> Scene:  # fmt: skip
+    """A ``[winch.line]`` scene's line as a fixed-``n`` scene whose end starts ``height`` up.
+
+    The line (first ``line_out``, m) is trimmed until its hanging end starts within
+    :data:`LINE_TOLERANCE` of ``height`` (m) above the seabed under it; the drum may haul in
+    :data:`HOLD_RANGE` and pay out ``pay_out`` (m) about it, over ``duration`` (s). The seabed's
+    clearance ``delta`` is ``lowering.height``; ``lowering`` (a table, or None) is the new
+    scene's ``[lowering]``.
+
+    Raises
+    ------
+    ValueError
+        The trimming does not converge (naming ``lowering.height``).
+    """
+    reference = seabed_reference(scene)
+    length = line_out
     for _ in range(TRIM_ITERATIONS):
-        held = _fixed_line(scene, length, duration)
-        miss = _start_height(held, scene, reference) - lowering.height
+        held = _fixed_line(scene, length, duration, pay_out, lowering)
+        miss = _start_height(held, scene, reference) - height
         if abs(miss) < LINE_TOLERANCE:
             return held
         length += miss  # too high by miss: pay out as much (the end falls by what is paid out)
     raise ValueError(
-        f"lowering.height = {lowering.height!r} m: the held line's start stays {miss:+.3g} m off "
-        f"the target after {TRIM_ITERATIONS} trims (line out {length:.6g} m)"
+        f"lowering.height = {scene.lowering.height!r} m: the held line's start stays {miss:+.3g} m "
+        f"off {height:.6g} m after {TRIM_ITERATIONS} trims (line out {length:.6g} m)"
     )
 
 
-def _fixed_line(scene, length: float, duration: float) -> Scene:
+def _fixed_line(scene, length: float, duration: float, pay_out: float, lowering) -> Scene:
     """The scene's line as a fixed-``n`` scene of ``length`` (m) over ``duration`` (s)."""
     data = scene.to_dict()
     line = data["winch"].pop("line")
     data.pop("lowering")
+    if lowering is not None:
+        data["lowering"] = lowering
     mesh = scene.winch.line.mesh
-    reach = HOLD_RANGE / scene.winch.drum_radius
+    radius = scene.winch.drum_radius
     data["cable"]["length"] = length
     data["model"]["elements"] = mesh.starting_elements(length)
-    data["winch"].update(angle_min=-reach, angle_max=reach)
+    data["winch"].update(angle_min=-HOLD_RANGE / radius, angle_max=pay_out / radius)
     data["winch"]["top_length_min"] = line.get("top_length_min", mesh.element_length / 2)
     seabed = data["seabed"]
     seabed["clearance"] = scene.lowering.height
     if seabed.get("minimum_clearance") is not None:
         seabed["minimum_clearance"] = min(seabed["minimum_clearance"], scene.lowering.height)
     data["numerics"]["duration"] = duration
-    data["name"] = f"{scene.name}_hold"
+    data["name"] = f"{scene.name}_{'landing' if lowering is not None else 'hold'}"
     return scene_from_dict(data, base_dir=None)
 
 
@@ -169,6 +192,26 @@ def _start_height(held: Scene, scene, reference: float) -> float:
     model = CableModel.from_scene(held)
     end = starting_state(model, Drive.from_scene(held), compiled=True)[:3]
     return float(clearance(scene.seabed, end, reference))
+
+
+def compensation_ratio(top_heights, end_heights) -> tuple[float, float, float]:
+    """The share of the vessel's heave kept off the load, ``100 (1 - std z_E / std z_top)`` (%).
+
+    Parameters
+    ----------
+    top_heights, end_heights : arrays (k,), m
+        The top's and the end's heights over the same samples.
+
+    Returns
+    -------
+    ratio : float, %
+        NaN in a calm (the top's standard deviation below :data:`CALM`).
+    heave_std, load_std : float, m
+        The two standard deviations.
+    """
+    heave_std, load_std = float(np.std(top_heights)), float(np.std(end_heights))
+    ratio = 100.0 * (1.0 - load_std / heave_std) if heave_std > CALM else float("nan")
+    return ratio, heave_std, load_std
 
 
 def hold(
@@ -197,8 +240,7 @@ def hold(
     result = mpc(held, quiet=quiet, **settings)
     run = result.trajectory
     deviation = float(np.max(np.abs(run.clearance_error)))
-    heave_std, load_std = float(np.std(run.top[:, 2])), float(np.std(run.end[:, 2]))
-    ratio = 100.0 * (1.0 - load_std / heave_std) if heave_std > CALM else float("nan")
+    ratio, heave_std, load_std = compensation_ratio(run.top[:, 2], run.end[:, 2])
     line = run.inputs[:, INPUTS.top_length_rate], run.inputs[:, INPUTS.top_length_acceleration]
     rate, acceleration = (float(np.abs(v).max()) / held.winch.drum_radius for v in line)
     drum = tuple(drum_checks(held.winch, run.time, *line))

@@ -15,6 +15,7 @@ from cable_ocp.model.cable import CableModel
 from cable_ocp.model.layout import INPUTS
 from cable_ocp.simulation.budget import check_simulation_memory
 from cable_ocp.simulation.integrate import evaluate_into, integrate
+from cable_ocp.simulation.landing_reference import reference_error
 from cable_ocp.simulation.seabed import (
     check_on_grid,
     check_start,
@@ -301,12 +302,15 @@ def run_trajectory(
     Its states and inputs at ``time`` (s), with the winch angle (rad) that drove it.
 
     Its joints and tensions are the model's outputs (:func:`joints_and_tensions`), ``e(t)`` and
-    Omega those of eq. 39 on the end's path (no Omega of a single point: NaN). Raises
+    Omega those of eq. 39 on the end's path (no Omega of a single point: NaN); on a fixed-``n``
+    landing, ``e(t)`` is the deviation from the landing reference
+    (:mod:`~cable_ocp.simulation.landing_reference`). Raises
     :class:`~cable_ocp.simulation.seabed.OffGridError` if the end left the bathymetry grid.
     """
     joints, tensions = joints_and_tensions(model, states, inputs, compiled)
     check_on_grid(scene.seabed, joints[:, :, 0], time)
     error = clearance_error(scene.seabed, joints[:, :, 0])
+    error = error - reference_error(scene, time, error[0])
     return Trajectory(
         time=time,
         states=states,

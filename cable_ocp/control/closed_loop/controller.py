@@ -6,8 +6,8 @@ open loop's, on the controller's reduced model: a free-start Hermite angle on in
 (:mod:`cable_ocp.drive.bounds`), the same
 stage grid and clearance error. Its named parameters (:mod:`cable_ocp.control.parameters`) take
 the estimate at each sample: the reduced state, the forecast top motion, the end force over the
-horizon, the end offset (measured end minus the reduced end, :mod:`.projection`) and the
-clearance reference. The solver is the open loop's transcription: one Gauss-Newton step from the
+horizon, the end offset (measured end minus the reduced end, :mod:`.projection`), the
+clearance reference, and on a landing its reference height over the horizon (in the bias). The solver is the open loop's transcription: one Gauss-Newton step from the
 plan in force moved on to the sample (the real-time iteration), or IPOPT on the multiple-shooting
 NLP (the earlier path, kept as the baseline).
 
@@ -31,6 +31,7 @@ from cable_ocp.control.problem import WinchProblem
 from cable_ocp.control.settings import GridSettings, OcpSettings, TranscriptionSettings
 from cable_ocp.control.solvers import SOLVERS
 from cable_ocp.drive.drive import end_force, stage_times
+from cable_ocp.simulation.landing_reference import reference_error
 
 # IPOPT's options for the closed loop (the baseline): warm-started from the shifted plan.
 IPOPT_WARM_START = {"warm_start_init_point": "yes", "mu_init": 1e-3}
@@ -53,6 +54,9 @@ class Estimate:
         Clearance reference ``z_E(0) - z(E(0))`` of the plant's start.
     margin : float, rad
         Room the plan keeps from each angle bound for the heave feedback.
+    start_error : float, m
+        The clearance error of the plant's start: a landing's reference starts there
+        (:mod:`~cable_ocp.simulation.landing_reference`).
     """
 
     state: np.ndarray
@@ -60,6 +64,7 @@ class Estimate:
     end_offset: np.ndarray
     reference: float
     margin: float
+    start_error: float = 0.0
 
 
 @dataclass(frozen=True)
@@ -141,7 +146,8 @@ class RecedingHorizon:
             end_force=end_force(self.scene.end, now + times),
             reference=estimate.reference,
             end_offset=np.asarray(estimate.end_offset, dtype=float),
-            bias=np.zeros(self.problem.grid.size),
+            # A landing's reference over the horizon; zero on other scenes.
+            bias=-reference_error(self.scene, now + self.problem.grid, estimate.start_error),
         )
 
     def make_step(self, now: float, estimate: Estimate, angle: float, rate: float) -> Solve:

@@ -37,6 +37,9 @@ class Estimator:
     ----------
     reference : float, m
         Clearance reference of the plant's start (set once the plant has started).
+    start_error : float, m
+        The clearance error of the plant's start, ``e_0`` of a landing's reference
+        (:mod:`~cable_ocp.simulation.landing_reference`; set with ``reference``).
     """
 
     def __init__(
@@ -48,7 +51,7 @@ class Estimator:
         height: float,
     ):
         self.settings, self.plant, self.reduced, self.radius = settings, plant, reduced, radius
-        self.reference = float("nan")
+        self.reference = self.start_error = float("nan")
         self.filter = HeightFilter(settings.heave_filter, height)
         self.times = [np.zeros(1)]
         self.heights = [np.array([height], dtype=float)]
@@ -103,5 +106,6 @@ class Estimator:
             departure = np.max(np.abs(heights - self.filtered_heights()[recent]))
             margin += self.settings.heave_margin * departure / self.radius
         return Estimate(
-            projected.state, forecast, projected.end_offset, self.reference, float(margin)
-        )
+            projected.state, forecast, projected.end_offset, self.reference, float(margin),
+            self.start_error,
+        )  # fmt: skip

@@ -33,6 +33,7 @@ from cable_ocp.simulation.progress import Progress
 from cable_ocp.simulation.seabed import (
     OffGridError,
     check_start,
+    clearance_error,
     clearance_reference,
 )
 
@@ -70,6 +71,7 @@ class LoopParts:
         seabed = self.plant.scene.seabed
         check_start(seabed, self.plant.state[:3])
         self.estimator.reference = clearance_reference(seabed, self.plant.state)
+        self.estimator.start_error = float(clearance_error(seabed, self.plant.state[None, :3])[0])
         return measured
 
 

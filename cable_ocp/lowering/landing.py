@@ -1,0 +1,256 @@
+"""The optimised and the closed-loop landing from a hover: the lowering objective of a WinchProblem.
+
+A descent stops a little above its target (the hover, as installations do before the set-down:
+the line settles, the position is confirmed), then the load is landed. :func:`landing_scene`
+makes that last part a scene of fixed ``n``: the line whose hanging end is ``hover`` above the
+target (trimmed on its statics), its own ``n`` of ``winch.line.element_length``, the drum free to
+pay out the hover and :data:`~.hold.HOLD_RANGE` more, ``[lowering]`` kept with the land time of
+the approach (:func:`approach_time`) and the hold after it. On such a scene the objective of the
+one :class:`~cable_ocp.control.problem.WinchProblem` is the deviation from the landing reference
+(:mod:`cable_ocp.simulation.landing_reference`: a smoothstep from the hover to the target height
+at ``land_time``, held after), so every solver, the model correction and the verification on the
+scene's own model are those of :func:`cable_ocp.optimize`, and the closed loop
+(:func:`cable_ocp.mpc`, the measured heave fed back) is the same problem with its named
+parameters set at every sample.
+
+The top tension limits enter as a limit on the line's acceleration (:func:`tension_acceleration`:
+the line and the load accelerated as one rigid body change the top tension by their mass times
+the acceleration), the winch's rate and acceleration limits as the problem's linear bounds, the
+minimum clearance as its clearance rows. :func:`land` then measures every constraint on the
+verified run by :func:`~.checks.check_landing`, code independent of the solver.
+"""
+
+from __future__ import annotations
+
+import math
+import time
+from dataclasses import dataclass
+
+import numpy as np
+
+from cable_ocp.control.closed_loop.loop import mpc
+from cable_ocp.control.optimization import optimize
+from cable_ocp.drive.drive import Drive
+from cable_ocp.lowering.checks import LandingReport, check_landing
+from cable_ocp.lowering.descent import landing_line
+from cable_ocp.lowering.hold import HOLD_RANGE, compensation_ratio, trimmed_line
+from cable_ocp.model.cable import CableModel
+from cable_ocp.scene.schema import Scene
+from cable_ocp.simulation.run import joints_and_tensions
+from cable_ocp.simulation.statics import starting_state
+
+HOVER = 10.0  # m above the target height where the descent stops before the landing
+# Shares of the winch's line speed and acceleration, and multiple of lowering.landing_speed,
+# that the landing reference's peak speed and acceleration may use (the rest is for the
+# heave and the corrections).
+SPEED_SHARE, ACCELERATION_SHARE, LANDING_SPEEDS = 0.5, 0.5, 10.0
+SHORTEST_APPROACH = 10.0  # s
+# Share of the room between the hover's top tension and each tension limit that the line's
+# acceleration may use (the rest is for drag and the heave).
+TENSION_SHARE = 0.5
+# Peak speed and acceleration of the smoothstep S(t/T) over a drop H: 1.875 H/T, 5.7735 H/T^2.
+PEAK_SPEED, PEAK_ACCELERATION = 1.875, 10 / math.sqrt(3)
+
+
+def approach_time(scene, hover: float) -> float:
+    """The landing's duration from the hover (s, whole seconds): the reference's peaks in limits.
+
+    The smoothstep over ``hover`` (m) keeps its peak speed within :data:`SPEED_SHARE` of the
+    winch's line speed and :data:`LANDING_SPEEDS` landing speeds, its peak acceleration within
+    :data:`ACCELERATION_SHARE` of the winch's, and lasts at least :data:`SHORTEST_APPROACH`.
+    """
+    winch = scene.winch
+    speed = LANDING_SPEEDS * scene.lowering.landing_speed
+    if winch.rate_max is not None:
+        speed = min(speed, SPEED_SHARE * winch.rate_max * winch.drum_radius)
+    needed = [SHORTEST_APPROACH, PEAK_SPEED * hover / speed]
+    if winch.acceleration_max is not None:
+        acceleration = ACCELERATION_SHARE * winch.acceleration_max * winch.drum_radius
+        needed.append(math.sqrt(PEAK_ACCELERATION * hover / acceleration))
+    return float(math.ceil(max(needed)))
+
+
+def tension_acceleration(scene: Scene) -> tuple[float, float]:
+    """The line acceleration (m/s^2) the tension limits allow, and the hover's top tension (N).
+
+    At the hover the top tension is ``T_0`` (the model's, at its equilibrium). Paying out with
+    acceleration ``a`` lowers it, hauling in raises it, by about ``m a``: ``m`` the line's mass,
+    the payload's and its added mass. Returned: :data:`TENSION_SHARE` of the smaller room,
+    ``min(T_0 - tension_min, tension_max - T_0) / m`` (inf without limits), and ``T_0``.
+    """
+    model = CableModel.from_scene(scene)
+    drive = Drive.from_scene(scene)
+    x0 = starting_state(model, drive, compiled=True)
+    _, tensions = joints_and_tensions(model, x0[None, :], drive.inputs(np.zeros(1)).T, True)
+    top = float(tensions[0, -1])
+    lowering = scene.lowering
+    room = top - lowering.tension_min
+    if lowering.tension_max is not None:
+        room = min(room, lowering.tension_max - top)
+    mass = scene.cable.density * scene.cable.cross_section_area * scene.cable.length
+    payload = scene.end.payload
+    if payload is not None:
+        water = scene.environment.water_density if scene.environment.submerged else 0.0
+        mass += payload.mass + payload.added_mass * water * payload.volume
+    return TENSION_SHARE * max(room, 0.0) / mass, top
+
+
+def landing_scene(scene, hover: float = HOVER) -> Scene:
+    """The fixed-``n`` landing of a ``[lowering]`` scene's load from a hover (module docstring).
+
+    Parameters
+    ----------
+    scene : Scene
+        With ``[lowering]`` and ``[winch.line]``, its vessel holding station.
+    hover : float, m
+        How far above the target height the descent stopped.
+
+    Returns
+    -------
+    Scene
+        ``[lowering]`` with the approach's ``land_time`` (:func:`approach_time`), the hold of the
+        scene after it (``numerics.duration - lowering.land_time``), and the winch's
+        acceleration limit lowered to what the tension limits allow (:func:`tension_acceleration`)
+        where that is less.
+
+    Raises
+    ------
+    ValueError
+        A scene without ``[lowering]`` or ``[winch.line]``, a moving vessel, a hover that is not
+        positive, or no hold.
+    """
+    if scene.lowering is None or scene.winch.line is None:
+        raise ValueError("a landing scene needs a scene with [lowering] and [winch.line]")
+    if scene.top.motion != "fixed":
+        raise ValueError(
+            f"top.motion = {scene.top.motion!r}: a landing needs the vessel holding station "
+            "(top.motion = 'fixed'; heave allowed)"
+        )
+    if not hover > 0:
+        raise ValueError(f"hover = {hover!r} m is out of range: must be > 0")
+    lowering = scene.lowering
+    hold = scene.numerics.duration - lowering.land_time
+    if not hold > 0:
+        raise ValueError(
+            f"numerics.duration = {scene.numerics.duration!r} s leaves no hold after "
+            f"lowering.land_time = {lowering.land_time!r} s"
+        )
+    approach = approach_time(scene, hover)
+    table = {**scene.to_dict()["lowering"], "land_time": approach}
+    line = landing_line(scene) - hover
+    landed = trimmed_line(
+        scene, lowering.height + hover, line, approach + hold, hover + HOLD_RANGE, table
+    )
+    allowed, _ = tension_acceleration(landed)
+    winch = landed.winch
+    drum = allowed / winch.drum_radius
+    if winch.acceleration_max is None or drum < winch.acceleration_max:
+        landed = landed.updated({"winch.acceleration_max": drum})
+    return landed
+
+
+@dataclass(frozen=True)
+class LandingResult:
+    """A landing from the hover, optimised (open loop) or closed-loop, and its checks.
+
+    Attributes
+    ----------
+    scene : Scene
+        The landing scene (:func:`landing_scene`).
+    closed_loop : bool
+    result : OcpResult or MpcResult
+        What :func:`cable_ocp.optimize` or :func:`cable_ocp.mpc` returned.
+    report : LandingReport or None
+        Every constraint measured on the verified run (the open loop's on the scene's own model,
+        the closed loop's plant run); None when there is no run.
+    compensation_ratio : float, %
+        Over the hold (from ``land_time`` on): ``100 (1 - std z_E / std z_top)``; NaN in a calm.
+    wall_time : float, s
+    """
+
+    scene: Scene
+    closed_loop: bool
+    result: object
+    report: LandingReport | None
+    compensation_ratio: float
+    wall_time: float
+
+    @property
+    def success(self) -> bool:
+        """Whether the solver or the loop succeeded and every check passed on its run."""
+        return bool(self.result.success) and self.report is not None and self.report.passed
+
+    @property
+    def real_time_factor(self) -> float:
+        """Simulated seconds per second of wall time (the closed loop's speed)."""
+        return self.scene.numerics.duration / self.wall_time
+
+    @property
+    def status(self) -> str:
+        """What happened, in one line."""
+        what = "closed loop" if self.closed_loop else f"{self.result.solver} optimum"
+        if not self.result.success:
+            return f"the {what} failed: {self.result.status}"
+        if self.report is None:
+            return f"the {what} has no run to check"
+        report = self.report
+        found = (
+            f"landing error {report.landing_error:+.3g} m at {report.landing_speed:+.3g} m/s, "
+            f"hold {report.hold_deviation:.3g} m, top tension {report.least_tension / 1e3:.4g}-"
+            f"{report.peak_tension / 1e3:.4g} kN"
+        )
+        if not math.isnan(self.compensation_ratio):
+            found += f", compensation {self.compensation_ratio:.1f} %"
+        if report.passed:
+            return f"the {what} landed, every check passed ({found})"
+        return f"the {what}: {found}; failed: {report.reason}"
+
+
+def land(
+    scene, closed_loop: bool = False, hover: float = HOVER, quiet: bool = True, **settings
+) -> LandingResult:
+    """Land a ``[lowering]`` scene's load from a hover, by optimisation or by the closed loop.
+
+    Parameters
+    ----------
+    scene : Scene
+        With ``[lowering]`` and ``[winch.line]`` (see :func:`landing_scene`), or a landing scene
+        already (a fixed-``n`` scene with ``[lowering]``).
+    closed_loop : bool
+        :func:`cable_ocp.mpc` (the measured heave fed back) instead of :func:`cable_ocp.optimize`.
+    hover : float, m
+        Where the descent stopped, above the target height.
+    quiet : bool
+        No progress.
+    **settings
+        Keywords of :func:`cable_ocp.optimize` (``solver``, ``settings``) or fields of
+        :class:`~cable_ocp.control.closed_loop.settings.MpcSettings`.
+
+    Returns
+    -------
+    LandingResult
+        Never raises for a landing that fails on a valid scene: ``success`` and ``status`` say
+        why (the solver's or the loop's status, or the failed checks).
+    """
+    started = time.perf_counter()
+    landing = scene if scene.winch.line is None else landing_scene(scene, hover)
+    if landing.lowering is None:
+        raise ValueError(f"scene {landing.name!r} has no [lowering] table: nothing to land")
+    if closed_loop:
+        result = mpc(landing, quiet=quiet, **settings)
+    else:
+        result = optimize(landing, quiet=quiet, **settings)
+    run = result.trajectory
+    report = ratio = None
+    if run is not None and run.time[-1] >= landing.lowering.land_time:
+        report = check_landing(run, "inputs" if closed_loop else result)
+        after = run.time >= landing.lowering.land_time
+        ratio = compensation_ratio(run.top[after, 2], run.end[after, 2])[0]
+    return LandingResult(
+        scene=landing,
+        closed_loop=closed_loop,
+        result=result,
+        report=report,
+        compensation_ratio=float("nan") if ratio is None else ratio,
+        wall_time=time.perf_counter() - started,
+    )
