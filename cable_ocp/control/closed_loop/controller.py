@@ -3,12 +3,13 @@
 The problem over one horizon (:meth:`cable_ocp.control.problem.WinchProblem.receding`) is the
 open loop's, on the controller's reduced model: a free-start Hermite angle on intervals of
 ``MpcSettings.interval``, the winch bounds held between the samples
-(:mod:`cable_ocp.drive.bounds`), the same
-stage grid and clearance error. Its named parameters (:mod:`cable_ocp.control.parameters`) take
-the estimate at each sample: the reduced state, the forecast top motion, the end force over the
-horizon, the end offset (measured end minus the reduced end, :mod:`.projection`), the
-clearance reference, and on a landing its reference height over the horizon (in the bias). The solver is the open loop's transcription: one Gauss-Newton step from the
-plan in force moved on to the sample (the real-time iteration), or IPOPT on the multiple-shooting
+(:mod:`cable_ocp.drive.bounds`), the same stage grid and clearance error. Its named parameters
+(:mod:`cable_ocp.control.parameters`) take the estimate at each sample: the reduced state, the
+forecast top motion, the end force over the horizon, the end offset (measured end minus the
+reduced end, :mod:`.projection`), the clearance reference, and on a landing its reference over
+the horizon (in the bias, :mod:`cable_ocp.simulation.landing_reference`). The solver is the open
+loop's transcription: one Gauss-Newton step from the plan in force moved on to the sample (the
+real-time iteration), or IPOPT on the multiple-shooting
 NLP (the earlier path, kept as the baseline).
 
 Objective: ``1/H int e^2 dt + w 1/H int (r_D phi')^2 dt`` on the RK4 grid; the first node is held
