@@ -142,9 +142,10 @@ def trimmed_line(
 
     The line (first ``line_out``, m) is trimmed until its hanging end starts within
     :data:`LINE_TOLERANCE` of ``height`` (m) above the seabed under it; the drum may haul in
-    :data:`HOLD_RANGE` and pay out ``pay_out`` (m) about it, over ``duration`` (s). The seabed's
-    clearance ``delta`` is ``lowering.height``; ``lowering`` (a table, or None) is the new
-    scene's ``[lowering]``.
+    :data:`HOLD_RANGE` and pay out ``pay_out`` (m) about it, over ``duration`` (s). The seabed
+    stays where it is: a grid's clearance ``delta`` is ``lowering.height`` (the target), and a
+    relative seabed, which lies ``delta`` below the start, is placed by ``delta = height``.
+    ``lowering`` (a table, or None) is the new scene's ``[lowering]``.
 
     Raises
     ------
@@ -154,7 +155,7 @@ def trimmed_line(
     reference = seabed_reference(scene)
     length = line_out
     for _ in range(TRIM_ITERATIONS):
-        held = _fixed_line(scene, length, duration, pay_out, lowering)
+        held = _fixed_line(scene, length, duration, pay_out, lowering, height)
         miss = _start_height(held, scene, reference) - height
         if abs(miss) < LINE_TOLERANCE:
             return held
@@ -165,7 +166,9 @@ def trimmed_line(
     )
 
 
-def _fixed_line(scene, length: float, duration: float, pay_out: float, lowering) -> Scene:
+def _fixed_line(
+    scene, length: float, duration: float, pay_out: float, lowering, height: float
+) -> Scene:
     """The scene's line as a fixed-``n`` scene of ``length`` (m) over ``duration`` (s)."""
     data = scene.to_dict()
     line = data["winch"].pop("line")
@@ -179,7 +182,7 @@ def _fixed_line(scene, length: float, duration: float, pay_out: float, lowering)
     data["winch"].update(angle_min=-HOLD_RANGE / radius, angle_max=pay_out / radius)
     data["winch"]["top_length_min"] = line.get("top_length_min", mesh.element_length / 2)
     seabed = data["seabed"]
-    seabed["clearance"] = scene.lowering.height
+    seabed["clearance"] = scene.lowering.height if scene.seabed.absolute else height
     if seabed.get("minimum_clearance") is not None:
         seabed["minimum_clearance"] = min(seabed["minimum_clearance"], scene.lowering.height)
     data["numerics"]["duration"] = duration

@@ -31,6 +31,7 @@ import numpy as np
 from cable_ocp.control.closed_loop.loop import mpc
 from cable_ocp.control.optimization import optimize
 from cable_ocp.drive.drive import Drive
+from cable_ocp.drive.vessel import top_motion
 from cable_ocp.lowering.checks import LandingReport, check_landing
 from cable_ocp.lowering.descent import landing_line
 from cable_ocp.lowering.hold import HOLD_RANGE, compensation_ratio, trimmed_line
@@ -45,6 +46,8 @@ HOVER = 10.0  # m above the target height where the descent stops before the lan
 # heave and the corrections).
 SPEED_SHARE, ACCELERATION_SHARE, LANDING_SPEEDS = 0.5, 0.5, 10.0
 SHORTEST_APPROACH = 10.0  # s
+NO_ROOM = 0.1  # share of a winch limit used when the heave's peak leaves none
+HEAVE_SAMPLE = 0.1  # s between the samples of the heave's peaks
 # Share of the room between the hover's top tension and each tension limit that the line's
 # acceleration may use (the rest is for drag and the heave).
 TENSION_SHARE = 0.5
@@ -55,19 +58,36 @@ PEAK_SPEED, PEAK_ACCELERATION = 1.875, 10 / math.sqrt(3)
 def approach_time(scene, hover: float) -> float:
     """The landing's duration from the hover (s, whole seconds): the reference's peaks in limits.
 
-    The smoothstep over ``hover`` (m) keeps its peak speed within :data:`SPEED_SHARE` of the
-    winch's line speed and :data:`LANDING_SPEEDS` landing speeds, its peak acceleration within
-    :data:`ACCELERATION_SHARE` of the winch's, and lasts at least :data:`SHORTEST_APPROACH`.
+    The drum pays the heave out too, so the room is what the winch has beyond the heave's peaks
+    (:func:`heave_peaks`). The smoothstep over ``hover`` (m) keeps its peak speed within
+    :data:`SPEED_SHARE` of that room in line speed and within :data:`LANDING_SPEEDS` landing
+    speeds, its peak acceleration within :data:`ACCELERATION_SHARE` of the room in line
+    acceleration, and lasts at least :data:`SHORTEST_APPROACH`. A drum with no room beyond the
+    heave is given :data:`NO_ROOM` of its limit (the landing's checks will say it is too slow).
     """
     winch = scene.winch
+    heave_speed, heave_acceleration = heave_peaks(scene, scene.numerics.duration)
     speed = LANDING_SPEEDS * scene.lowering.landing_speed
     if winch.rate_max is not None:
-        speed = min(speed, SPEED_SHARE * winch.rate_max * winch.drum_radius)
+        line = winch.rate_max * winch.drum_radius
+        speed = min(speed, SPEED_SHARE * max(line - heave_speed, NO_ROOM * line))
     needed = [SHORTEST_APPROACH, PEAK_SPEED * hover / speed]
     if winch.acceleration_max is not None:
-        acceleration = ACCELERATION_SHARE * winch.acceleration_max * winch.drum_radius
+        line = winch.acceleration_max * winch.drum_radius
+        acceleration = ACCELERATION_SHARE * max(line - heave_acceleration, NO_ROOM * line)
         needed.append(math.sqrt(PEAK_ACCELERATION * hover / acceleration))
     return float(math.ceil(max(needed)))
+
+
+def heave_peaks(scene, duration: float) -> tuple[float, float]:
+    """The largest vertical speed (m/s) and acceleration (m/s^2) of the top over ``duration`` s.
+
+    Sampled every :data:`HEAVE_SAMPLE` s from the scene's own top motion (its sea state, seed
+    included); zero for a top that does not heave.
+    """
+    times = np.arange(0.0, duration + HEAVE_SAMPLE, HEAVE_SAMPLE)
+    _, velocity, acceleration = top_motion(scene.top)(times)
+    return float(np.abs(velocity[2]).max()), float(np.abs(acceleration[2]).max())
 
 
 def tension_acceleration(scene: Scene) -> tuple[float, float]:

@@ -1,0 +1,167 @@
+"""The landing from a hover: the lowering objective of the one WinchProblem, open and closed loop.
+
+References independent of the code under test: the smoothstep's own values and finite
+differences of the reference, the submerged weight of the line and the load (the hover's top
+tension in still water), the locked winch (which leaves the load at the hover), and every
+constraint measured on the verified run by :func:`check_landing`, not by the solver.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+from conftest import MODELS
+from test_lowering import HEAVING, lowering_scene
+
+import cable_ocp as co
+from cable_ocp.lowering.checks import check_landing
+from cable_ocp.lowering.hold import LINE_TOLERANCE
+from cable_ocp.lowering.landing import (
+    ACCELERATION_SHARE,
+    HOVER,
+    PEAK_ACCELERATION,
+    PEAK_SPEED,
+    SPEED_SHARE,
+    TENSION_SHARE,
+    approach_time,
+    land,
+    landing_scene,
+    tension_acceleration,
+)
+from cable_ocp.simulation.landing_reference import reference_error
+from cable_ocp.simulation.seabed import clearance, clearance_reference
+
+STILL = {"environment.current_profile": []}
+
+
+def start_height(scene) -> float:
+    """The end's height above the seabed at t = 0 of a scene's locked run (m)."""
+    run = co.simulate(scene)
+    return float(clearance(scene.seabed, run.end[0], clearance_reference(scene.seabed, run.end[0])))
+
+
+@pytest.fixture(scope="module")
+def landing():
+    """The 2 t load of test_lowering's scene at its hover, in a sheared current."""
+    scene = lowering_scene(**{"environment.current_profile": [{"z": 0.0, "u": 0.5}]})
+    return scene, landing_scene(scene)
+
+
+def test_the_reference_leaves_the_hover_at_rest_and_lands_at_rest_on_the_target():
+    scene = lowering_scene()
+    landed = landing_scene(scene)
+    # A relative seabed lies delta below the start: the end starts at e = 0, the target is
+    # delta - HOVER below it.
+    assert landed.seabed.clearance == pytest.approx(scene.lowering.height + HOVER, abs=1e-3)
+    target = scene.lowering.height - landed.seabed.clearance
+    land_time = landed.lowering.land_time
+    t = np.linspace(0.0, landed.numerics.duration, 20_001)
+    e = reference_error(landed, t, 0.0)
+    assert e[0] == 0.0 and target == pytest.approx(-HOVER, abs=1e-3)
+    assert np.allclose(e[t >= land_time], target, atol=1e-12)
+    speed = np.gradient(e, t)
+    assert abs(speed[0]) < 1e-6 and np.abs(speed[t >= land_time]).max() < 1e-6
+    # The smoothstep's peak speed 1.875 H / T, at half time.
+    assert np.abs(speed).max() == pytest.approx(PEAK_SPEED * HOVER / land_time, rel=1e-6)
+    # Any other scene, the line scene included, has no reference.
+    assert not reference_error(scene, t, 3.0).any()
+    assert not reference_error(co.load_scene(MODELS / "paper_flat.toml"), t, 3.0).any()
+
+
+def test_the_landing_scene_hangs_the_end_at_the_hover_within_the_winch_and_the_rope(landing):
+    scene, landed = landing
+    assert landed.winch.line is None and landed.lowering is not None
+    assert start_height(landed) == pytest.approx(scene.lowering.height + HOVER, abs=LINE_TOLERANCE)
+    assert landed.model.elements == scene.winch.line.mesh.starting_elements(landed.cable.length)
+    # The approach: the reference's peaks within their shares of the winch, the hold after it.
+    land_time = landed.lowering.land_time
+    assert land_time == approach_time(scene, HOVER)
+    radius = scene.winch.drum_radius
+    assert PEAK_SPEED * HOVER / land_time <= SPEED_SHARE * scene.winch.rate_max * radius
+    peak = PEAK_ACCELERATION * HOVER / land_time**2
+    assert peak <= ACCELERATION_SHARE * scene.winch.acceleration_max * radius
+    hold = scene.numerics.duration - scene.lowering.land_time
+    assert landed.numerics.duration == pytest.approx(land_time + hold)
+    # The drum may pay the hover out and more.
+    assert landed.winch.angle_max * radius > HOVER
+
+
+def test_the_hovers_top_tension_is_the_submerged_weight_in_still_water():
+    scene = lowering_scene(**STILL)
+    landed = landing_scene(scene)
+    allowed, top = tension_acceleration(landed)
+    gravity, water = scene.environment.gravity, scene.environment.water_density
+    cable, payload = landed.cable, landed.end.payload
+    rope = (cable.density - water) * cable.cross_section_area * cable.length * gravity
+    load = (payload.mass - water * payload.volume) * gravity
+    assert top == pytest.approx(rope + load, rel=1e-6)
+    mass = cable.density * cable.cross_section_area * cable.length
+    mass += payload.mass + payload.added_mass * water * payload.volume
+    room = min(top - scene.lowering.tension_min, scene.lowering.tension_max - top)
+    assert allowed == pytest.approx(TENSION_SHARE * room / mass)
+
+
+def test_a_tension_limit_close_to_the_hovers_tension_slows_the_drum():
+    scene = lowering_scene(**STILL)
+    _, top = tension_acceleration(landing_scene(scene))
+    tight = landing_scene(scene.updated({"lowering.tension_max": top + 500.0}))
+    allowed, _ = tension_acceleration(tight)
+    assert tight.winch.acceleration_max == pytest.approx(allowed / tight.winch.drum_radius)
+    assert tight.winch.acceleration_max < scene.winch.acceleration_max
+
+
+def test_the_optimised_landing_lands_every_check_passed_on_the_scenes_own_model(landing):
+    scene, landed = landing
+    result = land(landed)
+    assert result.success, result.status
+    report = result.report
+    assert abs(report.landing_error) < 0.1 * scene.lowering.height_tolerance
+    assert abs(report.landing_speed) < scene.lowering.landing_speed
+    assert result.result.solver == "gauss-newton"
+    assert "every check passed" in result.status
+    # Verified on the scene's own model (its n), the run's error the reference's deviation.
+    run = result.result.trajectory
+    assert run.states.shape[1] == co.CableModel.from_scene(landed).state_size
+    assert result.result.omega < 0.05
+    # The baseline: the winch locked leaves the load at the hover.
+    locked = check_landing(co.simulate(landed), None)
+    assert locked.landing_error == pytest.approx(HOVER, abs=0.05)
+    assert not locked.passed
+    # IPOPT on the same transcription finds the same landing.
+    other = land(landed, solver="ipopt")
+    assert other.success, other.status
+    assert other.report.landing_error == pytest.approx(report.landing_error, abs=2e-3)
+
+
+def test_the_closed_loop_lands_and_holds_against_the_heave():
+    scene = lowering_scene(**HEAVING)
+    result = land(scene, closed_loop=True)
+    assert result.success, result.status
+    report = result.report
+    assert abs(report.landing_error) < scene.lowering.height_tolerance
+    assert abs(report.landing_speed) < scene.lowering.landing_speed
+    assert report.hold_deviation < scene.lowering.hold_band
+    assert result.compensation_ratio > 90.0
+    # The same sea with the winch locked: the load rides the heave at the hover.
+    locked = co.simulate(result.scene)
+    after = locked.time >= result.scene.lowering.land_time
+    assert np.std(locked.end[after, 2]) > 0.8 * np.std(locked.top[after, 2])
+
+
+def test_a_landing_that_its_drum_cannot_hold_fails_with_its_reason():
+    scene = lowering_scene(**{**HEAVING, "winch.acceleration_max": 0.3})
+    result = land(scene, closed_loop=True)
+    assert not result.success
+    assert "failed" in result.status
+
+
+def test_a_landing_refuses_bad_input_before_any_work():
+    scene = lowering_scene()
+    with pytest.raises(ValueError, match="hover = -1.0 m is out of range"):
+        landing_scene(scene, hover=-1.0)
+    with pytest.raises(ValueError, match="top.motion = 'tow'"):
+        landing_scene(lowering_scene(**{"top.motion": "tow"}))
+    with pytest.raises(ValueError, match="leaves no hold"):
+        landing_scene(lowering_scene(**{"numerics.duration": 200.0}))
+    with pytest.raises(ValueError, match="no \\[lowering\\] table"):
+        land(co.load_scene(MODELS / "paper_flat.toml"))
