@@ -48,7 +48,11 @@ def test_a_case_lands_and_holds_and_a_bad_case_is_a_row_not_a_raise():
     row = bl.run_case(case)
     assert row["success"] and row["hold_success"], row
     assert abs(row["landing_error"]) < 0.01 and row["ratio"] > 90.0
+    # From the hover: optimised and closed-loop, each landed with every check passed.
+    assert row["optimised"] and row["looped"], row
+    assert abs(row["optimised_error"]) < 0.1 and abs(row["looped_error"]) < 0.1
     bad = bl.run_case({**case, "lowering": {**case["lowering"], "land_time": 1.0}})
     assert not bad["success"] and "lowering.land_time" in bad["raised"]
     figures = bl.summary([row, bad])
     assert figures["landed"] == 1 and figures["raised"] == 1 and figures["cases"] == 2
+    assert figures["optimised"] == 1 and figures["looped"] == 1
