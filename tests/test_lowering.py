@@ -352,8 +352,13 @@ def test_the_command_line_lands_holds_and_writes_its_figures(tmp_path, capsys):
     assert abs(summary["landing_error"]) < 0.01 and summary["compensation_ratio"] > 90
     assert summary["locked_hold_deviation"] > summary["closed_loop_deviation"]
     assert summary["units"]["compensation_ratio"] == "%"
+    # From the hover: optimised and closed-loop landings, each checked.
+    assert summary["hover_optimised_success"] and summary["hover_closed_loop_success"]
+    assert abs(summary["hover_optimised_landing_error"]) < 0.1
+    assert summary["hover_closed_loop_compensation_ratio"] > 90
+    assert summary["units"]["hover_closed_loop_real_time_factor"] == "1"
     for name in ("landing.nc", "landing.png", "seabed_view.png", "line_run.png",
-                 "hold_clearance.png"):  # fmt: skip
+                 "hold_clearance.png", "hover_optimised.png", "hover_closed_loop.png"):  # fmt: skip
         assert (out / name).stat().st_size > 0, name
     assert "every check passed" in capsys.readouterr().out
     # A scene without [lowering] is refused before any work, naming what it needs.

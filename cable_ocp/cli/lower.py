@@ -8,6 +8,7 @@ import sys
 from pathlib import Path
 
 from cable_ocp.cli.arguments import OUT_HELP, SCENE_HELP, DefaultsShown
+from cable_ocp.lowering.landing import HOVER
 from cable_ocp.scene.bundled import scene_argument
 
 # Units of the figures in summary.json.
@@ -15,7 +16,10 @@ UNITS = {
     "landing_line": "m", "landing_error": "m", "landing_speed": "m/s", "least_tension": "N",
     "peak_tension": "N", "least_bond_tension": "N", "hold_deviation": "m", "wall_time": "s",
     "closed_loop_deviation": "m", "compensation_ratio": "%", "real_time_factor": "1",
-    "locked_hold_deviation": "m",
+    "locked_hold_deviation": "m", "hover": "m", "hover_optimised_landing_error": "m",
+    "hover_optimised_landing_speed": "m/s", "hover_optimised_wall_time": "s",
+    "hover_closed_loop_landing_error": "m", "hover_closed_loop_landing_speed": "m/s",
+    "hover_closed_loop_compensation_ratio": "%", "hover_closed_loop_real_time_factor": "1",
 }  # fmt: skip
 
 
@@ -30,7 +34,9 @@ def add_lower_command(subparsers) -> None:
         "forward on the approach, the landing line corrected until the verified run lands; "
         "every constraint measured on that run. Then the landed line held above the target by "
         "the closed loop (mpc), with its compensation ratio. Writes landing.nc (the verified "
-        "run), summary.json and figures to --out.",
+        "run), summary.json and figures to --out. Then the landing from a hover (--hover m above "
+        "the target): optimised (optimize, Gauss-Newton) and closed-loop (mpc), each with its "
+        "checks and figure.",
     )
     parser.add_argument("scene", type=scene_argument, help=SCENE_HELP)
     parser.add_argument("--out", type=Path, required=True, help=OUT_HELP)
@@ -39,6 +45,14 @@ def add_lower_command(subparsers) -> None:
         help="override a scene field, e.g. --set lowering.land_time=1000",
     )  # fmt: skip
     parser.add_argument("--no-hold", action="store_true", help="leave out the closed-loop hold")
+    parser.add_argument(
+        "--hover", type=float, default=HOVER,
+        help="m above the target where the descent stops before the landing from the hover",
+    )  # fmt: skip
+    parser.add_argument(
+        "--no-hover", action="store_true",
+        help="leave out the optimised and the closed-loop landing from the hover",
+    )  # fmt: skip
     parser.add_argument(
         "--animate", action="store_true",
         help="also write animation.gif: the rope growing as it is paid out",
@@ -53,6 +67,7 @@ def run_lower_command(args: argparse.Namespace) -> int:
     from cable_ocp.cli import parse_overrides
     from cable_ocp.cli.files import results_folder
     from cable_ocp.lowering.hold import hold
+    from cable_ocp.lowering.landing import land, landing_scene
     from cable_ocp.lowering.plan import plan_landing
     from cable_ocp.plots import landing, survey
     from cable_ocp.scene.output import json_text
@@ -65,8 +80,13 @@ def run_lower_command(args: argparse.Namespace) -> int:
             f"{args.scene}: lower needs a scene with [lowering] and [winch.line] (see "
             "models/deploy.toml)"
         )
+    hovering = None if args.no_hover else landing_scene(scene, args.hover)  # refused early
     plan = plan_landing(scene, quiet=args.quiet)
     held = None if args.no_hold else hold(scene, quiet=args.quiet)
+    hover = {}
+    if hovering is not None:
+        hover = {"optimised": land(hovering, quiet=args.quiet),
+                 "closed_loop": land(hovering, closed_loop=True, quiet=args.quiet)}  # fmt: skip
     summary = {"scene": scene.name, "landing_success": plan.success, "landing": plan.status,
                "landing_line": plan.descent.landing_line, "wall_time": plan.wall_time}  # fmt: skip
     if plan.report is not None:
@@ -86,6 +106,10 @@ def run_lower_command(args: argparse.Namespace) -> int:
             real_time_factor=held.mpc.real_time_factor,
             locked_hold_deviation=float(abs(locked.clearance_error).max()),
         )  # fmt: skip
+    if hover:
+        summary["hover"] = args.hover
+    for name, result in hover.items():
+        summary.update(_hover_fields(name, result))
     summary["units"] = {name: unit for name, unit in UNITS.items() if name in summary}
     with results_folder(args.out) as folder:
         (folder / "summary.json").write_text(json_text(summary))
@@ -98,6 +122,13 @@ def run_lower_command(args: argparse.Namespace) -> int:
             plots.line_run(plan.run, path=folder / "line_run.png")
             if args.animate:
                 plots.animate(plan.run, folder / "animation.gif", scene.seabed.clearance)
+        for name, result in hover.items():
+            run = result.result.trajectory
+            if run is not None:
+                solver = result.result.solver if not result.closed_loop else ""
+                label = f"optimised ({solver})" if solver else "closed loop"
+                landing.landing(run, report=result.report, label=label,
+                                path=folder / f"hover_{name}.png")  # fmt: skip
         if held is not None:
             plots.clearance([locked, held.mpc], held.scene.seabed.clearance,
                             ["winch locked", "closed loop"], folder / "hold_clearance.png",
@@ -105,10 +136,31 @@ def run_lower_command(args: argparse.Namespace) -> int:
     print(f"landing: {plan.status}")
     if held is not None:
         print(f"hold: {held.status}; {held.mpc.real_time_factor:.0f}x faster than real time")
+    for name, result in hover.items():
+        print(f"from the hover ({name.replace('_', ' ')}): {result.status}")
     print(f"results and figures written to {Path(args.out).resolve()}")
-    failed = [name for name, outcome in (("landing", plan), ("hold", held))
-              if outcome is not None and not outcome.success]  # fmt: skip
+    outcomes = [("landing", plan), ("hold", held)]
+    outcomes += [(f"{name.replace('_', '-')} landing from the hover", result)
+                 for name, result in hover.items()]  # fmt: skip
+    failed = [name for name, outcome in outcomes if outcome is not None and not outcome.success]
     if failed:
         print(f"cable-ocp lower: the {' and the '.join(failed)} failed", file=sys.stderr)
         return 3
     return 0
+
+
+def _hover_fields(name: str, result) -> dict:
+    """The summary's figures of a landing from the hover (``name``: optimised or closed_loop)."""
+    key = f"hover_{name}"
+    fields = {f"{key}_success": result.success, key: result.status}
+    report = result.report
+    if report is not None:
+        fields.update({f"{key}_landing_error": report.landing_error,
+                       f"{key}_landing_speed": report.landing_speed})  # fmt: skip
+    if result.closed_loop:
+        ratio = result.compensation_ratio
+        fields[f"{key}_compensation_ratio"] = ratio if math.isfinite(ratio) else None
+        fields[f"{key}_real_time_factor"] = result.result.real_time_factor
+    else:
+        fields[f"{key}_wall_time"] = result.result.wall_time
+    return fields

@@ -14,6 +14,7 @@ from matplotlib.figure import Figure
 from matplotlib.ticker import MaxNLocator
 
 from cable_ocp.plots import finish_figure, run_title, significant
+from cable_ocp.simulation.landing_reference import is_landing, reference_error
 from cable_ocp.simulation.line_trajectory import LineTrajectory
 from cable_ocp.simulation.seabed import clearance, clearance_reference
 from cable_ocp.simulation.trajectory import Trajectory
@@ -34,7 +35,8 @@ def landing(
         A run of a scene with ``[lowering]``.
     descent : ReferenceDescent, optional
         Drawn as the height it means (the start's height less the line paid out: the vertical
-        drop).
+        drop). A landing from a hover (fixed ``n``) draws its own reference
+        (:mod:`~cable_ocp.simulation.landing_reference`).
     report : LandingReport, optional
         Its failed checks are named in the title.
     path : str or Path, optional
@@ -52,6 +54,10 @@ def landing(
         line = descent.line_out(time)[0]
         upper.plot(time, height[0] - (line - line[0]), "k--", lw=1,
                    label="reference descent (vertical drop)")  # fmt: skip
+    elif is_landing(scene):
+        start = height[0] - scene.seabed.clearance
+        reference = height[0] + reference_error(scene, time, start) - start
+        upper.plot(time, reference, "k--", lw=1, label="landing reference")
     upper.axhline(
         lowering.height, color="C2", lw=1, label=f"target {significant(lowering.height)} m"
     )
