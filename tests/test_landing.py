@@ -86,7 +86,7 @@ def test_the_landing_scene_hangs_the_end_at_the_hover_within_the_winch_and_the_r
     assert landed.winch.angle_max * radius > HOVER
 
 
-def test_the_hovers_top_tension_is_the_submerged_weight_in_still_water():
+def test_the_hovers_top_tension_is_the_submerged_weight_in_still_water(validation):
     scene = lowering_scene(**STILL)
     landed = landing_scene(scene)
     allowed, top = tension_acceleration(landed)
@@ -94,6 +94,15 @@ def test_the_hovers_top_tension_is_the_submerged_weight_in_still_water():
     cable, payload = landed.cable, landed.end.payload
     rope = (cable.density - water) * cable.cross_section_area * cable.length * gravity
     load = (payload.mass - water * payload.volume) * gravity
+    validation(
+        f"2 t load hanging {landed.cable.length:.4g} m (n = {landed.model.elements}) in still "
+        "water at the hover of a landing",
+        "analytic",
+        "submerged weight of the line and the load",
+        "|T_top / weight - 1|",
+        f"{abs(top / (rope + load) - 1):.1e}",
+        "<= 1e-6",
+    )
     assert top == pytest.approx(rope + load, rel=1e-6)
     mass = cable.density * cable.cross_section_area * cable.length
     mass += payload.mass + payload.added_mass * water * payload.volume
@@ -110,7 +119,9 @@ def test_a_tension_limit_close_to_the_hovers_tension_slows_the_drum():
     assert tight.winch.acceleration_max < scene.winch.acceleration_max
 
 
-def test_the_optimised_landing_lands_every_check_passed_on_the_scenes_own_model(landing):
+def test_the_optimised_landing_lands_every_check_passed_on_the_scenes_own_model(
+    landing, validation
+):
     scene, landed = landing
     result = land(landed)
     assert result.success, result.status
@@ -129,6 +140,17 @@ def test_the_optimised_landing_lands_every_check_passed_on_the_scenes_own_model(
     assert not locked.passed
     # IPOPT on the same transcription finds the same landing.
     other = land(landed, solver="ipopt")
+    validation(
+        f"2 t load landed from a {HOVER:g} m hover ({landed.cable.length:.4g} m of line, n = "
+        f"{landed.model.elements}, sheared current), optimised on a reduced model, verified on "
+        "the scene's own",
+        "second formulation",
+        "IPOPT on the same transcription; check_landing on the run",
+        "landing error, speed (Gauss-Newton); |difference| of IPOPT's landing error",
+        f"{report.landing_error:+.1e} m, {report.landing_speed:+.1e} m/s; "
+        f"{abs(other.report.landing_error - report.landing_error):.1e} m",
+        "< 1 cm, < 0.1 m/s; <= 2 mm",
+    )
     assert other.success, other.status
     assert other.report.landing_error == pytest.approx(report.landing_error, abs=2e-3)
 
@@ -165,3 +187,25 @@ def test_a_landing_refuses_bad_input_before_any_work():
         landing_scene(lowering_scene(**{"numerics.duration": 200.0}))
     with pytest.raises(ValueError, match="no \\[lowering\\] table"):
         land(co.load_scene(MODELS / "paper_flat.toml"))
+
+
+@pytest.mark.slow
+def test_deploy_lands_from_its_hover_optimised_by_both_solvers_and_by_the_closed_loop():
+    """The bundled deploy scene, from 10 m above its target: 1005 m of line, H_s = 2 m."""
+    scene = co.load_scene(MODELS / "deploy.toml")
+    landed = landing_scene(scene)
+    lowering = landed.lowering
+    for solver in ("gauss-newton", "ipopt"):
+        result = land(landed, solver=solver)
+        assert result.success, result.status
+        report = result.report
+        assert abs(report.landing_error) < lowering.height_tolerance
+        assert abs(report.landing_speed) < lowering.landing_speed
+        assert lowering.tension_min < report.least_tension < report.peak_tension
+        assert report.peak_tension < lowering.tension_max
+        print(result.status, f"{result.result.wall_time:.1f} s")
+    looped = land(landed, closed_loop=True)
+    assert looped.success, looped.status
+    assert looped.report.hold_deviation < lowering.hold_band
+    assert looped.compensation_ratio > 90.0
+    print(looped.status, f"real-time factor {looped.result.real_time_factor:.0f}")
