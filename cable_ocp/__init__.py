@@ -30,6 +30,7 @@ if TYPE_CHECKING:  # what __getattr__ imports, for type checkers and the import 
     from cable_ocp.drive.drive import Drive
     from cable_ocp.lowering.checks import check_landing
     from cable_ocp.lowering.hold import hold
+    from cable_ocp.lowering.landing import land, landing_scene
     from cable_ocp.lowering.plan import plan_landing
     from cable_ocp.model.cable import INPUT_NAMES, CableModel
     from cable_ocp.scene.schema import Scene, load_scene
@@ -64,6 +65,8 @@ _SOURCES = {
     "catenary_check": "cable_ocp.studies.validation",
     "check_landing": "cable_ocp.lowering.checks",
     "hold": "cable_ocp.lowering.hold",
+    "land": "cable_ocp.lowering.landing",
+    "landing_scene": "cable_ocp.lowering.landing",
     "plan_landing": "cable_ocp.lowering.plan",
     "catenary_shape": "cable_ocp.studies.catenary",
     "equilibrium": "cable_ocp.simulation.statics",
@@ -102,6 +105,8 @@ __all__ = [
     "equilibrium",
     "hold",
     "integrate",
+    "land",
+    "landing_scene",
     "load_result",
     "load_scene",
     "mpc",

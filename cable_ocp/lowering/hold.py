@@ -116,22 +116,36 @@ def hold_scene(scene, line_out: float | None = None, duration: float | None = No
     ValueError
         A scene without ``[lowering]`` or ``[winch.line]``, a moving vessel, or no hold time.
     """
+    hold_time = held_on_station(scene, "a hold", duration is None)
+    duration = hold_time if duration is None else duration
+    length = landing_line(scene) if line_out is None else line_out
+    return trimmed_line(scene, scene.lowering.height, length, duration, HOLD_RANGE)
+
+
+def held_on_station(scene, what: str, needs_hold: bool = True) -> float:
+    """The hold's duration (s) of a ``[lowering]`` scene whose vessel holds station.
+
+    Raises
+    ------
+    ValueError
+        Naming ``what`` needs it: a scene without ``[lowering]`` or ``[winch.line]``, a moving
+        vessel, or (``needs_hold``) no time after ``lowering.land_time``.
+    """
     if scene.lowering is None or scene.winch.line is None:
-        raise ValueError("a hold needs a scene with [lowering] and [winch.line]")
+        raise ValueError(f"{what} needs a scene with [lowering] and [winch.line]")
     if scene.top.motion != "fixed":
         raise ValueError(
-            f"top.motion = {scene.top.motion!r}: a hold needs the vessel holding station "
+            f"top.motion = {scene.top.motion!r}: {what} needs the vessel holding station "
             "(top.motion = 'fixed'; heave allowed)"
         )
-    lowering = scene.lowering
-    duration = scene.numerics.duration - lowering.land_time if duration is None else duration
-    if not duration > 0:
+    duration = scene.numerics.duration - scene.lowering.land_time
+    if needs_hold and not duration > 0:
         raise ValueError(
             f"numerics.duration = {scene.numerics.duration!r} s leaves no hold after "
-            f"lowering.land_time = {lowering.land_time!r} s: pass a hold duration"
+            f"lowering.land_time = {scene.lowering.land_time!r} s: numerics.duration must be "
+            "longer (hold() also takes a hold duration)"
         )
-    length = landing_line(scene) if line_out is None else line_out
-    return trimmed_line(scene, lowering.height, length, duration, HOLD_RANGE)
+    return duration
 
 
 def trimmed_line(

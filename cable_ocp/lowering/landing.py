@@ -34,7 +34,12 @@ from cable_ocp.drive.drive import Drive
 from cable_ocp.drive.vessel import top_motion
 from cable_ocp.lowering.checks import LandingReport, check_landing
 from cable_ocp.lowering.descent import landing_line
-from cable_ocp.lowering.hold import HOLD_RANGE, compensation_ratio, trimmed_line
+from cable_ocp.lowering.hold import (
+    HOLD_RANGE,
+    compensation_ratio,
+    held_on_station,
+    trimmed_line,
+)
 from cable_ocp.model.cable import CableModel
 from cable_ocp.scene.schema import Scene
 from cable_ocp.simulation.run import joints_and_tensions
@@ -139,22 +144,10 @@ def landing_scene(scene, hover: float = HOVER) -> Scene:
         A scene without ``[lowering]`` or ``[winch.line]``, a moving vessel, a hover that is not
         positive, or no hold.
     """
-    if scene.lowering is None or scene.winch.line is None:
-        raise ValueError("a landing scene needs a scene with [lowering] and [winch.line]")
-    if scene.top.motion != "fixed":
-        raise ValueError(
-            f"top.motion = {scene.top.motion!r}: a landing needs the vessel holding station "
-            "(top.motion = 'fixed'; heave allowed)"
-        )
+    hold = held_on_station(scene, "a landing")
     if not hover > 0:
         raise ValueError(f"hover = {hover!r} m is out of range: must be > 0")
     lowering = scene.lowering
-    hold = scene.numerics.duration - lowering.land_time
-    if not hold > 0:
-        raise ValueError(
-            f"numerics.duration = {scene.numerics.duration!r} s leaves no hold after "
-            f"lowering.land_time = {lowering.land_time!r} s"
-        )
     approach = approach_time(scene, hover)
     table = {**scene.to_dict()["lowering"], "land_time": approach}
     line = landing_line(scene) - hover
