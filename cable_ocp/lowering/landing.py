@@ -194,11 +194,6 @@ class LandingResult:
         return bool(self.result.success) and self.report is not None and self.report.passed
 
     @property
-    def real_time_factor(self) -> float:
-        """Simulated seconds per second of wall time (the closed loop's speed)."""
-        return self.scene.numerics.duration / self.wall_time
-
-    @property
     def status(self) -> str:
         """What happened, in one line."""
         what = "closed loop" if self.closed_loop else f"{self.result.solver} optimum"
