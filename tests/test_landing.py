@@ -110,13 +110,37 @@ def test_the_hovers_top_tension_is_the_submerged_weight_in_still_water(validatio
     assert allowed == pytest.approx(TENSION_SHARE * room / mass)
 
 
-def test_a_tension_limit_close_to_the_hovers_tension_slows_the_drum():
+def mass_of(scene) -> float:
+    """The line's mass, the payload's and its added mass (kg)."""
+    cable, payload = scene.cable, scene.end.payload
+    water = scene.environment.water_density
+    line = cable.density * cable.cross_section_area * cable.length
+    return line + payload.mass + payload.added_mass * water * payload.volume
+
+
+def test_a_tension_limit_close_to_the_landed_tension_lengthens_the_approach():
     scene = lowering_scene(**STILL)
-    _, top = tension_acceleration(landing_scene(scene))
-    tight = landing_scene(scene.updated({"lowering.tension_max": top + 500.0}))
-    allowed, _ = tension_acceleration(tight)
-    assert tight.winch.acceleration_max == pytest.approx(allowed / tight.winch.drum_radius)
-    assert tight.winch.acceleration_max < scene.winch.acceleration_max
+    normal = landing_scene(scene)
+    _, top = tension_acceleration(normal)
+    # The landed line is the hover's longer by HOVER: its static tension is higher by that
+    # much rope's submerged weight; 500 N above it is the room left.
+    water, cable = scene.environment.water_density, normal.cable
+    weight = (cable.density - water) * cable.cross_section_area * scene.environment.gravity
+    most = top + weight * HOVER + 500.0
+    tight = landing_scene(scene.updated({"lowering.tension_max": most}))
+    allowed, _ = tension_acceleration(tight, HOVER)
+    assert allowed == pytest.approx(TENSION_SHARE * 500.0 / mass_of(tight), rel=1e-9)
+    land_time = tight.lowering.land_time
+    assert land_time > normal.lowering.land_time
+    assert PEAK_ACCELERATION * HOVER / land_time**2 <= allowed
+    assert tight.numerics.duration - land_time == pytest.approx(
+        normal.numerics.duration - normal.lowering.land_time
+    )
+    # The drum keeps its own limit: a compensated heave moves the drum, not the load.
+    assert tight.winch.acceleration_max == scene.winch.acceleration_max
+    result = land(tight)
+    assert result.success, result.status
+    assert result.report.peak_tension <= most
 
 
 def test_the_optimised_landing_lands_every_check_passed_on_the_scenes_own_model(

@@ -13,10 +13,11 @@ scene's own model are those of :func:`cable_ocp.optimize`, and the closed loop
 (:func:`cable_ocp.mpc`, the measured heave fed back) is the same problem with its named
 parameters set at every sample.
 
-The top tension limits enter as a limit on the line's acceleration (:func:`tension_acceleration`:
-the line and the load accelerated as one rigid body change the top tension by their mass times
-the acceleration), the winch's rate and acceleration limits as the problem's linear bounds, the
-minimum clearance as its clearance rows. :func:`land` then measures every constraint on the
+The top tension limits bound the reference's acceleration (:func:`tension_acceleration`: the line
+and the load accelerated as one rigid body change the top tension by their mass times the
+acceleration; a compensated heave moves the drum, not the load, so they are no limit on the
+drum), the winch's rate and acceleration limits are the problem's linear bounds, the minimum
+clearance its clearance rows. :func:`land` then measures every constraint on the
 verified run by :func:`~.checks.check_landing`, code independent of the solver.
 """
 
@@ -95,27 +96,31 @@ def heave_peaks(scene, duration: float) -> tuple[float, float]:
     return float(np.abs(velocity[2]).max()), float(np.abs(acceleration[2]).max())
 
 
-def tension_acceleration(scene: Scene) -> tuple[float, float]:
+def tension_acceleration(scene: Scene, hover: float = 0.0) -> tuple[float, float]:
     """The line acceleration (m/s^2) the tension limits allow, and the hover's top tension (N).
 
-    At the hover the top tension is ``T_0`` (the model's, at its equilibrium). Paying out with
-    acceleration ``a`` lowers it, hauling in raises it, by about ``m a``: ``m`` the line's mass,
-    the payload's and its added mass. Returned: :data:`TENSION_SHARE` of the smaller room,
-    ``min(T_0 - tension_min, tension_max - T_0) / m`` (inf without limits), and ``T_0``.
+    At the hover the top tension is ``T_0`` (the model's, at its equilibrium); once the ``hover``
+    (m) is paid out it is about ``T_0 + w hover``, ``w`` the rope's submerged weight per metre.
+    Paying out with acceleration ``a`` lowers it, hauling in raises it, by about ``m a``: ``m``
+    the line's mass, the payload's and its added mass. Returned: :data:`TENSION_SHARE` of the
+    smaller room, ``min(T_0 - tension_min, tension_max - T_0 - w hover) / m`` (0 when there is
+    none), and ``T_0``.
     """
     model = CableModel.from_scene(scene)
     drive = Drive.from_scene(scene)
     x0 = starting_state(model, drive, compiled=True)
     _, tensions = joints_and_tensions(model, x0[None, :], drive.inputs(np.zeros(1)).T, True)
     top = float(tensions[0, -1])
+    cable, environment = scene.cable, scene.environment
+    water = environment.water_density if environment.submerged else 0.0
+    weight = (cable.density - water) * cable.cross_section_area * environment.gravity
     lowering = scene.lowering
     room = top - lowering.tension_min
     if lowering.tension_max is not None:
-        room = min(room, lowering.tension_max - top)
-    mass = scene.cable.density * scene.cable.cross_section_area * scene.cable.length
+        room = min(room, lowering.tension_max - top - max(weight, 0.0) * hover)
+    mass = cable.density * cable.cross_section_area * cable.length
     payload = scene.end.payload
     if payload is not None:
-        water = scene.environment.water_density if scene.environment.submerged else 0.0
         mass += payload.mass + payload.added_mass * water * payload.volume
     return TENSION_SHARE * max(room, 0.0) / mass, top
 
@@ -133,10 +138,10 @@ def landing_scene(scene, hover: float = HOVER) -> Scene:
     Returns
     -------
     Scene
-        ``[lowering]`` with the approach's ``land_time`` (:func:`approach_time`), the hold of the
-        scene after it (``numerics.duration - lowering.land_time``), and the winch's
-        acceleration limit lowered to what the tension limits allow (:func:`tension_acceleration`)
-        where that is less.
+        ``[lowering]`` with the approach's ``land_time`` (:func:`approach_time`, lengthened
+        where the reference's peak acceleration would be more than the tension limits allow,
+        :func:`tension_acceleration`), and the hold of the scene after it
+        (``numerics.duration - lowering.land_time``).
 
     Raises
     ------
@@ -154,11 +159,15 @@ def landing_scene(scene, hover: float = HOVER) -> Scene:
     landed = trimmed_line(
         scene, lowering.height + hover, line, approach + hold, hover + HOLD_RANGE, table
     )
-    allowed, _ = tension_acceleration(landed)
-    winch = landed.winch
-    drum = allowed / winch.drum_radius
-    if winch.acceleration_max is None or drum < winch.acceleration_max:
-        landed = landed.updated({"winch.acceleration_max": drum})
+    # The tension limits bound the load's acceleration, not the drum's: a compensated heave
+    # moves the drum and leaves the load (and the tension) still. So they lengthen the approach.
+    allowed, _ = tension_acceleration(landed, hover)
+    if allowed > 0:
+        needed = math.ceil(math.sqrt(PEAK_ACCELERATION * hover / allowed))
+        if needed > approach:
+            landed = landed.updated(
+                {"lowering.land_time": float(needed), "numerics.duration": needed + hold}
+            )
     return landed
 
 
