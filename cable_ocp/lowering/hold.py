@@ -211,6 +211,15 @@ def _start_height(held: Scene, scene, reference: float) -> float:
     return float(clearance(scene.seabed, end, reference))
 
 
+def vessel_heights(run) -> np.ndarray:
+    """The top's prescribed heights over a run (k,), m: the vessel's, from the run's inputs.
+
+    Not the model's top joint, which carries the bonds' residual (1e-6 m): in a calm that alone
+    made a compensation ratio of -457000 %.
+    """
+    return run.inputs[:, INPUTS.top][:, 2]
+
+
 def compensation_ratio(top_heights, end_heights) -> tuple[float, float, float]:
     """The share of the vessel's heave kept off the load, ``100 (1 - std z_E / std z_top)`` (%).
 
@@ -257,7 +266,7 @@ def hold(
     result = mpc(held, quiet=quiet, **settings)
     run = result.trajectory
     deviation = float(np.max(np.abs(run.clearance_error)))
-    ratio, heave_std, load_std = compensation_ratio(run.top[:, 2], run.end[:, 2])
+    ratio, heave_std, load_std = compensation_ratio(vessel_heights(run), run.end[:, 2])
     line = run.inputs[:, INPUTS.top_length_rate], run.inputs[:, INPUTS.top_length_acceleration]
     rate, acceleration = (float(np.abs(v).max()) / held.winch.drum_radius for v in line)
     drum = tuple(drum_checks(held.winch, run.time, *line))

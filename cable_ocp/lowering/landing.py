@@ -40,6 +40,7 @@ from cable_ocp.lowering.hold import (
     compensation_ratio,
     held_on_station,
     trimmed_line,
+    vessel_heights,
 )
 from cable_ocp.model.cable import CableModel
 from cable_ocp.scene.schema import Scene
@@ -262,7 +263,7 @@ def land(
     if run is not None and run.time[-1] >= landing.lowering.land_time:
         report = check_landing(run, "inputs" if closed_loop else result)
         after = run.time >= landing.lowering.land_time
-        ratio = compensation_ratio(run.top[after, 2], run.end[after, 2])[0]
+        ratio = compensation_ratio(vessel_heights(run)[after], run.end[after, 2])[0]
     return LandingResult(
         scene=landing,
         closed_loop=closed_loop,
