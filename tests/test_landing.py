@@ -24,6 +24,7 @@ from cable_ocp.lowering.landing import (
     SPEED_SHARE,
     TENSION_SHARE,
     approach_time,
+    heave_peaks,
     land,
     landing_scene,
     tension_acceleration,
@@ -75,12 +76,12 @@ def test_the_landing_scene_hangs_the_end_at_the_hover_within_the_winch_and_the_r
     assert landed.model.elements == scene.winch.line.mesh.starting_elements(landed.cable.length)
     # The approach: the reference's peaks within their shares of the winch, the hold after it.
     land_time = landed.lowering.land_time
-    assert land_time == approach_time(scene, HOVER)
+    hold = scene.numerics.duration - scene.lowering.land_time
+    assert land_time == approach_time(scene, HOVER, hold)
     radius = scene.winch.drum_radius
     assert PEAK_SPEED * HOVER / land_time <= SPEED_SHARE * scene.winch.rate_max * radius
     peak = PEAK_ACCELERATION * HOVER / land_time**2
     assert peak <= ACCELERATION_SHARE * scene.winch.acceleration_max * radius
-    hold = scene.numerics.duration - scene.lowering.land_time
     assert landed.numerics.duration == pytest.approx(land_time + hold)
     # The drum may pay the hover out and more.
     assert landed.winch.angle_max * radius > HOVER
@@ -184,6 +185,13 @@ def test_the_optimised_landing_lands_every_check_passed_on_the_scenes_own_model(
 def test_the_closed_loop_lands_and_holds_against_the_heave():
     scene = lowering_scene(**HEAVING)
     result = land(scene, closed_loop=True)
+    # The approach leaves the drum its heave's peaks over the landing and the hold.
+    landed = result.scene
+    speed, acceleration = heave_peaks(landed, landed.numerics.duration)
+    radius, land_time = landed.winch.drum_radius, landed.lowering.land_time
+    assert PEAK_SPEED * HOVER / land_time + speed <= landed.winch.rate_max * radius
+    peak = PEAK_ACCELERATION * HOVER / land_time**2
+    assert peak + acceleration <= landed.winch.acceleration_max * radius
     assert result.success, result.status
     report = result.report
     assert abs(report.landing_error) < scene.lowering.height_tolerance

@@ -55,6 +55,7 @@ SPEED_SHARE, ACCELERATION_SHARE, LANDING_SPEEDS = 0.5, 0.5, 10.0
 SHORTEST_APPROACH = 10.0  # s
 NO_ROOM = 0.1  # share of a winch limit used when the heave's peak leaves none
 HEAVE_SAMPLE = 0.1  # s between the samples of the heave's peaks
+APPROACH_ITERATIONS = 8  # of the approach and the heave's window (it stops growing in 2-3)
 # Share of the room between the hover's top tension and each tension limit that the line's
 # acceleration may use (the rest is for drag and the heave).
 TENSION_SHARE = 0.5
@@ -62,18 +63,30 @@ TENSION_SHARE = 0.5
 PEAK_SPEED, PEAK_ACCELERATION = 1.875, 10 / math.sqrt(3)
 
 
-def approach_time(scene, hover: float) -> float:
+def approach_time(scene, hover: float, hold: float) -> float:
     """The landing's duration from the hover (s, whole seconds): the reference's peaks in limits.
 
     The drum pays the heave out too, so the room is what the winch has beyond the heave's peaks
-    (:func:`heave_peaks`). The smoothstep over ``hover`` (m) keeps its peak speed within
+    over the landing and its ``hold`` (s) (:func:`heave_peaks`; the landing scene's sea is the
+    scene's from t = 0, so the window grows with the approach until the approach stops
+    growing). The smoothstep over ``hover`` (m) keeps its peak speed within
     :data:`SPEED_SHARE` of that room in line speed and within :data:`LANDING_SPEEDS` landing
     speeds, its peak acceleration within :data:`ACCELERATION_SHARE` of the room in line
     acceleration, and lasts at least :data:`SHORTEST_APPROACH`. A drum with no room beyond the
     heave is given :data:`NO_ROOM` of its limit (the landing's checks will say it is too slow).
     """
+    approach = SHORTEST_APPROACH
+    for _ in range(APPROACH_ITERATIONS):
+        longer = _approach_within(scene, hover, *heave_peaks(scene, approach + hold))
+        if longer <= approach:
+            break
+        approach = longer
+    return approach
+
+
+def _approach_within(scene, hover: float, heave_speed: float, heave_acceleration: float):
+    """The approach (s) that keeps the reference's peaks within the room the heave leaves."""
     winch = scene.winch
-    heave_speed, heave_acceleration = heave_peaks(scene, scene.numerics.duration)
     speed = LANDING_SPEEDS * scene.lowering.landing_speed
     if winch.rate_max is not None:
         line = winch.rate_max * winch.drum_radius
@@ -154,7 +167,7 @@ def landing_scene(scene, hover: float = HOVER) -> Scene:
     if not hover > 0:
         raise ValueError(f"hover = {hover!r} m is out of range: must be > 0")
     lowering = scene.lowering
-    approach = approach_time(scene, hover)
+    approach = approach_time(scene, hover, hold)
     table = {**scene.to_dict()["lowering"], "land_time": approach}
     line = landing_line(scene) - hover
     landed = trimmed_line(
