@@ -24,13 +24,15 @@ from cable_ocp.sweep import open_sweep
 from cable_ocp.sweep.store import case_path
 
 ROOT = Path(__file__).resolve().parent.parent
-CASES = 5
-# small_tow at a fine step: about half a second per case, so the engine dies with cases left to run.
+CASES = 8
+# small_tow at a fine step: about a second per case (a fifth of it with a warm compile cache), and
+# cases enough that the engine dies with some left to run: with 5 cases of 0.2 s the last result
+# could arrive before the sweep saw its scheduler die, and it ended with exit 0.
 SWEEP = f"""
 scene = "small_tow"
 [set]
-"numerics.duration" = 20.0
-"numerics.step" = 0.02
+"numerics.duration" = 40.0
+"numerics.step" = 0.01
 [grid]
 "top.tow.surge_speed" = {[round(0.6 + 0.1 * k, 1) for k in range(CASES)]}
 """
