@@ -145,7 +145,7 @@ def test_a_tension_limit_close_to_the_landed_tension_lengthens_the_approach():
 
 
 def test_the_optimised_landing_lands_every_check_passed_on_the_scenes_own_model(
-    landing, validation
+    landing, validation, tmp_path
 ):
     scene, landed = landing
     result = land(landed)
@@ -180,6 +180,14 @@ def test_the_optimised_landing_lands_every_check_passed_on_the_scenes_own_model(
     )
     assert other.success, other.status
     assert other.report.landing_error == pytest.approx(report.landing_error, abs=2e-3)
+    # The paper's method on the same problem (its Omega is the deviation from the reference).
+    searched = land(landed, solver="nelder-mead")
+    assert searched.success, searched.status
+    # Saved, loaded and replayed: the same run.
+    result.result.save(tmp_path / "landing")
+    saved = co.load_result(tmp_path / "landing")
+    replayed = co.simulate(saved.scene, winch=saved)
+    assert replayed.omega == pytest.approx(result.result.omega, abs=1e-9)
 
 
 def test_the_closed_loop_lands_and_holds_against_the_heave():

@@ -125,13 +125,16 @@ class NelderMead(ProblemSolver):
         """Minimise Omega over the knots from ``guess`` (rad), moved into the winch bounds.
 
         The search takes the problem's own parameter values only (the open loop's, with no
-        model-correction bias) and no fixed parameters or narrowed bounds: it is the paper's
-        open-loop method, not a closed loop's solver. ``success`` is False, with the reason in
+        model-correction bias; a landing's reference is the problem's own) and no fixed
+        parameters or narrowed bounds: it is the paper's open-loop method, not a closed loop's
+        solver. ``success`` is False, with the reason in
         ``status``, when SciPy reports a failure (e.g. the evaluation limit), when no evaluated
         profile both kept the winch bounds and simulated, or when the returned profile breaks a
         bound by more than :data:`cable_ocp.drive.bounds.BOUND_TOLERANCE`.
         """
-        if fixed or lower is not None or upper is not None or np.any(values.bias):
+        # The problem's own bias is a landing's reference (zero elsewhere), which its Omega has.
+        own = self.problem.parameter_values().bias
+        if fixed or lower is not None or upper is not None or np.any(values.bias != own):
             raise ValueError(
                 "Nelder-Mead solves the open-loop problem only: no fixed parameters, narrowed "
                 "bounds or model-correction bias"
