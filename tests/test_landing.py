@@ -223,6 +223,8 @@ def test_a_landing_refuses_bad_input_before_any_work():
     scene = lowering_scene()
     with pytest.raises(ValueError, match="hover = -1.0 m is out of range"):
         landing_scene(scene, hover=-1.0)
+    with pytest.raises(ValueError, match="hover = 150.0 m is out of range: .* rigid rod"):
+        landing_scene(scene, hover=150.0)
     with pytest.raises(ValueError, match="top.motion = 'tow'"):
         landing_scene(lowering_scene(**{"top.motion": "tow"}))
     with pytest.raises(ValueError, match="leaves no hold"):

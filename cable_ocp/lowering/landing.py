@@ -44,7 +44,7 @@ from cable_ocp.lowering.hold import (
 )
 from cable_ocp.model.cable import CableModel
 from cable_ocp.scene.schema import Scene
-from cable_ocp.simulation.run import joints_and_tensions
+from cable_ocp.simulation.run import TOP_SHARE, joints_and_tensions
 from cable_ocp.simulation.statics import starting_state
 
 HOVER = 10.0  # m above the target height where the descent stops before the landing
@@ -161,7 +161,7 @@ def landing_scene(scene, hover: float = HOVER) -> Scene:
     ------
     ValueError
         A scene without ``[lowering]`` or ``[winch.line]``, a moving vessel, a hover that is not
-        positive, or no hold.
+        positive or that would make the top element a rigid rod of the line, or no hold.
     """
     hold = held_on_station(scene, "a landing")
     if not hover > 0:
@@ -173,6 +173,7 @@ def landing_scene(scene, hover: float = HOVER) -> Scene:
     landed = trimmed_line(
         scene, lowering.height + hover, line, approach + hold, hover + HOLD_RANGE, table
     )
+    _check_rod(landed, hover)
     # The tension limits bound the load's acceleration, not the drum's: a compensated heave
     # moves the drum and leaves the load (and the tension) still. So they lengthen the approach.
     allowed, _ = tension_acceleration(landed, hover)
@@ -183,6 +184,23 @@ def landing_scene(scene, hover: float = HOVER) -> Scene:
                 {"lowering.land_time": float(needed), "numerics.duration": needed + hold}
             )
     return landed
+
+
+def _check_rod(landed: Scene, hover: float) -> None:
+    """Refuse a hover whose pay-out would make the top element a rigid rod of the line.
+
+    The landing scene pays the hover out through its graded top element, which may carry at most
+    :data:`~cable_ocp.simulation.run.TOP_SHARE` of the line (the simulation refuses more).
+    """
+    reach = landed.winch.angle_max * landed.winch.drum_radius
+    top, line = landed.top_element_length, landed.cable.length
+    if top + reach > TOP_SHARE * (line + reach):
+        largest = TOP_SHARE * (line + reach) - top - (reach - hover)
+        raise ValueError(
+            f"hover = {hover!r} m is out of range: its pay-out would make the top element "
+            f"{top + reach:.4g} m of {line + reach:.4g} m of line, more than {TOP_SHARE:.0%} "
+            f"(a rigid rod, not a rope); must be <= about {max(largest, 0.0):.3g} m here"
+        )
 
 
 @dataclass(frozen=True)
