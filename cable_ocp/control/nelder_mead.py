@@ -127,10 +127,10 @@ class NelderMead(ProblemSolver):
         The search takes the problem's own parameter values only (the open loop's, with no
         model-correction bias; a landing's reference is the problem's own) and no fixed
         parameters or narrowed bounds: it is the paper's open-loop method, not a closed loop's
-        solver. ``success`` is False, with the reason in
-        ``status``, when SciPy reports a failure (e.g. the evaluation limit), when no evaluated
-        profile both kept the winch bounds and simulated, or when the returned profile breaks a
-        bound by more than :data:`cable_ocp.drive.bounds.BOUND_TOLERANCE`.
+        solver. ``success`` is False, with the reason in ``status``, when SciPy reports a
+        failure (e.g. the evaluation limit), when no evaluated profile both kept the winch bounds
+        and simulated, or when the returned profile breaks a bound by more than
+        :data:`cable_ocp.drive.bounds.BOUND_TOLERANCE`.
         """
         # The problem's own bias is a landing's reference (zero elsewhere), which its Omega has.
         own = self.problem.parameter_values().bias

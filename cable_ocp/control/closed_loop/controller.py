@@ -9,8 +9,8 @@ forecast top motion, the end force over the horizon, the end offset (measured en
 reduced end, :mod:`.projection`), the clearance reference, and on a landing its reference over
 the horizon (in the bias, :mod:`cable_ocp.simulation.landing_reference`). The solver is the open
 loop's transcription: one Gauss-Newton step from the plan in force moved on to the sample (the
-real-time iteration), or IPOPT on the multiple-shooting
-NLP (the earlier path, kept as the baseline).
+real-time iteration), or IPOPT on the multiple-shooting NLP (the earlier path, kept as the
+baseline).
 
 Objective: ``1/H int e^2 dt + w 1/H int (r_D phi')^2 dt`` on the RK4 grid; the first node is held
 at the angle and rate the winch has now, and the angle range is narrowed by the room the heave
