@@ -85,6 +85,21 @@ def test_a_duration_no_grid_of_5_s_fits_shortens_the_full_models_step(models_dir
     assert result.verified_step <= 0.1
 
 
+def test_the_fitted_step_keeps_the_output_samples_on_its_steps(models_dir):
+    """T = 79 s at h = 0.05 s, a sample every 10 steps: 16 nodes asked for 1584 steps, which 10
+    does not divide (a landing failed its verification on it); the fit takes 1600."""
+    scene = load_scene(
+        models_dir / "small_tow.toml",
+        {"numerics.duration": 79.0, "numerics.step": 0.05, "numerics.output_every": 10},
+    )
+    fitted, _ = defaults.on_nodes(scene, 16)
+    steps = round(79.0 / fitted.numerics.step)
+    assert steps % 16 == 0 and steps % 10 == 0 and steps == 1600
+    assert fitted.numerics.step <= 0.05
+    run = simulate(fitted, quiet=True)
+    assert run.time[-1] == pytest.approx(79.0) and run.time.size == steps // 10 + 1
+
+
 def test_reduced_step_follows_the_limit_along_the_run(models_dir):
     """The thin rope's reduced step is within 0.7 of its limit along the locked run, which is
     below its limit at rest (drag grows with speed), and the default optimize succeeds."""
