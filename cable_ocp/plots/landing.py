@@ -10,9 +10,11 @@ from __future__ import annotations
 from pathlib import Path
 
 import matplotlib.pyplot as plt
+import numpy as np
 from matplotlib.figure import Figure
 from matplotlib.ticker import MaxNLocator
 
+from cable_ocp.model.layout import INPUTS
 from cable_ocp.plots import finish_figure, run_title, significant
 from cable_ocp.simulation.landing_reference import is_landing, reference_error
 from cable_ocp.simulation.line_trajectory import LineTrajectory
@@ -78,6 +80,11 @@ def landing(
                     label=f"landing +/- {significant(tolerance)} m")  # fmt: skip
     scale = 4 * max(lowering.hold_band, lowering.height_tolerance)
     middle.set_ylim(-scale, scale)
+    heave = run.inputs[:, INPUTS.top][:, 2]
+    if np.ptp(heave[near]) > 0:  # the vessel's heave, on its own scale: what the load is spared
+        sea = middle.twinx()
+        sea.plot(time[near], heave[near] - heave[near].mean(), color="0.6", lw=0.8)
+        sea.set_ylabel("vessel heave at the winch [m]", color="0.4")
     middle.set_ylabel("end above the target [m]")
     middle.legend(fontsize=8, loc="upper right")
     upper.set_ylabel("end above the seabed [m]")
