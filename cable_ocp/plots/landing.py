@@ -14,12 +14,13 @@ import numpy as np
 from matplotlib.figure import Figure
 from matplotlib.ticker import MaxNLocator
 
-from cable_ocp.model.layout import INPUTS
 from cable_ocp.plots import finish_figure, run_title, significant
 from cable_ocp.simulation.landing_reference import is_landing, reference_error
 from cable_ocp.simulation.line_trajectory import LineTrajectory
 from cable_ocp.simulation.seabed import clearance, clearance_reference
 from cable_ocp.simulation.trajectory import Trajectory
+
+HEAVE_SHOWN = 1e-3  # m: a top that moves less in the last tenth is drawn without its heave
 
 
 def landing(
@@ -80,8 +81,9 @@ def landing(
                     label=f"landing +/- {significant(tolerance)} m")  # fmt: skip
     scale = 4 * max(lowering.hold_band, lowering.height_tolerance)
     middle.set_ylim(-scale, scale)
-    heave = run.inputs[:, INPUTS.top][:, 2]
-    if np.ptp(heave[near]) > 0:  # the vessel's heave, on its own scale: what the load is spared
+    heave = run.top[:, 2]
+    if np.ptp(heave[near]) > HEAVE_SHOWN:  # the vessel's heave on its own scale: what the load
+        # is spared (the top joint's bond residual, 1e-6 m, is no heave)
         sea = middle.twinx()
         sea.plot(time[near], heave[near] - heave[near].mean(), color="0.6", lw=0.8)
         sea.set_ylabel("vessel heave at the winch [m]", color="0.4")
