@@ -1,8 +1,8 @@
 """Figures of a lowering (matplotlib), by the rules of :mod:`cable_ocp.plots`.
 
 :func:`landing` draws a run of a ``[lowering]`` scene against its targets: the end's height above
-the seabed with the reference descent, the landing's tolerance and the hold band, and the top
-tension between its limits. The figure returns; with ``path`` it is saved there and closed.
+the seabed with the reference descent (or a landing's reference), the landing's tolerance and the
+hold band with the vessel's heave beside them, and the top tension between its limits. The figure returns; with ``path`` it is saved there and closed.
 """
 
 from __future__ import annotations
