@@ -2,7 +2,8 @@
 
 :func:`landing` draws a run of a ``[lowering]`` scene against its targets: the end's height above
 the seabed with the reference descent (or a landing's reference), the landing's tolerance and the
-hold band with the vessel's heave beside them, and the top tension between its limits. The figure returns; with ``path`` it is saved there and closed.
+hold band with the vessel's heave beside them, and the top tension between its limits. The figure
+returns; with ``path`` it is saved there and closed.
 """
 
 from __future__ import annotations
