@@ -125,8 +125,9 @@ def run_lower_command(args: argparse.Namespace) -> int:
         for name, result in hover.items():
             run = result.result.trajectory
             if run is not None:
-                solver = result.result.solver if not result.closed_loop else ""
-                label = f"optimised ({solver})" if solver else "closed loop"
+                label = "closed loop" if result.closed_loop else "optimised"
+                if not result.closed_loop:
+                    label += f" ({result.result.solver})"
                 landing.landing(run, report=result.report, label=label,
                                 path=folder / f"hover_{name}.png")  # fmt: skip
         if held is not None:

@@ -174,9 +174,7 @@ def check_landing(run: Trajectory | LineTrajectory, winch=None, scene=None) -> L
               bool(tensions[sample, bond] > 0.0), f"at t = {time[sample]:g} s, bond {bond + 1}")
     )  # fmt: skip
     if isinstance(winch, str) and winch == "inputs":
-        inputs = run.inputs
-        checks += drum_checks(scene.winch, time, inputs[:, INPUTS.top_length_rate],
-                              inputs[:, INPUTS.top_length_acceleration])  # fmt: skip
+        checks += drum_checks(scene.winch, time, *sampled_line(run))
     else:
         checks += _drum_checks(scene, winch, time)
     if scene.seabed.minimum_clearance is not None:
@@ -268,6 +266,16 @@ def _drum_checks(scene, winch, time: np.ndarray) -> list[Check]:
     u = pay_out_drive(scene, winch_function(scene, winch)).inputs(dense)
     return drum_checks(scene.winch, dense, u[INPUTS.top_length_rate],
                        u[INPUTS.top_length_acceleration])  # fmt: skip
+
+
+def sampled_line(run: Trajectory) -> tuple[np.ndarray, np.ndarray]:
+    """The line's pay-out rate (m/s) and acceleration (m/s^2) at a run's samples, from its inputs.
+
+    Heave compensation included: what the drum did, where no profile between the samples is
+    known (a closed loop's plant run).
+    """
+    inputs = run.inputs
+    return inputs[:, INPUTS.top_length_rate], inputs[:, INPUTS.top_length_acceleration]
 
 
 def drum_checks(winch, time: np.ndarray, line_rate: np.ndarray, line_acceleration: np.ndarray):

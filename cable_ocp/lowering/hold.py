@@ -24,7 +24,7 @@ import numpy as np
 
 from cable_ocp.control.closed_loop.loop import mpc
 from cable_ocp.drive.drive import Drive
-from cable_ocp.lowering.checks import Check, drum_checks
+from cable_ocp.lowering.checks import Check, drum_checks, sampled_line
 from cable_ocp.lowering.descent import landing_line, seabed_reference
 from cable_ocp.model.cable import CableModel
 from cable_ocp.model.layout import INPUTS
@@ -267,7 +267,7 @@ def hold(
     run = result.trajectory
     deviation = float(np.max(np.abs(run.clearance_error)))
     ratio, heave_std, load_std = compensation_ratio(vessel_heights(run), run.end[:, 2])
-    line = run.inputs[:, INPUTS.top_length_rate], run.inputs[:, INPUTS.top_length_acceleration]
+    line = sampled_line(run)
     rate, acceleration = (float(np.abs(v).max()) / held.winch.drum_radius for v in line)
     drum = tuple(drum_checks(held.winch, run.time, *line))
     return HoldResult(result, held, deviation, scene.lowering.hold_band, ratio, heave_std,

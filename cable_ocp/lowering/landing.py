@@ -125,16 +125,16 @@ def tension_acceleration(scene: Scene, hover: float = 0.0) -> tuple[float, float
     x0 = starting_state(model, drive, compiled=True)
     _, tensions = joints_and_tensions(model, x0[None, :], drive.inputs(np.zeros(1)).T, True)
     top = float(tensions[0, -1])
-    cable, environment = scene.cable, scene.environment
-    water = environment.water_density if environment.submerged else 0.0
-    weight = (cable.density - water) * cable.cross_section_area * environment.gravity
+    element = model.spec.element  # the rope's mass and submerged weight per metre
     lowering = scene.lowering
     room = top - lowering.tension_min
     if lowering.tension_max is not None:
-        room = min(room, lowering.tension_max - top - max(weight, 0.0) * hover)
-    mass = cable.density * cable.cross_section_area * cable.length
+        weight = max(element.submerged_weight_per_length, 0.0)
+        room = min(room, lowering.tension_max - top - weight * hover)
+    mass = element.mass_per_length * scene.cable.length
     payload = scene.end.payload
     if payload is not None:
+        water = scene.environment.water_density if scene.environment.submerged else 0.0
         mass += payload.mass + payload.added_mass * water * payload.volume
     return TENSION_SHARE * max(room, 0.0) / mass, top
 

@@ -30,7 +30,7 @@ from cable_ocp.drive.vessel import smoothstep
 
 def is_landing(scene) -> bool:
     """Whether the scene is a fixed-``n`` landing (``[lowering]`` without ``[winch.line]``)."""
-    return getattr(scene, "lowering", None) is not None and scene.winch.line is None
+    return scene.lowering is not None and scene.winch.line is None
 
 
 def reference_error(scene, times, start_error: float) -> np.ndarray:
