@@ -229,6 +229,8 @@ def test_a_landing_refuses_bad_input_before_any_work():
         landing_scene(lowering_scene(**{"top.motion": "tow"}))
     with pytest.raises(ValueError, match="leaves no hold"):
         landing_scene(lowering_scene(**{"numerics.duration": 200.0}))
+    with pytest.raises(ValueError, match="from a hover by co.land"):
+        co.optimize(scene)  # a line paid out by elements: the message points to the landing
     with pytest.raises(ValueError, match="no \\[lowering\\] table"):
         land(co.load_scene(MODELS / "paper_flat.toml"))
 

@@ -647,6 +647,12 @@ def refuse_line_scene(scene, what: str) -> None:
             f"winch.line: {what} works on a fixed number of elements; a line paid out by "
             "elements ([winch.line]) is simulated only (co.simulate): leave [winch.line] out, "
             "and the winch's reach stays in its top element"
+            + (
+                "; a [lowering] scene lands by co.plan_landing, or from a hover by co.land "
+                "(co.landing_scene makes its fixed-n landing)"
+                if scene.lowering is not None
+                else ""
+            )
         )
 
 
