@@ -18,7 +18,7 @@ DIMENSIONLESS = frozenset({
     "hydrodynamics.added_mass_axial", "hydrodynamics.quadrature_points", "model.elements",
     "winch.knots", "numerics.output_every", "end.payload.drag", "end.payload.added_mass",
     "top.heave.sea_state.peak_enhancement", "top.heave.sea_state.components",
-    "top.heave.sea_state.seed",
+    "top.heave.sea_state.seed", "cable.fill_factor", "cable.axial_damping",
 })  # fmt: skip
 
 

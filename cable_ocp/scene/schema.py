@@ -286,10 +286,30 @@ class Cable(_Validated):
         0.0, doc="Rayleigh time constant: damping = bending_damping x stiffness.", ge=0, unit="s"
     )
     torsion_damping: float = _param(0.0, doc="Rayleigh time constant for torsion.", ge=0, unit="s")
+    axial_stiffness: float | None = _param(
+        None, doc="Axial stiffness EA; None means youngs_modulus x area x fill_factor.", gt=0,
+        unit="N", optional=True,
+    )  # fmt: skip
+    fill_factor: float = _param(
+        1.0, doc="Metallic-area fraction of a wire rope: EA = E A f (1: a solid section).",
+        ge=0.1, le=1.0, why="the metal fills a fraction of the rope's circle: about 0.5 to 0.8 "
+        "in a wire rope, 1 in a solid bar",
+    )  # fmt: skip
+    axial_damping: float = _param(
+        0.02, doc="Axial structural damping, as a ratio of critical of the line's first axial "
+        "mode.", ge=0, le=1,
+    )  # fmt: skip
 
     def _check_relations(self) -> None:
+        if self.axial_stiffness is not None and self.fill_factor != 1.0:
+            raise SceneError(
+                self._path("fill_factor"),
+                f" = {self.fill_factor!r} beside cable.axial_stiffness = "
+                f"{self.axial_stiffness!r} N: give one of the two (axial_stiffness is EA itself; "
+                "fill_factor scales youngs_modulus x area when EA is left out)",
+            )
         derived = ("cross_section_area", "mass_per_length", "bending_stiffness")
-        for name in (*derived, "torsional_stiffness"):
+        for name in (*derived, "torsional_stiffness", "axial_stiffness_value"):
             try:
                 finite = math.isfinite(getattr(self, name))
             except OverflowError:
@@ -321,6 +341,13 @@ class Cable(_Validated):
     def torsional_stiffness(self) -> float:
         """Torsional stiffness G I_p = G pi d^4/32, N m^2."""
         return self.shear_modulus * math.pi * self.diameter**4 / 32
+
+    @property
+    def axial_stiffness_value(self) -> float:
+        """Effective axial stiffness EA, N (``axial_stiffness`` if given, else E A f)."""
+        if self.axial_stiffness is not None:
+            return self.axial_stiffness
+        return self.youngs_modulus * self.cross_section_area * self.fill_factor
 
 
 @_section("environment.current_profile")
@@ -411,6 +438,11 @@ class ModelOptions(_Validated):
     elements: int = _param(15, "int", "n; the model has n+1 rigid elements.", ge=1, le=1000)
     torsion: bool = _param(False, "bool", "6-DOF elements with torsion springs.")
     bending: bool = _param(True, "bool", "Bending springs on.")
+    axial: str = _param(
+        "auto", "choice", "Axial compliance of the rope: rigid elements, elastic, or chosen from "
+        "the scene (auto: elastic where the line's first axial period reaches its excitation).",
+        choices=("rigid", "elastic", "auto"),
+    )  # fmt: skip
 
 
 @_section("top.tow")
