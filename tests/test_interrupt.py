@@ -129,3 +129,69 @@ def test_a_broken_tolerance_shows_its_excess():
     assert apart(0.000100049, 1e-4) == ("0.00010005", "0.0001")
     assert apart(0.00104, 1e-4) == ("0.00104", "0.0001")
     assert apart(1e-4, 1e-4) == ("0.0001", "0.0001")
+
+
+# --- Ctrl-C while a result is written (issue 45 item 1) -------------------------------------------
+
+# Run as a child: a real SIGINT, sent by the process to itself in the middle of netCDF4's
+# combined lock (the first lock taken, the second not yet) the AT-th time it is taken, where an
+# interrupt that is let through leaves a process-wide lock held: the 1st (opening the file) and
+# the 8th (inside the write, whose close then waited on it for ever: 0 % CPU, the folder's lock
+# and scratch folder kept).
+SIGINT_IN_THE_WRITE = """
+import signal, sys
+from xarray.backends import locks
+
+taken = locks.acquire
+
+def acquire(lock, blocking=True):
+    got = taken(lock, blocking)
+    acquire.calls = getattr(acquire, "calls", 0) + 1
+    if acquire.calls == AT:
+        signal.raise_signal(signal.SIGINT)
+    return got
+
+locks.acquire = acquire
+"""
+WRITE_TIMEOUT = 60  # s: a write that an interrupt hangs never ends
+
+
+@pytest.mark.skipif(os.name != "posix", reason="SIGINT")
+@pytest.mark.parametrize("at", [1, 8])
+def test_ctrl_c_while_a_run_is_written_exits_130_leaving_nothing(tmp_path, at):
+    out = tmp_path / "run"
+    command = ["simulate", str(MODELS / "hanging.toml"), "--set", "numerics.duration=2.0",
+               "--quiet", "--out", str(out)]  # fmt: skip
+    child = SIGINT_IN_THE_WRITE.replace("AT", str(at))
+    child += f"from cable_ocp.cli import main\nsys.exit(main({command!r}))"
+    run = subprocess.run([sys.executable, "-c", child], capture_output=True, text=True,
+                         timeout=WRITE_TIMEOUT)  # fmt: skip
+    assert run.returncode == 130, run.stderr
+    assert "interrupted" in run.stderr and "Traceback" not in run.stderr
+    assert sorted(p.name for p in tmp_path.iterdir()) == []  # no folder, scratch or lock left
+
+
+@pytest.mark.skipif(os.name != "posix", reason="SIGINT")
+def test_ctrl_c_in_a_save_is_raised_after_it_and_the_next_save_works(tmp_path):
+    child = (
+        SIGINT_IN_THE_WRITE.replace("AT", "8")
+        + f"""
+import cable_ocp as co
+from pathlib import Path
+folder = Path({str(tmp_path)!r})
+scene = co.load_scene({str(MODELS / "small_tow.toml")!r}, {{"numerics.duration": 2.0}})
+trajectory = co.simulate(scene, quiet=True)
+try:
+    trajectory.save(folder / "first")
+except KeyboardInterrupt:
+    print("interrupted:", sorted(p.name for p in folder.iterdir()))
+trajectory.save(folder / "second")
+print("saved:", co.Trajectory.load(folder / "second").time.size)
+"""
+    )
+    run = subprocess.run([sys.executable, "-c", child], capture_output=True, text=True,
+                         timeout=WRITE_TIMEOUT)  # fmt: skip
+    assert run.returncode == 0, run.stderr
+    lines = run.stdout.splitlines()
+    assert lines[0] == "interrupted: []", run.stdout  # neither first.nc nor its scratch file
+    assert lines[1].startswith("saved: ") and int(lines[1].split()[1]) > 1

@@ -14,6 +14,7 @@ from collections.abc import Iterator
 from contextlib import contextmanager
 from pathlib import Path
 
+from cable_ocp.result_files import netcdf
 from cable_ocp.scene.output import atomic_directory
 
 try:
@@ -34,12 +35,15 @@ def _size_limit() -> int | None:
 
 def _cause(folder: Path, error: RuntimeError) -> str:
     """Why writing into ``folder`` failed with netCDF's ``error``, as the file system tells it."""
-    files = sorted(folder.rglob("*.nc"), key=lambda p: p.stat().st_mtime)
-    name = files[-1].name if files else "the results"
+    if isinstance(error, netcdf.WriteFailed):  # its scratch file is gone: the error says
+        name, size = error.path.name, error.size
+    else:
+        files = sorted(folder.rglob("*.nc"), key=lambda p: p.stat().st_mtime)
+        name = files[-1].name if files else "the results"
+        size = files[-1].stat().st_size if files else 0
     limit = _size_limit()
     # A write that would cross the limit fails whole, so the file may stop short of it.
     if limit is not None:
-        size = files[-1].stat().st_size if files else 0
         return (
             f"writing {name}: the file is too large for this process's file-size limit of "
             f"{limit} bytes (ulimit -f, prlimit --fsize; it got to {size} bytes); raise the "

@@ -9,6 +9,12 @@ objective history in m^2. This module writes 3 and reads 2 and 3 (each result's 
 
 from __future__ import annotations
 
+import os
+import secrets
+import signal
+import threading
+from collections.abc import Callable, Iterator
+from contextlib import contextmanager
 from importlib import metadata
 from pathlib import Path
 
@@ -44,9 +50,16 @@ def format_of(dataset: xr.Dataset) -> int:
 
 
 def write(dataset: xr.Dataset, path: Path, groups: dict[str, xr.Dataset] | None = None) -> Path:
-    """Write a result's Dataset to netCDF at ``path``, without any Dask scheduler's lock.
+    """Write a result's Dataset to netCDF at ``path``, atomically, without Dask's scheduler lock.
 
     ``groups`` are written beside it as netCDF groups by name (a line's segments).
+
+    The file is written as a scratch file ``.NAME.XXXXXXXX.tmp`` beside ``path`` and renamed onto
+    it, so ``path`` holds either its old content or the whole new file; on any exception,
+    Ctrl-C included, the scratch file is removed. A Ctrl-C that arrives while netCDF4 writes is
+    held until the part being written (the root, or a group) is closed, then raised: an interrupt
+    inside xarray's write leaves netCDF4's process-wide locks held, and the next close waits on
+    them for ever.
 
     A result's arrays are in memory, so they go straight to xarray's netCDF4 store under
     netCDF4's own locks: ``Dataset.to_netcdf`` first asks Dask for its scheduler, which imports
@@ -62,14 +75,61 @@ def write(dataset: xr.Dataset, path: Path, groups: dict[str, xr.Dataset] | None 
         if any(variable.chunks is not None for variable in part.variables.values()):
             raise ValueError(f"{path}: a result's arrays must be in memory, not Dask arrays")
     lock = combine_locks([NETCDFC_LOCK, HDF5_LOCK])  # what to_netcdf takes, less Dask's
-    for k, (group, part) in enumerate(parts.items()):
-        store = NetCDF4DataStore.open(path, mode="a" if k else "w", format="NETCDF4",
-                                      group=group, lock=lock)  # fmt: skip
-        try:
-            part.dump_to_store(store)
-        finally:
-            store.close()
+    scratch = path.parent / f".{path.name}.{secrets.token_hex(4)}.tmp"
+    try:
+        with _interrupts_held() as interrupt_if_seen:
+            for k, (group, part) in enumerate(parts.items()):
+                store = NetCDF4DataStore.open(scratch, mode="a" if k else "w", format="NETCDF4",
+                                              group=group, lock=lock)  # fmt: skip
+                try:
+                    part.dump_to_store(store)
+                finally:
+                    store.close()
+                interrupt_if_seen()
+        os.replace(scratch, path)
+    except RuntimeError as error:  # netCDF's "NetCDF: HDF error": a refused write
+        size = scratch.stat().st_size if scratch.exists() else 0
+        scratch.unlink(missing_ok=True)
+        raise WriteFailed(str(error), path, size) from error
+    except BaseException:
+        scratch.unlink(missing_ok=True)
+        raise
     return path
+
+
+class WriteFailed(RuntimeError):
+    """netCDF's error (its message) writing ``path``, whose scratch file got to ``size`` bytes."""
+
+    def __init__(self, message: str, path: Path, size: int):
+        super().__init__(message)
+        self.path, self.size = path, size
+
+
+@contextmanager
+def _interrupts_held() -> Iterator[Callable[[], None]]:
+    """Hold SIGINT over a block; yields a function that delivers a held one (call it when safe).
+
+    A held signal is delivered to the handler it was meant for (Python's: KeyboardInterrupt) at
+    the next call of the yielded function, or when the block ends. Only the main thread
+    receives signals; elsewhere, or where SIGINT has no Python handler (it is ignored, or the
+    system's default ends the process), the block runs as it is.
+    """
+    previous = signal.getsignal(signal.SIGINT)
+    if threading.current_thread() is not threading.main_thread() or not callable(previous):
+        yield lambda: None
+        return
+    held: list[int] = []
+
+    def deliver() -> None:
+        if held:
+            previous(held.pop(), None)
+
+    signal.signal(signal.SIGINT, lambda number, frame: held.append(number))
+    try:
+        yield deliver
+    finally:
+        signal.signal(signal.SIGINT, previous)
+    deliver()
 
 
 # Deflate, the netCDF4 compression, packs at most about 1032 bytes into one: a file cannot hold
