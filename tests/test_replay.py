@@ -145,3 +145,22 @@ def test_cable_ocp_replay_refuses_what_is_not_an_optimum(tmp_path, capsys):
     assert code == 2
     assert "holds a Trajectory; replay takes what optimize saved" in capsys.readouterr().err
     assert not (tmp_path / "o").exists()
+
+
+@pytest.mark.parametrize("given", ["folder", "file", "parent"])
+def test_cable_ocp_replay_never_writes_over_its_source(heaving_optimum, tmp_path, capsys, given):
+    """``--out`` the optimum's folder (given as its folder or its result.nc), or a folder that
+    holds it, is refused before any work: the replay's run would replace the optimum."""
+    _, result, _ = heaving_optimum
+    parent = tmp_path / "runs"
+    folder = parent / "optimum"
+    result.save(folder)
+    for results in (parent, folder):  # results folders (as optimize --out writes), replaceable
+        (results / ".cable_ocp-results").write_text("")
+    before = {p.name: p.read_bytes() for p in folder.iterdir()}
+    source = {"folder": folder, "file": folder / "result.nc", "parent": folder}[given]
+    out = parent if given == "parent" else folder
+    code = cli.main(["replay", str(source), "--out", str(out), "--quiet"])
+    assert code == 2
+    assert "is the folder replay reads" in capsys.readouterr().err
+    assert {p.name: p.read_bytes() for p in folder.iterdir()} == before

@@ -75,6 +75,14 @@ def _replay(args) -> int:
     from cable_ocp.control.results import load_result
     from cable_ocp.simulation.run import simulate
 
+    source = args.result.expanduser().resolve()
+    source = source.parent if source.suffix == ".nc" else source
+    out = args.out.expanduser().resolve()
+    if out == source or out in source.parents:
+        raise ValueError(
+            f"--out {args.out}: is the folder replay reads ({source}), which the replay's run "
+            "would replace; give another folder; nothing was written"
+        )
     result = load_result(args.result)
     if not isinstance(result, OcpResult):
         raise ValueError(
