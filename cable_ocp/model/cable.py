@@ -29,6 +29,7 @@ from cable_ocp.model.layout import INPUT_NAMES, INPUT_SIZE
 from cable_ocp.model.parameters import parameter_names, parameter_values, structure_of
 from cable_ocp.model.parametric import ModelLayout, ParametricModel, parametric_model
 from cable_ocp.model.rfe import ElementProperties
+from cable_ocp.scene.axial_choice import axial_choice
 
 __all__ = ["INPUT_NAMES", "INPUT_SIZE", "CableModel", "ModelSpec", "Payload", "spec_from_scene"]
 # Models kept per process by CableModel.from_scene (each holds its symbolic graph and compiled
@@ -83,6 +84,10 @@ class ModelSpec:
     baumgarte_alpha, baumgarte_beta : float, 1/s
         Gains of ``Phi'' + 2 alpha Phi' + beta^2 Phi = 0``.
     payload : Payload
+    axial_stiffness : float, N
+        ``EA`` of an elastic rope (:mod:`cable_ocp.model.axial`); 0: rigid, the paper's rope.
+    axial_damping : float
+        Damping ratio of the elastic rope's axial mode.
     """
 
     elements: int
@@ -98,6 +103,8 @@ class ModelSpec:
     baumgarte_alpha: float
     baumgarte_beta: float
     payload: Payload = field(default_factory=Payload)
+    axial_stiffness: float = 0.0
+    axial_damping: float = 0.0
 
     @property
     def segment_length(self) -> float:
@@ -138,6 +145,7 @@ def spec_from_scene(scene, elements: int | None = None) -> ModelSpec:
         hydro=hydro,
     )
     elements = elements or scene.model.elements
+    elastic = axial_choice(scene).elastic
     return ModelSpec(
         elements=elements,
         cable_length=cable.length,
@@ -152,6 +160,8 @@ def spec_from_scene(scene, elements: int | None = None) -> ModelSpec:
         baumgarte_alpha=scene.numerics.baumgarte_alpha,
         baumgarte_beta=scene.numerics.baumgarte_beta,
         payload=_payload(scene.end.payload),
+        axial_stiffness=cable.axial_stiffness_value if elastic else 0.0,
+        axial_damping=cable.axial_damping if elastic else 0.0,
     )
 
 
@@ -257,6 +267,7 @@ class CableModel(ModelLayout):
         """Names of the state entries, e.g. ``psi_3`` and ``d_psi_3`` (its rate)."""
         coords = ["x", "y", "z", "psi", "theta", "phi"][: self.dofs]
         names = [f"{c}_{i}" for i in range(self.element_count) for c in coords]
+        names += ["strain"] * self.axial
         return names + [f"d_{name}" for name in names]
 
     def bind(self, function: ca.Function, **values: float) -> ca.Function:

@@ -65,28 +65,32 @@ def thomas_solve(
     Parameters
     ----------
     mass_blocks : list of SX (dofs x dofs), one per element 0..n
-    force_blocks : list of SX (dofs), the generalised forces ``f_i``
+    force_blocks : list of SX (dofs x k), the generalised forces ``f_i``
     top_jacobians : list of SX (3 x dofs), ``D_i``
-    bond_rhs : list of SX (3), ``b_j`` for bonds 1..n+1
+    bond_rhs : list of SX (3 x k), ``b_j`` for bonds 1..n+1
+
+    ``k`` right-hand sides are solved together (an elastic rope solves two:
+    :mod:`cable_ocp.model.axial`); most solve one.
 
     Returns
     -------
-    accelerations : list of SX (dofs), ``q''_i``
-    bond_forces : list of SX (3), ``lambda_j`` for bonds 1..n+1 (N)
+    accelerations : list of SX (dofs x k), ``q''_i``
+    bond_forces : list of SX (3 x k), ``lambda_j`` for bonds 1..n+1 (N)
     """
     count = len(mass_blocks)
     dofs = mass_blocks[0].shape[0]
+    columns = force_blocks[0].shape[1]
     select = ca.SX(ca.DM.eye(dofs)[:3, :])  # P = [I 0]
     # One SX Function for the element solve, called per element: CasADi inlines it in C++, where
     # building the Cholesky expression in Python for each of 101 elements took 1.7 s.
-    mass_sym, rhs_sym = ca.SX.sym("mass", dofs, dofs), ca.SX.sym("rhs", dofs, 7)
+    mass_sym, rhs_sym = ca.SX.sym("mass", dofs, dofs), ca.SX.sym("rhs", dofs, columns + 6)
     element_solve = ca.Function("solve", [mass_sym, rhs_sym], [cholesky_solve(mass_sym, rhs_sym)])
     free, along_p, along_d = [], [], []
     for mass, force, top in zip(mass_blocks, force_blocks, top_jacobians, strict=True):
         solved = element_solve(mass, ca.horzcat(force, select.T, top.T))
-        free.append(solved[:, 0])
-        along_p.append(solved[:, 1:4])
-        along_d.append(solved[:, 4:7])
+        free.append(solved[:, 0] if columns == 1 else solved[:, :columns])
+        along_p.append(solved[:, columns : columns + 3])
+        along_d.append(solved[:, columns + 3 : columns + 6])
 
     # Bond j (index j-1 here) couples element j-1 (block -D) and element j (block P).
     diag, upper, lower, rhs = [], [], [], []

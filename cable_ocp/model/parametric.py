@@ -18,8 +18,10 @@ from types import SimpleNamespace
 
 import casadi as ca
 
+from cable_ocp.model.axial import elastic_graph
 from cable_ocp.model.current import current_at
 from cable_ocp.model.hydro import smooth_norm
+from cable_ocp.model.joints import baumgarte, bending_energies
 from cable_ocp.model.kinematics import POSITION, relative_twist
 from cable_ocp.model.kkt import thomas_solve
 from cable_ocp.model.layout import INPUT_SIZE, INPUTS, OUTPUT_NAMES
@@ -42,17 +44,21 @@ class ModelLayout:
         5, or 6 with torsion.
     element_count : int
         ``n + 1``.
+    axial : int
+        1 when the rope stretches (the line's strain ``s`` follows the elements' coordinates,
+        :mod:`cable_ocp.model.axial`), else 0.
     """
 
     def __init__(self, spec):
         self.spec = spec
         self.dofs = spec.element.dofs
         self.element_count = spec.elements + 1
+        self.axial = 1 if is_on(spec.axial_stiffness) else 0
 
     @property
     def state_size(self) -> int:
         """Length of the state vector."""
-        return 2 * self.dofs * self.element_count
+        return 2 * (self.dofs * self.element_count + self.axial)
 
     def element_lengths(self, top_length: ca.SX | float) -> list:
         """Lengths ``l_0 .. l_n`` (m): Delta/2 at both ends, Delta between, l_n from the winch."""
@@ -62,12 +68,19 @@ class ModelLayout:
 
     def coordinates(self, x) -> tuple[list, list]:
         """Split a state (SX or array) into per-element ``q_i`` and ``q'_i``."""
-        size = self.dofs * self.element_count
+        size = self.state_size // 2
         q = [x[i * self.dofs : (i + 1) * self.dofs] for i in range(self.element_count)]
         qd = [
             x[size + i * self.dofs : size + (i + 1) * self.dofs] for i in range(self.element_count)
         ]
         return q, qd
+
+    def strain(self, x) -> tuple:
+        """The line's axial strain ``s`` and its rate (1/s) in a state of an elastic model."""
+        if not self.axial:
+            raise ValueError("this model's rope is rigid: it has no axial strain")
+        half = self.state_size // 2
+        return x[half - 1], x[2 * half - 1]
 
 
 @lru_cache(maxsize=STRUCTURE_CACHE_SIZE)
@@ -144,10 +157,13 @@ class ParametricModel(ModelLayout):
     def energy(self) -> ca.Function:
         """``(x, u, p) ->`` kinetic plus potential energy (J), external force excluded."""
         graph = self._graph
-        energy = graph.potential + sum(
-            graph.element_energy(qi, qdi, li, self.p)
-            for qi, qdi, li in zip(graph.q, graph.qd, graph.lengths, strict=True)
-        )
+        if self.axial:
+            energy = graph.energy
+        else:
+            energy = graph.potential + sum(
+                graph.element_energy(qi, qdi, li, self.p)
+                for qi, qdi, li in zip(graph.q, graph.qd, graph.lengths, strict=True)
+            )
         energy += self._payload_energy(graph.q[0], graph.qd[0])
         return self.function("energy", [energy], ["energy"])
 
@@ -190,6 +206,8 @@ class ParametricModel(ModelLayout):
     @cached_property
     def _graph(self) -> SimpleNamespace:
         """The SX expressions of every flat Function, built on first use."""
+        if self.axial:
+            return elastic_graph(self)
         spec, p = self.spec, self.p
         element, element_energy = element_functions(spec.element, p)
         q, qd = self.coordinates(self.x)
@@ -209,7 +227,7 @@ class ParametricModel(ModelLayout):
         top_jacobians = [t[5] for t in terms]
 
         q_all, qd_all = ca.vertcat(*q), ca.vertcat(*qd)
-        potential, dissipation = self._spring_energies(q, qd, axes, axis_rates)
+        potential, dissipation = self.spring_energies(q, qd, axes, axis_rates)
         chain_force = -ca.gradient(potential, q_all) - ca.gradient(dissipation, qd_all)
         forces = [
             t[1] + chain_force[i * self.dofs : (i + 1) * self.dofs] for i, t in enumerate(terms)
@@ -268,7 +286,7 @@ class ParametricModel(ModelLayout):
             lengths=lengths,
         )
 
-    def _spring_energies(self, q, qd, axes, axis_rates) -> tuple[ca.SX, ca.SX]:
+    def spring_energies(self, q, qd, axes, axis_rates) -> tuple[ca.SX, ca.SX]:
         """Bending (and torsion) potential and Rayleigh dissipation of the joints."""
         spec = self.spec
         potential = ca.SX(0)
@@ -317,26 +335,3 @@ class ParametricModel(ModelLayout):
         inertia = payload.mass + payload.added_mass_coefficient * water * payload.volume
         weight = (payload.mass - water * payload.volume) * self.spec.gravity
         return 0.5 * inertia * ca.dot(velocity, velocity) + weight * q_end[2]
-
-
-def baumgarte(quadratic, rate, residual, spec):
-    """Right-hand side of a bond at acceleration level: ``Phi'' + 2 alpha Phi' + beta^2 Phi = 0``.
-
-    ``quadratic`` is the part of ``Phi''`` without the accelerations, ``rate`` is ``Phi'`` and
-    ``residual`` is ``Phi`` (m/s^2, m/s, m); the gains come from ``spec`` (1/s).
-    """
-    alpha, beta = spec.baumgarte_alpha, spec.baumgarte_beta
-    return quadratic - 2 * alpha * rate - beta**2 * residual
-
-
-def bending_energies(axis_below, axis_above, rate_below, rate_above, spec):
-    """Bending potential (J) and Rayleigh dissipation (W) of the joint between two elements.
-
-    ``k (1 - e_below . e_above)`` with ``k = EI / Delta``, and ``1/2 c k |e'_above - e'_below|^2``
-    with the Rayleigh time constant ``c`` (s).
-    """
-    bending = spec.bending_stiffness / spec.segment_length
-    potential = bending * (1 - ca.dot(axis_below, axis_above))
-    relative_rate = rate_above - rate_below
-    dissipation = 0.5 * spec.bending_damping * bending * ca.dot(relative_rate, relative_rate)
-    return potential, dissipation

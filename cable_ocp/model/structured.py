@@ -24,17 +24,21 @@ import casadi as ca
 
 from cable_ocp.model.cable import CableModel
 from cable_ocp.model.compile import CompileReport, compile_in_background, compiled_from
+from cable_ocp.model.joints import baumgarte, bending_energies
 from cable_ocp.model.kinematics import POSITION
 from cable_ocp.model.kkt import cholesky_solve, inverse_3x3
 from cable_ocp.model.layout import INPUT_SIZE, INPUTS
-from cable_ocp.model.parametric import ModelLayout, ParametricModel, baumgarte, bending_energies
+from cable_ocp.model.parametric import ModelLayout, ParametricModel
 from cable_ocp.model.rfe import element_functions
 from cable_ocp.model.rk4 import parametric_rk4_step
 
 
 def supports(model: ModelLayout) -> bool:
-    """Whether :func:`structured_rhs` can build this model's right-hand side (5 DOF, n >= 2)."""
-    return not model.spec.element.torsion and model.spec.elements >= 2
+    """Whether :func:`structured_rhs` can build this model's right-hand side (5 DOF, n >= 2).
+
+    An elastic rope (:mod:`cable_ocp.model.axial`) is built flat.
+    """
+    return not model.spec.element.torsion and model.spec.elements >= 2 and not model.axial
 
 
 def _element_solve(model: ParametricModel, end: bool) -> ca.Function:

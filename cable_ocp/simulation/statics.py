@@ -130,16 +130,21 @@ def _smallest_root(current: np.ndarray, loads: np.ndarray, turn: float) -> float
 
 
 def _state_from_angles(model: CableModel, angles: ca.SX, u: np.ndarray) -> ca.SX:
-    """State at rest whose positions follow from the angles by chaining down from the top."""
+    """State at rest whose positions follow from the angles by chaining down from the top.
+
+    An elastic model's strain is the last unknown after the angles: every length stretches by it.
+    """
     count, rotational = model.element_count, model.dofs - 3
     lengths = model.element_lengths(float(u[INPUTS.top_length]))
+    strain = angles[count * rotational :]
+    stretch = 1 + strain if model.axial else 1
     point = ca.DM(u[INPUTS.top])
     q = [None] * count
     for i in reversed(range(count)):
         a = angles[i * rotational : (i + 1) * rotational]
-        point = point - lengths[i] * axis_direction(a[0], a[1])
+        point = point - stretch * lengths[i] * axis_direction(a[0], a[1])
         q[i] = ca.vertcat(point, a)
-    return ca.vertcat(*q, ca.SX.zeros(count * model.dofs))
+    return ca.vertcat(*q, strain, ca.SX.zeros(model.state_size // 2))
 
 
 @dataclass(frozen=True, eq=False)
@@ -207,9 +212,10 @@ def equilibrium(
     u = rest_inputs(drive)
     count, dofs = model.element_count, model.dofs
     rotational = dofs - 3
-    angles = ca.SX.sym("angles", count * rotational)
+    angles = ca.SX.sym("angles", count * rotational + model.axial)
     x = _state_from_angles(model, angles, u)
     rotational_index = [i * dofs + 3 + k for i in range(count) for k in range(rotational)]
+    rotational_index += [model.state_size // 2 - 1] * model.axial  # the strain's acceleration
     unknowns = angles
     if model.spec.element.torsion:
         # A common spin of all elements stores no energy: hold the top element's twist at 0.
@@ -220,10 +226,12 @@ def equilibrium(
     if guess is None:
         start = np.zeros((count, rotational))
         start[:, :2] = string_guess(model, u)
-        start = start.ravel()
+        start = np.concatenate([start.ravel(), np.zeros(model.axial)])
     else:
         q_guess, _ = model.coordinates(np.asarray(guess, float))
-        start = np.concatenate([qi[3:] for qi in q_guess])
+        half = model.state_size // 2
+        strain = np.asarray(guess, float)[half - model.axial : half]
+        start = np.concatenate([qi[3:] for qi in q_guess] + [strain])
     start = start[: unknowns.numel()]
     state_of = ca.Function("x", [unknowns], [x])
     if compiled and structured.supports(model):

@@ -1,0 +1,32 @@
+"""Terms of the bonds and joints shared by every right-hand side (flat, structured, elastic).
+
+A bond is imposed at acceleration level with Baumgarte's stabilisation; a joint between two
+elements carries the bending spring and its Rayleigh damping (CONVENTIONS.md §4).
+"""
+
+from __future__ import annotations
+
+import casadi as ca
+
+
+def baumgarte(quadratic, rate, residual, spec):
+    """Right-hand side of a bond at acceleration level: ``Phi'' + 2 alpha Phi' + beta^2 Phi = 0``.
+
+    ``quadratic`` is the part of ``Phi''`` without the accelerations, ``rate`` is ``Phi'`` and
+    ``residual`` is ``Phi`` (m/s^2, m/s, m); the gains come from ``spec`` (1/s).
+    """
+    alpha, beta = spec.baumgarte_alpha, spec.baumgarte_beta
+    return quadratic - 2 * alpha * rate - beta**2 * residual
+
+
+def bending_energies(axis_below, axis_above, rate_below, rate_above, spec):
+    """Bending potential (J) and Rayleigh dissipation (W) of the joint between two elements.
+
+    ``k (1 - e_below . e_above)`` with ``k = EI / Delta``, and ``1/2 c k |e'_above - e'_below|^2``
+    with the Rayleigh time constant ``c`` (s).
+    """
+    bending = spec.bending_stiffness / spec.segment_length
+    potential = bending * (1 - ca.dot(axis_below, axis_above))
+    relative_rate = rate_above - rate_below
+    dissipation = 0.5 * spec.bending_damping * bending * ca.dot(relative_rate, relative_rate)
+    return potential, dissipation
