@@ -58,8 +58,10 @@ def test_trajectory_file_has_units_on_every_variable(tmp_path, flat_run):
 
 def test_a_trajectory_of_format_1_still_loads(tmp_path, flat_run):
     write_trajectory(flat_run, tmp_path / "old")
-    # Format 1 kept no scene: the rest is the run as it was.
-    assert Trajectory.load(tmp_path / "old").equals(replace(flat_run, scene_record={}))
+    # Format 1 kept no scene nor signed tensions: the rest is the run as it was.
+    assert Trajectory.load(tmp_path / "old").equals(
+        replace(flat_run, scene_record={}, signed_tensions=np.zeros((0, 0)))
+    )
 
 
 def test_a_newer_or_foreign_file_is_named_with_its_version(tmp_path):

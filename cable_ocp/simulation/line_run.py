@@ -29,7 +29,7 @@ from cable_ocp.model.line_state import merge, split
 from cable_ocp.simulation.budget import check_simulation_memory
 from cable_ocp.simulation.integrate import integrate, step_count
 from cable_ocp.simulation.line_trajectory import LineTrajectory
-from cable_ocp.simulation.run import joints_and_tensions, step_times, winch_function
+from cable_ocp.simulation.run import run_outputs, step_times, winch_function
 from cable_ocp.simulation.seabed import (
     check_on_grid,
     check_start,
@@ -177,8 +177,8 @@ def simulate_line(scene, winch=None, quiet: bool = True, compiled: bool = True) 
             output_every=numerics.output_every, tolerance=numerics.constraint_tolerance,
             quiet=quiet, compiled=True,
         )  # fmt: skip
-        joints, tensions = joints_and_tensions(model, run.states, run.inputs, True)
-        segments.append((run.time + times[first], run, joints, tensions, model))
+        outputs = run_outputs(model, run.states, run.inputs, True)
+        segments.append((run.time + times[first], run, *outputs, model))
         state = _mapped(run.states[-1], run.inputs[-1], n, int(counts[last]), mesh)
     return _trajectory(scene, drive, segments)
 
@@ -205,7 +205,7 @@ def _trajectory(scene, drive: Drive, segments: list) -> LineTrajectory:
     """
     reference = clearance_reference(scene.seabed, segments[0][2][0, :, 0])
     errors = []
-    for t, _, joints, _, _ in segments:
+    for t, _, joints, *_ in segments:
         check_on_grid(scene.seabed, joints[:, :, 0], t)
         x, y, z = joints[:, :, 0].T
         errors.append(z - seabed_height(scene.seabed, x, y) - reference)
@@ -225,8 +225,9 @@ def _trajectory(scene, drive: Drive, segments: list) -> LineTrajectory:
             scene_name=scene.name,
             scene_record=scene.to_dict(),
             state_names=model.state_names,
+            signed_tensions=signed,
         )
-        for (t, run, joints, tensions, model), error in zip(segments, errors, strict=True)
+        for (t, run, joints, tensions, signed, model), error in zip(segments, errors, strict=True)
     ]
     residual = max(run.bond_residual for _, run, *_ in segments)
     return LineTrajectory(trajectories, scene.winch.line.element_length, residual)

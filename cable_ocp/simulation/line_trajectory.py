@@ -11,6 +11,7 @@ Saved as one netCDF file: the whole-run views at its root, each segment in a gro
 from __future__ import annotations
 
 from dataclasses import dataclass
+from functools import cached_property
 from pathlib import Path
 
 import numpy as np
@@ -18,7 +19,8 @@ import xarray as xr
 
 from cable_ocp.model.layout import INPUTS
 from cable_ocp.result_files import netcdf
-from cable_ocp.simulation.trajectory import Trajectory
+from cable_ocp.simulation.slack import PhysicsCheck, check_physics
+from cable_ocp.simulation.trajectory import Trajectory, run_summary
 
 KIND = "LineTrajectory"
 
@@ -72,6 +74,22 @@ class LineTrajectory:
 
     end = _joined("end", "Position of the end E (k, 3), m.")
 
+    def padded(self, values) -> np.ndarray:
+        """``values(segment)`` joined over the run, padded with NaN past each sample's top.
+
+        ``values`` gives an array per segment, samples first and bonds or joints last; each is
+        padded to the largest ``n`` of the run.
+        """
+        width = max(values(s).shape[-1] for s in self.segments)
+
+        def padded(s: Trajectory) -> np.ndarray:
+            own = values(s)
+            out = np.full((*own.shape[:-1], width), np.nan)
+            out[..., : own.shape[-1]] = own
+            return out
+
+        return self.joined(padded)
+
     @property
     def joints(self) -> np.ndarray:
         """Joint positions ``A_0 .. A_{n+1}`` (k, 3, largest n + 2), m, NaN past each top.
@@ -79,14 +97,12 @@ class LineTrajectory:
         A sample of fewer elements than the largest is padded after its top joint, so that
         plotting a sample draws its own joints and nothing else.
         """
-        width = max(s.joints.shape[2] for s in self.segments)
+        return self.padded(lambda s: s.joints)
 
-        def padded(s: Trajectory) -> np.ndarray:
-            out = np.full((s.time.size, 3, width), np.nan)
-            out[:, :, : s.joints.shape[2]] = s.joints
-            return out
-
-        return self.joined(padded)
+    @property
+    def signed_tensions(self) -> np.ndarray:
+        """Signed bond tensions (k, largest n + 1), N, NaN past each top (see ``Trajectory``)."""
+        return self.padded(lambda s: s.signed_tensions)
 
     @property
     def scene_name(self) -> str:
@@ -95,7 +111,7 @@ class LineTrajectory:
 
     top = _joined("top", "Position of the top point (k, 3), m.")
 
-    top_tension = _joined("top_tension", "Tension at the top (k,), N.")
+    top_tension = _joined("top_tension", "Signed tension at the top (k,), N.")
 
     winch_angle = _joined("winch_angle", "Drum angle (k,), rad.")
 
@@ -110,6 +126,28 @@ class LineTrajectory:
     def scene(self):
         """The scene that ran."""
         return self.segments[0].scene
+
+    @cached_property
+    def physics(self) -> PhysicsCheck:
+        """The run's slack, compression and seabed (:func:`.slack.check_physics`)."""
+        return check_physics(self)
+
+    @property
+    def success(self) -> bool:
+        """Whether the run passed its physics check (:attr:`physics`)."""
+        return self.physics.success
+
+    @property
+    def status(self) -> str:
+        """The physics check's one line: why the run fails, or that it passed."""
+        return self.physics.status
+
+    def summary(self) -> dict:
+        """As :meth:`Trajectory.summary`, with the line out's range (m)."""
+        figures = run_summary(self)
+        line = self.line_out
+        units = {**figures.pop("units"), "line_out_range": "m"}
+        return {**figures, "line_out_range": [float(line.min()), float(line.max())], "units": units}
 
     def element_lengths(self, segment: int) -> np.ndarray:
         """Lengths ``l_0 .. l_n`` (k, n+1) of the elements of a segment over its times, m."""

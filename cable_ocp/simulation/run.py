@@ -22,6 +22,7 @@ from cable_ocp.simulation.seabed import (
     clearance_error,
     rms_objective,
 )
+from cable_ocp.simulation.slack import signed_tensions
 from cable_ocp.simulation.statics import starting_state
 from cable_ocp.simulation.trajectory import Trajectory
 
@@ -158,43 +159,68 @@ def checked_state(state, size: int) -> np.ndarray:
 def joints_and_tensions(
     model: CableModel, states: np.ndarray, inputs: np.ndarray, compiled: bool = False
 ) -> tuple[np.ndarray, np.ndarray]:
-    """Joint positions (k, 3, n+2; m) and bond tensions (k, n+1; N) of k states.
+    """Joint positions (k, 3, n+2; m) and bond tensions ``|lambda_j|`` (k, n+1; N) of k states.
 
-    Compiled, a 5-DOF model evaluates them with the structured loops compiled to C (cached):
-    at n = 100 the interpreted outputs cost twice the whole compiled integration.
+    The first two of :func:`run_outputs`.
     """
-    count, joint_count = len(states), model.element_count + 1
+    joints, tensions, _ = run_outputs(model, states, inputs, compiled)
+    return joints, tensions
+
+
+def run_outputs(
+    model: CableModel, states: np.ndarray, inputs: np.ndarray, compiled: bool = False
+) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Joint positions (k, 3, n+2; m), bond tensions and signed tensions (k, n+1; N).
+
+    The tensions are ``|lambda_j|``, the signed ones along the element axes
+    (:func:`~cable_ocp.simulation.slack.signed_tensions`).
+
+    One evaluation of the model's joints and bond forces, :data:`OUTPUT_BLOCK` states at a
+    time. Compiled, a 5-DOF model evaluates them with the structured loops compiled to C
+    (cached): at n = 100 the interpreted outputs cost twice the whole compiled integration.
+    The norms are those of the model's ``tensions`` output, to the last bit.
+    """
+    count, joint_count, bonds = len(states), model.element_count + 1, model.element_count
+    structured_outputs = compiled and structured.supports(model)
     # Column-major CasADi results, written as their C-ordered transposes.
     joints = np.empty((count * joint_count, 3))
-    tensions = np.empty((count, model.element_count))
+    forces = np.empty((count * bonds, 3))
+    tensions = np.empty((count, bonds))
     for first in range(0, count, OUTPUT_BLOCK):
         rows = slice(first, min(first + OUTPUT_BLOCK, count))
+        results = [
+            joints[rows.start * joint_count : rows.stop * joint_count],
+            forces[rows.start * bonds : rows.stop * bonds],
+        ]
+        if not structured_outputs:
+            results.append(tensions[rows])
         evaluate_into(
-            _outputs_function(model, rows.stop - rows.start, compiled),
+            _outputs_function(model, rows.stop - rows.start, structured_outputs),
             [states[rows], inputs[rows]],
-            [joints[rows.start * joint_count : rows.stop * joint_count], tensions[rows]],
+            results,
         )
-    return joints.reshape(count, joint_count, 3).transpose(0, 2, 1), tensions
+    joints = joints.reshape(count, joint_count, 3).transpose(0, 2, 1)
+    forces = forces.reshape(count, bonds, 3).transpose(0, 2, 1)
+    if structured_outputs:  # the structured norm: sqrt of the squares summed in order
+        tensions = np.sqrt(np.sum(forces**2, axis=1))
+    return joints, tensions, signed_tensions(joints, forces)
 
 
-def _outputs_function(model: CableModel, count: int, compiled: bool) -> ca.Function:
-    """``count`` states and inputs -> joints and tensions, compiled (5 DOF) or interpreted."""
-    if compiled and structured.supports(model):
-        return structured.compiled_structured(model, "outputs", count)
-    return model.memo(("joints_tensions", count), lambda: _joints_tensions(model, count))
+def _outputs_function(model: CableModel, count: int, structured_outputs: bool) -> ca.Function:
+    """``count`` states and inputs -> joints and bond forces (and, interpreted, tensions)."""
+    if structured_outputs:
+        return structured.compiled_structured(model, "joints_and_forces", count)
+    return model.memo(("joints_forces_tensions", count), lambda: _model_outputs(model, count))
 
 
-def _joints_tensions(model: CableModel, count: int):
-    """``count`` states and inputs -> joints and tensions, from the model's own outputs."""
+def _model_outputs(model: CableModel, count: int):
+    """``count`` states and inputs -> joints, bond forces and tensions, the model's outputs."""
     outputs = model.outputs
     x, u = outputs.mx_in("x"), outputs.mx_in("u")
     results = outputs(x=x, u=u)
+    names = ["joints", "bond_forces", "tensions"]
     single = ca.Function(
-        "joints_tensions",
-        [x, u],
-        [results["joints"], results["tensions"]],
-        ["x", "u"],
-        ["joints", "tensions"],
+        "joints_forces_tensions", [x, u], [results[name] for name in names], ["x", "u"], names
     )
     return single.map(count)
 
@@ -301,13 +327,13 @@ def run_trajectory(
 
     Its states and inputs at ``time`` (s), with the winch angle (rad) that drove it.
 
-    Its joints and tensions are the model's outputs (:func:`joints_and_tensions`), ``e(t)`` and
+    Its joints and tensions are the model's outputs (:func:`run_outputs`), ``e(t)`` and
     Omega those of eq. 39 on the end's path (no Omega of a single point: NaN); on a fixed-``n``
     landing, ``e(t)`` is the deviation from the landing reference
     (:mod:`~cable_ocp.simulation.landing_reference`). Raises
     :class:`~cable_ocp.simulation.seabed.OffGridError` if the end left the bathymetry grid.
     """
-    joints, tensions = joints_and_tensions(model, states, inputs, compiled)
+    joints, tensions, signed = run_outputs(model, states, inputs, compiled)
     check_on_grid(scene.seabed, joints[:, :, 0], time)
     error = clearance_error(scene.seabed, joints[:, :, 0])
     error = error - reference_error(scene, time, error[0])
@@ -323,6 +349,7 @@ def run_trajectory(
         scene_name=scene.name,
         scene_record=scene.to_dict(),
         state_names=model.state_names,
+        signed_tensions=signed,
     )
 
 

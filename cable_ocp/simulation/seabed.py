@@ -39,6 +39,9 @@ from cable_ocp.simulation.progress import Progress
 
 DEGREE = 3  # bicubic
 LARGE_GRID_POINTS = 1_000_000  # a grid this large shows a progress bar while its spline is built
+# How far (m) the end may be under the seabed before a run is no picture of the scene: the
+# bicubic grid's rounding is far below it, a rope through the ground far above.
+PENETRATION_TOLERANCE = 1e-3
 
 
 class OffGridError(SimulationError):
@@ -275,6 +278,52 @@ def check_start(seabed, start: np.ndarray) -> None:
             f"({start[0]:g}, {start[1]:g}, {start[2]:g}) m: the cable is longer than the water "
             "there is deep; shorten cable.length or move top.start"
         )
+
+
+def seabed_findings(seabed, time: np.ndarray, end: np.ndarray) -> tuple[str | None, list[str]]:
+    """Where a run's end went under the seabed, or under ``seabed.minimum_clearance``.
+
+    On an absolute seabed (a grid) the end under the seabed by more than
+    :data:`PENETRATION_TOLERANCE` is a rope through the ground: the run fails (the model has no
+    seabed contact). A relative seabed lies ``delta`` below the start by the scene's choice (it
+    places the seabed in plots, and the objective does not see it): the end under it is a note,
+    as is an end between the seabed and ``seabed.minimum_clearance``.
+
+    Parameters
+    ----------
+    seabed : Seabed
+    time : array (k,), s
+    end : array (k, 3), m
+
+    Returns
+    -------
+    failure : str or None
+        When, where and how deep the end went under an absolute seabed.
+    notes : list of str
+    """
+    height = clearance(seabed, end, clearance_reference(seabed, end[0]))
+    k = int(np.argmin(height))
+    x, y, z = end[k]
+    place = f"at t = {time[k]:g} s, (x, y, z) = ({x:.1f}, {y:.1f}, {z:.1f}) m"
+    under = height < -PENETRATION_TOLERANCE
+    failure, notes = None, []
+    if under.any():
+        text = (
+            f"the end goes {-height[k]:.4g} m under the seabed {place} (under it from t = "
+            f"{time[int(np.argmax(under))]:g} s, {np.count_nonzero(under)} of {time.size} samples)"
+        )
+        if getattr(seabed, "absolute", False):
+            failure = text + ": the rope has no seabed contact, so the run is not physical there"
+        else:
+            notes.append(f"{text}; the seabed is relative (delta = {seabed.clearance:g} m "
+                         "under the start)")  # fmt: skip
+    minimum = getattr(seabed, "minimum_clearance", None)
+    if minimum is not None and not under.any() and height[k] < minimum - PENETRATION_TOLERANCE:
+        notes.append(
+            f"the end comes within {height[k]:.4g} m of the seabed {place}, under "
+            f"seabed.minimum_clearance = {minimum:g} m"
+        )
+    return failure, notes
 
 
 def trapezoid_weights(step: float, count: int) -> np.ndarray:

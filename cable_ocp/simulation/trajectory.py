@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 from dataclasses import dataclass, field, fields
+from functools import cached_property
 from pathlib import Path
 
 import numpy as np
@@ -14,11 +15,13 @@ from cable_ocp.result_files import format_1
 from cable_ocp.scene.records import check_run
 from cable_ocp.scene.schema import scene_of
 from cable_ocp.simulation import trajectory_dataset
+from cable_ocp.simulation.slack import PhysicsCheck, check_physics
 
 ARRAY_FIELDS = (
     "time", "states", "inputs", "joints", "tensions", "winch_angle", "clearance_error",
 )  # fmt: skip
 WHAT = "trajectory"
+SIGNED_NAME = "bond force along the axis of element i at its upper end A_{i+1} (negative pushes)"
 
 
 @dataclass(frozen=True, eq=False)
@@ -35,7 +38,7 @@ class Trajectory:
     joints : array (k, 3, n+2), m
         Joint positions ``A_0`` (the end E) .. ``A_{n+1}`` (the top).
     tensions : array (k, n+1), N
-        Bond forces ``|lambda_j|`` at ``A_1 .. A_{n+1}``; the last is the top tension.
+        Bond forces ``|lambda_j|`` at ``A_1 .. A_{n+1}`` (the model's ``tensions``, no sign).
     winch_angle : array (k,), rad
     clearance_error : array (k,), m
         ``e(t)`` of eq. 39.
@@ -46,6 +49,10 @@ class Trajectory:
     scene_record : dict
         The scene that ran, as :meth:`~cable_ocp.scene.schema.Scene.to_dict` gives it (its
         overrides applied); empty in files written before it was kept. :attr:`scene` rebuilds it.
+    signed_tensions : array (k, n+1), N
+        The bond forces along the element axes, positive pulling, negative pushing
+        (:func:`~cable_ocp.simulation.slack.signed_tensions`); the last is the top tension. Empty
+        in runs written before it was kept (:attr:`kept_signs`).
     """
 
     time: np.ndarray
@@ -59,6 +66,7 @@ class Trajectory:
     scene_name: str
     state_names: list[str]
     scene_record: dict = field(default_factory=dict)
+    signed_tensions: np.ndarray = field(default_factory=lambda: np.zeros((0, 0)))
 
     @property
     def scene(self):
@@ -87,9 +95,51 @@ class Trajectory:
         return self.inputs[:, INPUTS.top_length]
 
     @property
+    def kept_signs(self) -> bool:
+        """Whether the run holds its signed tensions (not in files written before them)."""
+        return self.signed_tensions.shape == self.tensions.shape
+
+    @property
     def top_tension(self) -> np.ndarray:
-        """Tension at the top (k,), N."""
-        return self.tensions[:, -1]
+        """Signed tension at the top (k,), N: negative where the top bond pushes.
+
+        The norm ``|lambda_{n+1}|`` in runs that kept no signed tensions.
+        """
+        return (self.signed_tensions if self.kept_signs else self.tensions)[:, -1]
+
+    def joined(self, values) -> np.ndarray:
+        """``values(self)``: the whole-run view, as :meth:`LineTrajectory.joined` gives it."""
+        return values(self)
+
+    def padded(self, values) -> np.ndarray:
+        """``values(self)``, as :meth:`LineTrajectory.padded` gives a line run's per-bond views."""
+        return values(self)
+
+    @cached_property
+    def physics(self) -> PhysicsCheck:
+        """The run's slack, compression and seabed (:func:`.slack.check_physics`).
+
+        Raises ValueError if the run holds no scene.
+        """
+        return check_physics(self)
+
+    @property
+    def success(self) -> bool:
+        """Whether the run passed its physics check (:attr:`physics`)."""
+        return self.physics.success
+
+    @property
+    def status(self) -> str:
+        """The physics check's one line: why the run fails, or that it passed."""
+        return self.physics.status
+
+    def summary(self) -> dict:
+        """The run's figures (json-ready), with ``"units"``.
+
+        Omega, the end's rise and final position, the signed top tension's range and the
+        physics check (``success``, ``status``, ``notes``).
+        """
+        return run_summary(self)
 
     def to_xarray(self) -> xr.Dataset:
         """The run as an ``xarray.Dataset`` over (time, element, joint, component, angle).
@@ -97,7 +147,14 @@ class Trajectory:
         Every variable carries ``units`` and ``long_name``
         (:mod:`cable_ocp.simulation.trajectory_dataset`).
         """
-        return trajectory_dataset.to_xarray(self)
+        dataset = trajectory_dataset.to_xarray(self)
+        if not self.kept_signs:  # nothing to keep: read back as the default
+            return dataset.drop_vars("signed_tensions")
+        signed = dataset["signed_tensions"].variable
+        dataset = dataset.drop_vars("signed_tensions")
+        attrs = {**signed.attrs, "long_name": SIGNED_NAME}
+        dataset["signed_tensions"] = xr.Variable(("time", "element"), signed.values, attrs)
+        return dataset
 
     def save(self, path: str | Path) -> Path:
         """Write the run to netCDF, ``path.nc`` (see :meth:`to_xarray`); returns the path."""
@@ -142,6 +199,9 @@ class Trajectory:
         """
         arrays = trajectory_dataset.from_dataset(dataset, cls)
         _check_shapes({name: arrays[name] for name in ARRAY_FIELDS})
+        signed, tensions = arrays["signed_tensions"].shape, arrays["tensions"].shape
+        if signed != tensions and np.prod(signed) > 0:
+            raise ValueError(f"signed_tensions of shape {signed} do not fit tensions {tensions}")
         return cls(**arrays)
 
     @classmethod
@@ -183,6 +243,21 @@ class Trajectory:
             if not same:
                 return False
         return True
+
+
+def run_summary(run) -> dict:
+    """The figures of :meth:`Trajectory.summary` of a Trajectory or a LineTrajectory."""
+    physics = run.physics.summary()
+    end = run.end
+    figures = {
+        "scene": run.scene_name,
+        "omega": run.omega,
+        "end_rise": float(end[:, 2].max() - end[0, 2]),
+        "final_end_position": end[-1].tolist(),
+        **{name: value for name, value in physics.items() if name != "units"},
+    }
+    units = {"omega": "m", "end_rise": "m", "final_end_position": "m", **physics["units"]}
+    return {**figures, "units": units}
 
 
 def _check_shapes(arrays: dict[str, np.ndarray]) -> None:
