@@ -605,7 +605,10 @@ class TopMotion(_Validated):
 class EndPayload(_Validated):
     """A point mass at the free end E = A_0 with buoyancy, drag and added mass.
 
-    The table is the switch: without ``[end.payload]`` there is no payload.
+    The table is the switch: without ``[end.payload]`` there is no payload. A buoyant payload
+    (``volume`` of water heavier than ``mass``) is held to the rules of
+    :mod:`cable_ocp.scene.hanging`: on a rope denser than water its end must hang below the
+    surface, with a sideways pull.
     """
 
     mass: float = _param(doc="Payload mass.", ge=0, unit="kg")
@@ -852,6 +855,12 @@ class Scene(_Validated):
 
     ``source`` is the absolute path of the file it was loaded from (None otherwise); it is neither
     compared nor exported by `to_dict`. The scene is hashable, so it can key a cache.
+
+    In water its line must hang from the top in still water (:mod:`cable_ocp.scene.hanging`): a
+    rope lighter than water needs a load at its end that outweighs its buoyancy; a buoyant end
+    (payload or ``end.force``) on a rope denser than water must hang below the sea surface, and
+    needs a sideways pull (``end.force``'s horizontal part) not to fold the rope into a slack
+    bight.
     """
 
     name: str = _param("scene", "str", "Scene name (default: the file stem).")
@@ -900,25 +909,9 @@ class Scene(_Validated):
         return self.mesh()[1]
 
     def _check_relations(self) -> None:
-        water = self.environment.water_density
-        if self.environment.submerged and self.cable.density <= water:
-            # A rope lighter than water hangs only while the load at its end outweighs its
-            # buoyancy: every bond in tension in still water (the statics check the rest).
-            area = self.cable.area or math.pi * self.cable.diameter**2 / 4
-            lift = (water - self.cable.density) * area * self.cable.length
-            payload = self.end.payload
-            load = (payload.mass - water * payload.volume) if payload is not None else 0.0
-            load -= self.end.force[2] / self.environment.gravity
-            if load <= lift:
-                raise SceneError(
-                    "cable.density",
-                    f" = {self.cable.density!r} kg/m^3 is not denser than "
-                    f"environment.water_density = {water!r} kg/m^3: the rope's buoyancy "
-                    f"({lift:.4g} kg) must be outweighed by the load at its end (end.payload mass "
-                    f"less its displaced water, less end.force[2]/g: {load:.4g} kg), or the rope "
-                    f"floats. Add a payload of more than {lift - load:.4g} kg, or use a rope "
-                    "denser than water",
-                )
+        from cable_ocp.scene.hanging import check_hanging  # it reads a Scene
+
+        check_hanging(self)
         if self.lowering is not None and self.lowering.land_time > self.numerics.duration:
             raise self.lowering._fail(
                 "land_time", f"<= numerics.duration = {self.numerics.duration!r}"
