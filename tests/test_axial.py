@@ -1,0 +1,159 @@
+"""The elastic rope (cable_ocp.model.axial): statics, period, damping, energy, and the auto rule.
+
+References are independent of the model: the vertical elastic catenary (the paper's eq. 34 with
+the stretch ``T / EA`` integrated along the line), the spring-mass period of DNV-RP-H103 §5.2, the
+logarithmic decrement of a damped oscillator, the energy balance without dissipation, and the
+assembled sparse KKT solve beside the bordered block Thomas elimination.
+"""
+
+import math
+
+import casadi as ca
+import numpy as np
+import pytest
+from conftest import MODELS
+
+import cable_ocp as co
+from cable_ocp.drive.drive import Drive
+from cable_ocp.model.cable import CableModel, spec_from_scene
+from cable_ocp.model.parameters import parameter_names
+from cable_ocp.scene.axial_choice import RIGID_ERROR, axial_choice, axial_period
+from cable_ocp.scene.schema import SceneError
+from cable_ocp.simulation.statics import equilibrium
+
+PAYLOAD = 40000.0  # kg
+
+# A 300 m steel line with a 40 t mass at its end, in air, no damping: a pure spring and mass.
+IN_AIR = {
+    "environment.submerged": False,
+    "environment.water_density": 0.0,
+    "model.axial": "elastic",
+    "cable.axial_damping": 0.0,
+    "end.payload.mass": PAYLOAD,
+}
+
+
+def _scene(overrides: dict, payload: float = PAYLOAD):
+    return co.load_scene(MODELS / "hanging.toml", {**overrides, "end.payload.mass": payload})
+
+
+def _free_run(model: CableModel, start: np.ndarray, u: np.ndarray, step: float, steps: int):
+    """RK4 from ``start`` with the inputs held: the states (state_size, steps)."""
+    x = ca.MX.sym("x", model.state_size)
+    k1 = model.rhs(x, u)
+    k2 = model.rhs(x + step / 2 * k1, u)
+    k3 = model.rhs(x + step / 2 * k2, u)
+    k4 = model.rhs(x + step * k3, u)
+    advance = ca.Function("advance", [x], [x + step / 6 * (k1 + 2 * k2 + 2 * k3 + k4)])
+    return np.array(advance.mapaccum(steps)(start))
+
+
+def _released(overrides: dict):
+    """The elastic model, and its state hanging a 1.5x heavier load (released at t = 0)."""
+    scene = _scene(overrides)
+    model = CableModel.from_scene(scene)
+    heavier = CableModel.from_scene(_scene(overrides, 1.5 * PAYLOAD))
+    start = equilibrium(heavier, Drive.from_scene(scene)).state
+    inputs = equilibrium(model, Drive.from_scene(scene)).inputs
+    return scene, model, start, inputs
+
+
+def _crossings(signal: np.ndarray, step: float) -> np.ndarray:
+    centred = signal - signal.mean()
+    k = np.where((centred[:-1] < 0) & (centred[1:] >= 0))[0]
+    return (k + -centred[k] / (centred[k + 1] - centred[k])) * step
+
+
+def test_statics_stretch_is_the_vertical_elastic_catenary():
+    """Hanging in water with its payload: the end lies (W L + w' L^2 / 2) / EA below L (0.5 %)."""
+    scene = co.load_scene(MODELS / "deep_lift.toml")
+    model = CableModel.from_scene(scene)
+    assert model.axial == 1
+    found = equilibrium(model, Drive.from_scene(scene))
+    cable, payload, water = scene.cable, scene.end.payload, scene.environment.water_density
+    line_weight = (cable.density - water) * cable.cross_section_area * 9.81
+    payload_weight = (payload.mass - water * payload.volume) * 9.81
+    length = cable.length
+    stretch = (payload_weight * length + line_weight * length**2 / 2) / cable.axial_stiffness_value
+    model_stretch = -found.end[2] - length
+    assert stretch > 1.0  # metres: the test would not notice a rigid rope otherwise
+    assert model_stretch == pytest.approx(stretch, rel=5e-3)
+    top_tension = payload_weight + line_weight * length
+    assert found.tensions[-1] == pytest.approx(top_tension, rel=1e-6)
+
+
+def test_free_period_and_damping_match_the_spring_and_mass():
+    """Released in air: T0 = 2 pi sqrt((M + m L / 3) / (EA / L)) within 0.5 %, zeta from decay."""
+    zeta = 0.05
+    scene, model, start, u = _released({**IN_AIR, "cable.axial_damping": zeta})
+    period = axial_period(scene, scene.cable.length)
+    step = period / 100
+    states = _free_run(model, start, u, step, 800)
+    strain = states[model.state_size // 2 - 1]
+    measured = np.diff(_crossings(strain, step))
+    damped = period / math.sqrt(1 - zeta**2)
+    assert measured.mean() == pytest.approx(damped, rel=5e-3)
+    rest = equilibrium(model, Drive.from_scene(scene)).state[model.state_size // 2 - 1]
+    peaks = [np.max(np.abs(strain[k : k + 100] - rest)) for k in range(0, 700, 100)]
+    decrement = np.log(peaks[0] / peaks[-1]) / (len(peaks) - 1)
+    assert decrement / (2 * math.pi) == pytest.approx(zeta, rel=0.1)
+
+
+def test_energy_with_the_elastic_energy_is_conserved_over_100_periods():
+    """In air, no damping: kinetic + gravity + strain energy drifts by < 1e-6 relative."""
+    scene, model, start, u = _released(IN_AIR)
+    period = axial_period(scene, scene.cable.length)
+    steps_per_period = 200
+    states = _free_run(model, start, u, period / steps_per_period, 100 * steps_per_period)
+    count = states.shape[1]
+    energy = np.array(model.energy.map(count)(states, np.tile(u[:, None], count)))
+    initial = float(model.energy(start, u))
+    drift = np.max(np.abs(energy - initial))
+    assert drift / abs(initial) < 1e-6
+    # The oscillation's own energy, 1/2 EA L s_a^2, drifts by far less than itself too.
+    strain = states[model.state_size // 2 - 1]
+    amplitude = (strain.max() - strain.min()) / 2
+    oscillation = 0.5 * scene.cable.axial_stiffness_value * scene.cable.length * amplitude**2
+    assert drift / oscillation < 1e-4
+
+
+def test_bordered_thomas_solve_equals_the_sparse_kkt_solve():
+    """At a moving state of the elastic model the two eliminations agree to rounding."""
+    scene = co.load_scene(MODELS / "deep_lift.toml", {"model.elements": 6})
+    model = CableModel.from_scene(scene)
+    found = equilibrium(model, Drive.from_scene(scene))
+    state = found.state.copy()
+    half = model.state_size // 2
+    state[half:] = 0.05 * np.random.default_rng(44).standard_normal(half)
+    thomas = np.array(model.rhs(state, found.inputs)).ravel()
+    sparse = np.array(model.rhs_sparse(state, found.inputs)[0]).ravel()
+    assert np.max(np.abs(thomas - sparse)) <= 1e-9 * np.max(np.abs(thomas))
+
+
+def test_auto_keeps_the_paper_rope_rigid_and_its_parameters_unchanged():
+    """Scenes whose axial period is far below their excitation keep the rigid model exactly."""
+    for name in ("paper_hill", "small_tow", "survey", "hanging", "catenary", "end_force"):
+        scene = co.load_scene(MODELS / f"{name}.toml")
+        choice = axial_choice(scene)
+        assert not choice.elastic and choice.rigid_error <= RIGID_ERROR, name
+        spec = spec_from_scene(scene)
+        assert spec.axial_stiffness == 0.0
+        assert not {"axial_stiffness", "axial_damping"} & set(parameter_names(spec))
+        assert CableModel.from_scene(scene).axial == 0
+
+
+def test_auto_chooses_the_elastic_rope_where_the_waves_reach_its_period():
+    choice = axial_choice(co.load_scene(MODELS / "deep_lift.toml"))
+    assert choice.elastic and choice.rigid_error > RIGID_ERROR
+    assert choice.period == pytest.approx(5.7, abs=0.1)
+    assert "elastic rope" in choice.note and "T0 = 5.7" in choice.note
+    rigid = co.load_scene(MODELS / "deep_lift.toml", {"model.axial": "rigid"})
+    assert CableModel.from_scene(rigid).axial == 0
+
+
+def test_an_elastic_line_paid_out_by_elements_is_refused_and_auto_says_why_it_stays_rigid():
+    with pytest.raises(SceneError, match=r"model\.axial.*winch\.line"):
+        axial_choice(co.load_scene(MODELS / "deploy.toml", {"model.axial": "elastic"}))
+    choice = axial_choice(co.load_scene(MODELS / "deploy.toml"))
+    assert choice.needed and not choice.elastic
+    assert "optimistic" in choice.note
