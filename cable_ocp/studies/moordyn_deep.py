@@ -15,13 +15,15 @@ statistics are taken after :data:`SETTLE`, once the start's transient (the sea-s
 at rest but not with zero velocity) has died out.
 
 Axial damping: MoorDyn's ``BA`` multiplies the strain rate (a Kelvin-Voigt line, tension
-``EA e + BA de/dt``). On the first axial mode, where the strain is uniform, the line is a spring
-``EA / L`` with a dashpot ``BA / L`` on the modal mass, so a damping ratio ``zeta`` of that mode is
+``EA e + BA de/dt``). That damping is proportional to the stiffness, so each axial mode of
+angular frequency ``w`` has the ratio ``BA w / (2 EA)`` (on the uniform-strain mode: a spring
+``EA / L`` beside a dashpot ``BA / L``). A ratio ``zeta`` of the first mode is therefore
 
     BA = 2 zeta EA / w0 = zeta EA T0 / pi   (N s),
 
-and higher modes get ``zeta w / w0``: they are overdamped, which also sets MoorDyn's stable step
-(:func:`internal_step`).
+with T0 the Rayleigh period above (the exact first mode, :func:`axial_period_exact`, is up to
+1.5 % slower in these cases, so its ratio is that much below ``zeta``). Higher modes get
+``zeta w / w0``: overdamped, which also sets MoorDyn's stable step (:func:`internal_step`).
 """
 
 from __future__ import annotations
@@ -29,6 +31,7 @@ from __future__ import annotations
 import math
 import tempfile
 import time
+from collections.abc import Iterable
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -36,7 +39,7 @@ import numpy as np
 from scipy.optimize import brentq
 
 from cable_ocp.drive.drive import Drive
-from cable_ocp.drive.vessel import smoothstep
+from cable_ocp.drive.vessel import TopMotionFunction, smoothstep, smoothstep_curvature
 from cable_ocp.model.cable import spec_from_scene
 from cable_ocp.scene.bundled import scene_path
 from cable_ocp.scene.schema import Scene, load_scene
@@ -44,7 +47,9 @@ from cable_ocp.studies import moordyn_compare as mc
 
 DAMPING_RATIO = 0.02  # of the first axial mode (issue 44)
 SEA_STATE = {"significant_height": 2.0, "peak_period": 9.0, "seed": 27}  # deploy's sea, m, s
-SETTLE = 200.0  # s, discarded: the start's transient decays below 1 % by then (e^-(zeta w0 t))
+# s, discarded: the start's transient decays as e^-(zeta w0 t), to 2 % by then at T0 = 6.3 s
+# with BA alone (the drag, 0.8 % more damping in the free decays, takes it further).
+SETTLE = 200.0
 RECORD = 600.0  # s, over which the statistics are taken
 COUPLING_STEP = mc.COUPLING_STEP  # s, MoorDyn is given the top position and velocity this often
 # RK4 is stable to |h lambda| of about 2.8 on the real and imaginary axes; half of it is kept.
@@ -76,7 +81,7 @@ class DeepCase:
     payload_drag : float
         Drag coefficient on ``payload_drag_area``.
     segments : int
-        MoorDyn's ``N``, converged (:func:`convergence`).
+        MoorDyn's ``N``: doubling it changes the heave figures by less than 1 % (:func:`case_row`).
     """
 
     name: str
@@ -119,7 +124,7 @@ class DeepCase:
                 "added_mass": 1.0,
             },
             "model.elements": elements,
-            "winch.top_length_max": self.length,
+            "winch.top_length_max": self.length,  # hanging's 30 m is for its 300 m line
             "numerics.duration": SETTLE + RECORD,
         }
         if heave:
@@ -362,60 +367,97 @@ def heave_run(scene: Scene, segments: int, step: float | None = None) -> DeepRun
     return run_moordyn(scene, top, SETTLE + RECORD, segments, step)
 
 
-def heave_figures(run: DeepRun) -> HeaveFigures:
-    """The statistics of a heave run over ``t >= SETTLE``."""
-    kept = run.time >= SETTLE
-    tension = run.tension[kept]
-    return HeaveFigures(float(np.std(run.top[kept])), float(np.std(run.payload[kept])),
+def heave_figures(time: np.ndarray, top: np.ndarray, payload: np.ndarray,
+                  tension: np.ndarray) -> HeaveFigures:  # fmt: skip
+    """The statistics of a heave run over ``t >= SETTLE``.
+
+    Parameters
+    ----------
+    time : array (k,), s
+    top, payload : array (k,), m
+        Heights of the top and of the payload.
+    tension : array (k,), N
+        Top tension.
+
+    The arrays of a :class:`DeepRun`, or of any run of the same scene (the project's model).
+    """
+    kept = np.asarray(time) >= SETTLE
+    tension = np.asarray(tension)[kept]
+    return HeaveFigures(float(np.std(np.asarray(top)[kept])),
+                        float(np.std(np.asarray(payload)[kept])),
                         float(tension.min()), float(tension.max()))  # fmt: skip
 
 
-def decay_run(scene: Scene, segments: int, step: float | None = None) -> DeepRun:
-    """MoorDyn's free decay: the top lifted by :data:`DECAY_LIFT` then held, from rest.
+def decay_top(scene: Scene) -> TopMotionFunction:
+    """The free decay's top: lifted by :data:`DECAY_LIFT` over ``T0 / 2``, then held.
 
-    The lift is a quintic smoothstep over ``T0 / 2``, which puts most of its work into the first
-    axial mode; the top is fixed from then on. ``scene``: ``DeepCase.scene(heave=False)``.
+    The lift is a quintic smoothstep, which puts most of its work into the first axial mode.
+
+    Returns
+    -------
+    callable
+        ``t -> (position, velocity, acceleration)``, arrays (3, len(t)) in m, m/s, m/s^2 (a
+        ``Drive``'s ``top``), from ``scene.top.start``.
+    """
+    ramp = axial_period(scene) / 2
+    start = np.asarray(scene.top.start, dtype=float).reshape(3, 1)
+    up = np.array([[0.0], [0.0], [DECAY_LIFT]])
+
+    def motion(t):
+        tau = np.atleast_1d(np.asarray(t, dtype=float)) / ramp
+        value, slope, _ = smoothstep(tau)
+        return start + up * value, up * slope / ramp, up * smoothstep_curvature(tau) / ramp**2
+
+    return motion
+
+
+def decay_run(scene: Scene, segments: int, step: float | None = None) -> DeepRun:
+    """MoorDyn's free decay from rest under :func:`decay_top`, for :data:`DECAY_PERIODS` T0.
+
+    ``scene``: ``DeepCase.scene(heave=False)``; ``segments``: MoorDyn's ``N``.
     """
     period = axial_period(scene)
-    ramp = period / 2
-    start = np.asarray(scene.top.start, dtype=float).reshape(3, 1)
-
-    def lift(t: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        value, slope, _ = smoothstep(np.asarray(t) / ramp)
-        up = np.array([[0.0], [0.0], [DECAY_LIFT]])
-        return start + up * value, up * slope / ramp
-
-    return run_moordyn(scene, lift, ramp + DECAY_PERIODS * period, segments, step)
+    return run_moordyn(scene, decay_top(scene), (DECAY_PERIODS + 0.5) * period, segments, step)
 
 
-def _rest_offset_and_crossings(run: DeepRun) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+def _rest_offset_and_crossings(time: np.ndarray, top: np.ndarray, payload: np.ndarray):
     """The payload above its rest height (m); indices and times (s) of its upward crossings.
 
-    Crossings after the lift, linearly interpolated, the first one left out (higher modes). The
-    rest height is the initial one plus :data:`DECAY_LIFT` (the static line moved up rigidly).
+    Crossings once the top is held, linearly interpolated, the first one left out (higher
+    modes). The rest height is the initial one plus :data:`DECAY_LIFT` (the static line moved up
+    rigidly).
     """
-    offset = run.payload - (run.payload[0] + DECAY_LIFT)
-    lifted = run.top >= run.top[-1] - 1e-12
-    up = np.flatnonzero(lifted[:-1] & (offset[:-1] < 0.0) & (offset[1:] >= 0.0))
+    time, top, payload = (np.asarray(v, dtype=float) for v in (time, top, payload))
+    offset = payload - (payload[0] + DECAY_LIFT)
+    held = top >= top[-1] - 1e-12
+    up = np.flatnonzero(held[:-1] & (offset[:-1] < 0.0) & (offset[1:] >= 0.0))
     if up.size < 4:
         raise ValueError(f"the free decay crossed its rest height {up.size} times (< 4)")
-    times = run.time[up] - offset[up] * COUPLING_STEP / (offset[up + 1] - offset[up])
-    return offset, up[1:], times[1:]
+    step = time[up + 1] - time[up]
+    crossings = time[up] - offset[up] * step / (offset[up + 1] - offset[up])
+    return offset, up[1:], crossings[1:]
 
 
-def decay_period(run: DeepRun) -> float:
-    """The mean period between upward crossings of the payload's rest height in a free decay, s."""
-    _, _, times = _rest_offset_and_crossings(run)
-    return float((times[-1] - times[0]) / (times.size - 1))
+def decay_period(time: np.ndarray, top: np.ndarray, payload: np.ndarray) -> float:
+    """The mean period between upward crossings of the payload's rest height in a free decay, s.
+
+    Parameters
+    ----------
+    time : array (k,), s
+    top, payload : array (k,), m
+        Heights of the top (:func:`decay_top`) and of the payload, from rest.
+    """
+    _, _, crossings = _rest_offset_and_crossings(time, top, payload)
+    return float((crossings[-1] - crossings[0]) / (crossings.size - 1))
 
 
-def decay_damping_ratio(run: DeepRun) -> float:
+def decay_damping_ratio(time: np.ndarray, top: np.ndarray, payload: np.ndarray) -> float:
     """The damping ratio of a free decay from its peaks: ``ln(a_0 / a_k) / (2 pi k)``.
 
-    ``a_j`` the highest payload offset in each cycle between upward crossings. It includes the
-    payload's and the line's drag besides ``BA``.
+    ``a_j`` the highest payload offset in each cycle between upward crossings; the arrays as in
+    :func:`decay_period`. It includes the payload's and the line's drag besides ``BA``.
     """
-    offset, up, _ = _rest_offset_and_crossings(run)
+    offset, up, _ = _rest_offset_and_crossings(time, top, payload)
     peaks = [offset[i:j].max() for i, j in zip(up[:-1], up[1:], strict=True)]
     return float(np.log(peaks[0] / peaks[-1]) / (2 * np.pi * (len(peaks) - 1)))
 
@@ -435,8 +477,8 @@ class CaseRow:
     static_tension : float, N
     stretch_analytic, stretch_moordyn : float, m
     heave : HeaveFigures
-    heave_refined : HeaveFigures
-        At twice the segments, for convergence.
+    heave_refined, heave_half_step : HeaveFigures
+        At twice the segments (and their own step), and at half the step: the convergence.
     ms_per_simulated_second : float, ms/s
         MoorDyn's heave run.
     internal_step : float, s
@@ -452,39 +494,58 @@ class CaseRow:
     stretch_moordyn: float
     heave: HeaveFigures
     heave_refined: HeaveFigures
+    heave_half_step: HeaveFigures
     ms_per_simulated_second: float
     internal_step: float
 
     @property
-    def largest_change(self) -> float:
+    def segments_change(self) -> float:
         """Largest relative change of the heave figures when the segments double."""
-        a, b = self.heave, self.heave_refined
-        pairs = [(a.payload_heave_std, b.payload_heave_std), (a.tension_min, b.tension_min),
-                 (a.tension_max, b.tension_max), (a.tension_range, b.tension_range)]  # fmt: skip
-        return max(abs(y - x) / abs(x) for x, y in pairs)
+        return _largest_change(self.heave, self.heave_refined)
+
+    @property
+    def step_change(self) -> float:
+        """Largest relative change of the heave figures when the internal step halves."""
+        return _largest_change(self.heave, self.heave_half_step)
+
+
+def _largest_change(a: HeaveFigures, b: HeaveFigures) -> float:
+    """Largest relative change from ``a`` to ``b`` of the payload's heave std and the tensions."""
+    pairs = [(a.payload_heave_std, b.payload_heave_std), (a.tension_min, b.tension_min),
+             (a.tension_max, b.tension_max), (a.tension_range, b.tension_range)]  # fmt: skip
+    return max(abs(y - x) / abs(x) for x, y in pairs)
 
 
 def case_row(case: DeepCase) -> CaseRow:
-    """Every figure of one case: analytic, free decay, heave at ``N`` and ``2 N``."""
+    """Every figure of one case: analytic, free decay, heave at ``N``, ``2 N`` and half the step."""
     scene = case.scene()
     run = heave_run(scene, case.segments)
     refined = heave_run(scene, 2 * case.segments)
+    half_step = heave_run(scene, case.segments, run.internal_step / 2)
+    heave, heave_refined, heave_half_step = (heave_figures(r.time, r.top, r.payload, r.tension)
+                                             for r in (run, refined, half_step))  # fmt: skip
     decay = decay_run(case.scene(heave=False), case.segments)
-    return CaseRow(case, axial_period(scene), axial_period_exact(scene), decay_period(decay),
-                   decay_damping_ratio(decay), static_top_tension(scene), static_stretch(scene),
-                   run.stretch, heave_figures(run), heave_figures(refined),
+    free = (decay.time, decay.top, decay.payload)
+    return CaseRow(case, axial_period(scene), axial_period_exact(scene), decay_period(*free),
+                   decay_damping_ratio(*free), static_top_tension(scene), static_stretch(scene),
+                   run.stretch, heave, heave_refined, heave_half_step,
                    run.ms_per_simulated_second, run.internal_step)  # fmt: skip
 
 
-def print_table(rows: list[CaseRow]) -> None:
-    """Print the deep-lowering table (kN for tensions)."""
+def print_table(rows: Iterable[CaseRow]) -> None:
+    """Print the deep-lowering table (kN for tensions), each row as it comes."""
     print(f"MoorDyn deep lowering: winch locked, JONSWAP Hs {SEA_STATE['significant_height']} m, "
           f"Tp {SEA_STATE['peak_period']} s, seed {SEA_STATE['seed']}; statistics over "
           f"{SETTLE:g}..{SETTLE + RECORD:g} s; axial damping {DAMPING_RATIO:.0%} of the first "
           "mode")  # fmt: skip
+    print("T0 [s]: Rayleigh (an.), continuum (exact), MoorDyn free decay (MD, err against an.) "
+          "and its damping ratio (drag included); T_st, Tmin, Tmax, range: top tension [kN]; "
+          "str: static stretch [m]; vessel, payload: heave std [m]; 2N, h/2 chg: largest change "
+          "of the heave figures at twice the segments, half the step; ms/s: MoorDyn's wall time "
+          "per simulated second")  # fmt: skip
     print(f"{'case':<17}{'N':>4}{'dtM [s]':>9}{'T0 an.':>8}{'exact':>8}{'T0 MD':>8}{'err':>7}"
           f"{'zeta':>7}{'T_st':>8}{'str an.':>9}{'str MD':>8}{'vessel':>8}{'payload':>8}{'Tmin':>8}"
-          f"{'Tmax':>8}{'range':>8}{'2N chg':>8}{'ms/s':>8}")  # fmt: skip
+          f"{'Tmax':>8}{'range':>8}{'2N chg':>8}{'h/2 chg':>8}{'ms/s':>8}")  # fmt: skip
     for r in rows:
         h = r.heave
         error = r.period_moordyn / r.period_analytic - 1
@@ -493,9 +554,10 @@ def print_table(rows: list[CaseRow]) -> None:
               f"{error:>7.1%}{r.damping_moordyn:>7.1%}"
               f"{r.static_tension / 1e3:>8.1f}{r.stretch_analytic:>9.3f}{r.stretch_moordyn:>8.3f}"
               f"{h.vessel_heave_std:>8.3f}{h.payload_heave_std:>8.3f}{h.tension_min / 1e3:>8.1f}"
-              f"{h.tension_max / 1e3:>8.1f}{h.tension_range / 1e3:>8.1f}{r.largest_change:>8.2%}"
-              f"{r.ms_per_simulated_second:>8.1f}")  # fmt: skip
+              f"{h.tension_max / 1e3:>8.1f}{h.tension_range / 1e3:>8.1f}{r.segments_change:>8.2%}"
+              f"{r.step_change:>8.2%}"
+              f"{r.ms_per_simulated_second:>8.1f}", flush=True)  # fmt: skip
 
 
 if __name__ == "__main__":
-    print_table([case_row(case) for case in CASES])
+    print_table(case_row(case) for case in CASES)
