@@ -118,6 +118,43 @@ def test_ipopt_options_beside_gauss_newton_are_named(tmp_path, capsys, no_optimi
     assert "compil" not in stderr and len(stderr.splitlines()) == 1
 
 
+@pytest.mark.parametrize(
+    ("command", "option", "takes"),
+    [
+        (["optimize", "--solver", "nelder-mead"], ["--hessian", "limited-memory"], "IPOPT"),
+        (["optimize", "--method", "nelder-mead"], ["--max-iter", "4"], "Gauss-Newton and IPOPT"),
+        (["optimize", "--solver", "nelder-mead"], ["--control", "spline"], "Gauss-Newton and"),
+        (["optimize", "--solver", "ipopt"], ["--max-evaluations", "9"], "Nelder-Mead"),
+        (["compare", "--solver", "gauss-newton"], ["--hessian", "exact"], "IPOPT"),
+    ],
+)  # fmt: skip
+def test_an_option_the_solver_does_not_take_is_refused_before_any_work(
+    tmp_path, capsys, no_optimiser, command, option, takes
+):
+    """Issue 45 item 9: ``--solver nelder-mead --hessian exact`` ran the slow interpreted model
+    for Nelder-Mead, which has no Hessian; every option is checked against the solver's."""
+    args = [command[0], SMALL_TOW, *command[1:], *option, "--out", tmp_path / "o"]
+    code, _, stderr = run_cli(args, capsys)
+    assert code == 2
+    assert f"error: {' '.join(option)} is an option of {takes}" in stderr, stderr
+    assert len(stderr.splitlines()) == 1 and not (tmp_path / "o").exists()
+
+
+def test_compare_takes_the_options_of_either_of_its_solvers(tmp_path, capsys, monkeypatch):
+    """compare runs a shooting solver and Nelder-Mead on the same options: each is given its own."""
+    calls = []
+
+    def recorded(scene, solver, settings, **options):
+        calls.append(settings)
+        raise KeyboardInterrupt  # enough: the options were built and accepted
+
+    monkeypatch.setattr(optimization, "optimize", recorded)
+    args = ["compare", SMALL_TOW, "--max-iter", "3", "--max-evaluations", "7"]
+    code, _, stderr = run_cli([*args, "--out", tmp_path / "o"], capsys)
+    assert code == 130, stderr
+    assert calls[0].max_iter == 3  # the shooting solver's; Nelder-Mead's comes second
+
+
 # --- the file system: a full disk, a file-size limit --------------------------------------------
 
 

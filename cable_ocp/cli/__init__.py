@@ -136,19 +136,17 @@ def _given(args, names: tuple[str, ...]) -> dict:
     return {name: getattr(args, name) for name in names if getattr(args, name) is not None}
 
 
-def _optimize_options(args, solver: str | None = None) -> dict:
+def _optimize_options(args, solver: str | None = None, beside: str | None = None) -> dict:
     """``optimize``'s solver and settings from the options given; unset ones are its own.
 
     The solver is ``solver``, else ``--solver``, else ``--method nelder-mead``'s, else IPOPT
     when an IPOPT option (``--hessian``, ``--shooting multiple``) is given, else the registry's
-    default. ``--hessian exact`` needs the interpreted model; IPOPT's options are refused beside
-    ``--solver gauss-newton``.
+    default. ``--hessian exact`` needs the interpreted model. An option that neither the solver
+    nor the solver run ``beside`` it on the same options (compare's) takes is refused.
     """
     from cable_ocp.control.settings import GridSettings, ModelSettings, TranscriptionSettings
     from cable_ocp.control.solvers import DEFAULT_SOLVER, solver_named
 
-    ipopt_only = {"--hessian exact": args.hessian == "exact",
-                  "--shooting multiple": args.shooting == "multiple"}  # fmt: skip
     method = getattr(args, "method", None)
     if method == "nelder-mead" and args.solver not in (None, "nelder-mead"):
         raise ValueError(
@@ -159,20 +157,15 @@ def _optimize_options(args, solver: str | None = None) -> dict:
     if solver is None and (args.hessian is not None or args.shooting == "multiple"):
         solver = "ipopt"
     solver = solver or DEFAULT_SOLVER
-    if solver == "gauss-newton" and any(ipopt_only.values()):
-        option = next(name for name, given in ipopt_only.items() if given)
-        raise ValueError(
-            f"{option} is an option of IPOPT (the Gauss-Newton solver works on single shooting "
-            f"with 2 J^T J, first derivatives only): give --solver ipopt, or leave {option} out"
-        )
-    exact = ipopt_only["--hessian exact"]
+    entry = solver_named(solver)
+    _check_solver_options(args, entry, *([solver_named(beside)] if beside else []))
+    exact = args.hessian == "exact"
     if exact and not args.quiet:
         print(
             f"cable-ocp {args.command}: note: --hessian exact runs the interpreted model "
             "(compiled = False): the compiled step carries no second derivatives",
             file=sys.stderr,
         )
-    entry = solver_named(solver)
     own = set(entry.settings.__dataclass_fields__)
     options = {
         "solver": solver,
@@ -187,6 +180,36 @@ def _optimize_options(args, solver: str | None = None) -> dict:
     if entry.shootings:  # the paper's Nelder-Mead takes the scene's knots, no grid
         options["grid"] = GridSettings(**_given(args, ("control", "intervals")))
     return options
+
+
+def _check_solver_options(args, *entries) -> None:
+    """Refuse an option given that none of the solvers ``entries`` (of the registry) takes.
+
+    Its settings' fields (``--hessian``, ``--max-iter``, ``--max-evaluations``), its shootings
+    (``--shooting``), the shooting grid (``--control``, ``--intervals``; not Nelder-Mead's,
+    which takes the scene's knots). An option left unused would run another problem than the
+    one asked for (``--solver nelder-mead --hessian exact`` ran the slow interpreted model).
+    """
+    from cable_ocp.control.solvers import SOLVERS
+
+    def takes(other, name: str) -> bool:
+        if name == "shooting":
+            return args.shooting in other.shootings
+        if name in ("control", "intervals"):
+            return bool(other.shootings)
+        return name in other.settings.__dataclass_fields__
+
+    names = ("hessian", "max_iter", "max_evaluations", "shooting", "control", "intervals")
+    for name in names:
+        if getattr(args, name, None) is None or any(takes(entry, name) for entry in entries):
+            continue
+        option = f"--{name.replace('_', '-')} {getattr(args, name)}"
+        others = [other for other in SOLVERS.values() if takes(other, name)]
+        raise ValueError(
+            f"{option} is an option of {' and '.join(o.label for o in others)}, not of "
+            f"{' or '.join(e.label for e in entries)}: give --solver {others[0].name}, or leave "
+            f"{option.split()[0]} out"
+        )
 
 
 def _locked_reference(scene):
@@ -308,8 +331,8 @@ def _compare(args) -> int:
             "--solver nelder-mead: compare runs Nelder-Mead anyway, beside a shooting solver; "
             "give --solver gauss-newton or ipopt"
         )
-    shooting = _optimize_options(args)
-    simplex = _optimize_options(args, "nelder-mead")
+    shooting = _optimize_options(args, beside="nelder-mead")
+    simplex = _optimize_options(args, "nelder-mead", beside=shooting["solver"])
     spline = {**shooting, "grid": replace(shooting["grid"], control="spline")}
     name = shooting["solver"]
     output = {"quiet": args.quiet, "verbose": args.verbose}
@@ -398,7 +421,9 @@ def _add_optimiser_options(parser) -> None:
         choices=["limited-memory", "exact"],
         help="exact: second derivatives, on the interpreted (not compiled) model",
     )
-    parser.add_argument("--max-iter", type=integer(1, 10**6), help="IPOPT iterations")
+    parser.add_argument(
+        "--max-iter", type=integer(1, 10**6), help="iterations of Gauss-Newton or IPOPT"
+    )
     parser.add_argument("--max-evaluations", type=integer(1, 10**8), help="Nelder-Mead runs")
     parser.add_argument(
         "--set",

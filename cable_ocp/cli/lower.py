@@ -63,7 +63,7 @@ def add_lower_command(subparsers) -> None:
 
 def run_lower_command(args: argparse.Namespace) -> int:
     """Run ``cable-ocp lower``; 3 when the landing or the hold fails, 0 otherwise."""
-    from cable_ocp import plots
+    from cable_ocp import plots, result_files
     from cable_ocp.cli import parse_overrides
     from cable_ocp.cli.files import results_folder
     from cable_ocp.lowering.hold import hold
@@ -123,6 +123,7 @@ def run_lower_command(args: argparse.Namespace) -> int:
             if args.animate:
                 plots.animate(plan.run, folder / "animation.gif", scene.seabed.clearance)
         for name, result in hover.items():
+            result_files.save(result.result, folder / f"hover_{name}.nc")  # co.load_result
             run = result.result.trajectory
             if run is not None:
                 label = "closed loop" if result.closed_loop else "optimised"
@@ -131,6 +132,7 @@ def run_lower_command(args: argparse.Namespace) -> int:
                 landing.landing(run, report=result.report, label=label,
                                 path=folder / f"hover_{name}.png")  # fmt: skip
         if held is not None:
+            result_files.save(held.mpc, folder / "hold.nc")
             plots.clearance([locked, held.mpc], held.scene.seabed.clearance,
                             ["winch locked", "closed loop"], folder / "hold_clearance.png",
                             zoom=True)  # fmt: skip

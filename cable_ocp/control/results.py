@@ -4,27 +4,47 @@ from __future__ import annotations
 
 from pathlib import Path
 
+from cable_ocp import result_files
+from cable_ocp.control.closed_loop import result as mpc_result
 from cable_ocp.control.closed_loop.result import MPC_FILE, MpcResult
-from cable_ocp.control.optimization import RESULT_FILE, OcpResult
+from cable_ocp.control.optimization import RESULT_FILE, WHAT, OcpResult
+from cable_ocp.result_files import netcdf
+from cable_ocp.simulation.line_trajectory import LineTrajectory
 from cable_ocp.simulation.trajectory import Trajectory
 
 TRAJECTORY_FILE = "trajectory.nc"
+LANDING_FILE = "landing.nc"  # cable-ocp lower's open-loop landing run
+# The files a results folder holds its result in, looked for in this order.
+FOLDER_FILES = (RESULT_FILE, MPC_FILE, TRAJECTORY_FILE, LANDING_FILE)
+# The reader of each kind of result file (its global attribute cable_ocp_result).
+READERS = {
+    "OcpResult": lambda path: result_files.load(OcpResult, path, WHAT),
+    "MpcResult": lambda path: result_files.load(MpcResult, path, mpc_result.WHAT),
+    "Trajectory": Trajectory.load,
+    "LineTrajectory": LineTrajectory.load,
+}
+
+Result = OcpResult | MpcResult | Trajectory | LineTrajectory
 
 
-def load_result(path: str | Path) -> OcpResult | MpcResult | Trajectory:
-    """Read what ``optimize``, ``mpc`` or ``simulate`` saved (the API's or the command line's).
+def load_result(path: str | Path) -> Result:
+    """Read what ``optimize``, ``mpc``, ``simulate`` or ``lower`` saved (the API's or the CLI's).
 
     Parameters
     ----------
     path : path-like
-        A results folder (holding ``result.nc``, ``mpc.nc`` or ``trajectory.nc``, looked for in
-        that order), or one of those files.
+        A results folder (holding ``result.nc``, ``mpc.nc``, ``trajectory.nc`` or
+        ``landing.nc``, looked for in that order; an optimum or closed loop of cable_ocp 0.1's
+        ``result.json`` or ``mpc.json``), or any result file, whatever its name (``cable-ocp
+        lower``'s ``hover_optimised.nc``, ``hover_closed_loop.nc``, ``hold.nc``): its kind is
+        read from the file.
 
     Returns
     -------
-    OcpResult, MpcResult or Trajectory
-        Each holds the scene it ran (``.scene``), so ``simulate(result.scene, winch=result)``
-        replays an optimum.
+    OcpResult, MpcResult, Trajectory or LineTrajectory
+        A run of a line paid out by elements (``[winch.line]``) is a LineTrajectory. Each holds
+        the scene it ran (``.scene``), so ``simulate(result.scene, winch=result)`` replays an
+        optimum.
 
     Raises
     ------
@@ -32,15 +52,24 @@ def load_result(path: str | Path) -> OcpResult | MpcResult | Trajectory:
         Naming the path, when it holds none of them, or the file that cannot be read.
     """
     path = Path(path)
-    folder, name = (path.parent, path.name) if path.suffix == ".nc" else (path, None)
-    readers = {
-        RESULT_FILE: OcpResult.load,
-        MPC_FILE: MpcResult.load,
-        TRAJECTORY_FILE: lambda where: Trajectory.load(where / "trajectory"),
-    }
-    for file, read in readers.items():
-        if (name is None and (folder / file).is_file()) or name == file:
-            return read(folder)
-    raise ValueError(
-        f"{path}: no cable_ocp result there (expected a folder or file of {', '.join(readers)})"
-    )
+    if not path.exists() and not path.suffix and path.with_suffix(".nc").is_file():
+        path = path.with_suffix(".nc")  # as Trajectory.save was given it: run/trajectory
+    if path.is_dir():
+        found = [name for name in FOLDER_FILES if (path / name).is_file()]
+        if not found and (path / "result.json").is_file():
+            return OcpResult.load(path)
+        if not found and (path / "mpc.json").is_file():
+            return MpcResult.load(path)
+        if not found:
+            raise ValueError(
+                f"{path}: no cable_ocp result there (expected a folder holding one of "
+                f"{', '.join(FOLDER_FILES)}, or a result file)"
+            )
+        path = path / found[0]
+    kind = netcdf.kind_of(path)
+    if kind not in READERS:
+        raise ValueError(
+            f"{path}: holds a {kind}, which load_result does not read (it reads "
+            f"{', '.join(READERS)})"
+        )
+    return READERS[kind](path)

@@ -44,6 +44,34 @@ def file_attributes(kind: str) -> dict[str, object]:
     return {KIND: kind, VERSION: FORMAT, WRITER: package_version(), "Conventions": "CF-1.10"}
 
 
+def kind_of(path: Path) -> str:
+    """The kind of result the file ``path`` holds (its class name), reading its attributes only.
+
+    Files of line runs written before the result format carried their kind in
+    ``cable_ocp_kind``.
+
+    Raises
+    ------
+    ValueError
+        Naming the file: it is missing, not netCDF, or not a cable_ocp result.
+    """
+    import netCDF4
+
+    path = Path(path)
+    if not path.is_file():
+        raise ValueError(f"{path}: no such file")
+    try:
+        with netCDF4.Dataset(path) as stored:
+            attrs = {name: stored.getncattr(name) for name in stored.ncattrs()}
+    except OSError as error:
+        detail = " ".join(str(error).split())[:160]
+        raise ValueError(f"{path}: not a readable netCDF file ({detail})") from None
+    kind = attrs.get(KIND, attrs.get("cable_ocp_kind"))
+    if not isinstance(kind, str):
+        raise ValueError(f"{path}: not a cable_ocp result (no attribute {KIND})")
+    return kind
+
+
 def format_of(dataset: xr.Dataset) -> int:
     """The format a Dataset read by :func:`read` was written in."""
     return int(dataset.attrs[VERSION])

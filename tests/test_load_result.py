@@ -1,0 +1,71 @@
+"""``co.load_result`` reads every kind of result, by the kind the file declares (issue 45 item 5):
+a line run (``[winch.line]``) in a results folder or under any name, ``cable-ocp lower``'s
+landing run, an optimum under another name; what is not a result is named."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+from conftest import MODELS
+
+import cable_ocp as co
+from cable_ocp import result_files
+from cable_ocp.simulation.line_trajectory import LineTrajectory
+
+LINE = {"element_length": 10.0, "pay_out_max": 30.0}
+
+
+@pytest.fixture(scope="module")
+def line_run():
+    """20 m paid out over 12 s (0.5 m drum): a LineTrajectory of several segments."""
+    scene = co.load_scene(
+        MODELS / "paper_flat.toml",
+        {"top.motion": "fixed", "cable.length": 50.0, "numerics.duration": 12.0,
+         "numerics.constraint_tolerance": 1e-4, "winch.knots": 4, "winch.line": LINE,
+         "end.payload": {"mass": 2000.0, "volume": 0.256}},
+    )  # fmt: skip
+    run = co.simulate(scene, winch=[10.0, 20.0, 30.0, 40.0], quiet=True)
+    assert isinstance(run, LineTrajectory) and len(run.segments) > 1
+    return run
+
+
+def _same_line(loaded, run) -> None:
+    assert isinstance(loaded, LineTrajectory)
+    np.testing.assert_array_equal(loaded.element_count, run.element_count)
+    np.testing.assert_array_equal(loaded.end, run.end)
+
+
+def test_a_line_runs_folder_and_its_file_load(tmp_path, line_run):
+    folder = tmp_path / "run"
+    folder.mkdir()
+    line_run.save(folder / "trajectory")
+    for given in (folder, folder / "trajectory.nc", folder / "trajectory"):
+        _same_line(co.load_result(given), line_run)
+
+
+def test_a_landing_folder_and_a_result_under_any_name_load(tmp_path, line_run):
+    """``lower``'s folder holds its run as landing.nc (and its other results under their own
+    names); a file is read by the kind it declares, not by its name."""
+    line_run.save(tmp_path / "landing")
+    _same_line(co.load_result(tmp_path), line_run)
+    _same_line(co.load_result(tmp_path / "landing.nc"), line_run)
+    run = co.simulate(co.load_scene(MODELS / "hanging.toml", {"numerics.duration": 1.0}))
+    result_files.save(run, tmp_path / "hover_optimised.nc")
+    loaded = co.load_result(tmp_path / "hover_optimised.nc")
+    assert isinstance(loaded, co.Trajectory) and loaded.omega == run.omega
+
+
+def test_what_is_not_a_result_is_named(tmp_path):
+    with pytest.raises(ValueError, match=r"no cable_ocp result there \(expected a folder"):
+        co.load_result(tmp_path)
+    (tmp_path / "notes.nc").write_text("not netCDF")
+    with pytest.raises(ValueError, match=r"notes\.nc: not a readable netCDF file"):
+        co.load_result(tmp_path / "notes.nc")
+    import xarray as xr
+
+    xr.Dataset({"a": ("x", [1.0])}).to_netcdf(tmp_path / "other.nc")
+    with pytest.raises(ValueError, match=r"other\.nc: not a cable_ocp result"):
+        co.load_result(tmp_path / "other.nc")
+    xr.Dataset(attrs={"cable_ocp_result": "HoldResult"}).to_netcdf(tmp_path / "hold.nc")
+    with pytest.raises(ValueError, match=r"holds a HoldResult, which load_result does not read"):
+        co.load_result(tmp_path / "hold.nc")
