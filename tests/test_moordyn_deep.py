@@ -46,6 +46,16 @@ def test_input_file_carries_the_payload_and_the_damping(deploy_line):
     assert rows.index("1e-6 threshIC") < len(rows) - 1
 
 
+def test_bad_run_settings_are_refused_by_name(deploy_line):
+    top = Drive.from_scene(deploy_line).top
+    with pytest.raises(ValueError, match="segments = 0 is out of range"):
+        md.run_moordyn(deploy_line, top, 10.0, 0)
+    with pytest.raises(ValueError, match="duration = 0.0 s is out of range"):
+        md.run_moordyn(deploy_line, top, 0.0, 20)
+    with pytest.raises(ValueError, match="step = 0.1 s is out of range"):
+        md.run_moordyn(deploy_line, top, 10.0, 20, step=0.1)
+
+
 def test_internal_step_shrinks_with_the_segments(deploy_line):
     coarse, fine = md.internal_step(deploy_line, 20), md.internal_step(deploy_line, 40)
     assert coarse in md.mc.MOORDYN_STEPS and fine < coarse

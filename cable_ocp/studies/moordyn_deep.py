@@ -305,6 +305,12 @@ def run_moordyn(scene: Scene, top, duration: float, segments: int,
     ratio : float
         Damping ratio of the first axial mode.
     """
+    if segments < 1:
+        raise ValueError(f"segments = {segments!r} is out of range: must be >= 1")
+    if not duration >= COUPLING_STEP:
+        raise ValueError(f"duration = {duration!r} s is out of range: must be >= {COUPLING_STEP} s")
+    if step is not None and not 0.0 < step <= COUPLING_STEP:
+        raise ValueError(f"step = {step!r} s is out of range: must be in (0, {COUPLING_STEP}] s")
     import moordyn
 
     step = internal_step(scene, segments, ratio) if step is None else step
