@@ -19,7 +19,7 @@ from pathlib import Path
 
 from cable_ocp.cli.arguments import OUT_HELP, SCENE_HELP, DefaultsShown, integer, positive
 from cable_ocp.cli.exports import winch_csv
-from cable_ocp.cli.files import results_folder
+from cable_ocp.cli.files import check_replaceable, results_folder
 from cable_ocp.cli.lower import add_lower_command
 from cable_ocp.cli.mpc import add_mpc_command
 from cable_ocp.cli.reference import add_reference_commands
@@ -729,7 +729,10 @@ def main(argv: list[str] | None = None) -> int:
     try:
         # Before any work, so a bad or busy --out costs nothing, and held to the last write; a
         # sweep folder is resumed, and cable_ocp.sweep checks and locks it as its own.
-        with claimed_target(getattr(args, "out", None) if args.command != "sweep" else None):
+        out = getattr(args, "out", None) if args.command != "sweep" else None
+        if out is not None:
+            check_replaceable(out)
+        with claimed_target(out):
             return args.run(args)
     except KeyboardInterrupt:
         print(f"{prefix}: interrupted", file=sys.stderr)

@@ -69,10 +69,42 @@ def results_folder(target: str | os.PathLike) -> Iterator[Path]:
         the file system failed otherwise (the message says which). Nothing is left of the
         folder's new contents; a previous results folder stays as it was.
     """
-    with atomic_directory(target) as folder:
-        try:
-            yield folder
-        except RuntimeError as error:
-            if not str(error).startswith("NetCDF:"):
-                raise
-            raise OSError(f"{_cause(folder, error)}; nothing was written") from error
+    scratch = None
+    try:
+        with atomic_directory(target) as folder:
+            scratch = folder
+            try:
+                yield folder
+            except RuntimeError as error:
+                if not str(error).startswith("NetCDF:"):
+                    raise
+                raise OSError(f"{_cause(folder, error)}; nothing was written") from error
+    except OSError as error:
+        if scratch is None or not scratch.is_dir():
+            raise
+        # Written, but not renamed into place: say where the results are, never hide them.
+        raise OSError(
+            f"{error.strerror or error}: the results could not be moved to {target}; they are "
+            f"in {scratch}: move them before the next run into {target}, which removes it"
+        ) from error
+
+
+def check_replaceable(target: str | os.PathLike) -> None:
+    """Refuse a results folder that cannot be replaced as a whole: a mount point.
+
+    A results folder is written beside its target and renamed onto it
+    (:func:`~cable_ocp.scene.output.atomic_directory`); a mount point cannot be renamed (EBUSY),
+    so a run into one would end after all its work with its results in a hidden folder.
+
+    Raises
+    ------
+    ValueError
+        Naming the folder, before any work.
+    """
+    path = Path(target).expanduser()
+    if path.is_dir() and os.path.ismount(path):
+        raise ValueError(
+            f"results folder {str(target)!r}: is a mount point, which cannot be replaced as a "
+            "whole (results are written beside it and renamed onto it): give a new subfolder "
+            "of it; nothing was written"
+        )

@@ -201,8 +201,9 @@ def run_sweep(
     check_engine(scheduler, workers if processes else None)
     folder = Path(out).expanduser().resolve()
     report = SweepReport(dataset=xr.Dataset(), path=folder / "sweep.nc")
+    check_folder(folder, spec)  # before the lock's file is written beside it
     with folder_lock(folder, f"cable-ocp sweep {spec.path}"):
-        check_folder(folder, spec)  # before anything is written
+        check_folder(folder, spec)  # again: another run may have written it meanwhile
         claim_folder(folder, spec)
         remove_scratch(folder)
         statuses = case_statuses(folder, spec)

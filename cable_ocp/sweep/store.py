@@ -177,6 +177,8 @@ def check_folder(folder: Path, spec: SweepSpec) -> None:
     """
     folder = Path(folder)
     names = {p.name for p in folder.iterdir()} if folder.is_dir() else set()
+    if folder.is_dir() and not os.access(folder, os.W_OK | os.X_OK):  # a read-only mount too
+        raise ValueError(f"--out {folder}: the folder is not writable; nothing was written")
     if names - {LOCK} and MARKER not in names:
         older = (
             f" (if an older cable-ocp wrote it, add an empty file {folder / MARKER} to resume it)"
@@ -191,8 +193,6 @@ def check_folder(folder: Path, spec: SweepSpec) -> None:
         check_target(folder)
     if not names - {LOCK, MARKER}:
         return
-    if not os.access(folder, os.W_OK | os.X_OK):
-        raise ValueError(f"--out {folder}: the folder is not writable; nothing was written")
     if "sweep.json" not in names:
         if names - SWEEP_NAMES:
             raise ValueError(
