@@ -27,6 +27,7 @@ except ModuleNotFoundError:  # Python 3.10
     import tomli as tomllib
 
 from cable_ocp.scene.bathymetry import GridError, read_grid
+from cable_ocp.scene.line_mesh import FEWEST_ELEMENTS, LineMesh
 
 __all__ = [
     "Cable",
@@ -67,6 +68,17 @@ MAX_CURRENT_ROWS = 100
 CURRENT_LIMIT = 10.0  # m/s, each component
 CURRENT_REASON = "currents at sea stay under 10 m/s, the fastest tidal streams"
 REQUIRED_TABLES = ("model", "top", "numerics")  # tables every scene file must have
+
+
+def whole_steps(duration: float, step: float) -> int | None:
+    """The number of steps of ``step`` (s) in ``duration`` (s), or None if not whole (to 1e-9)."""
+    ratio = duration / step
+    if not math.isfinite(ratio):
+        return None
+    count = round(ratio)
+    if count < 1 or abs(count * step - duration) > 1e-9 * max(duration, 1.0):
+        return None
+    return count
 
 
 class SceneError(ValueError):
@@ -186,25 +198,26 @@ def _check(spec: _Spec, value: Any, path: str) -> Any:
 
 
 def _existing_file(path: str, value: str | os.PathLike) -> str:
-    """The absolute path of a regular file, or one SceneError saying what ``value`` is instead."""
+    """The absolute path of a regular file, or one SceneError saying what ``value`` is instead.
+
+    The error shows the whole path (never shortened: it is what the user must find).
+    """
     try:
         resolved = Path(value).resolve()
         kind = resolved.stat().st_mode
     except RuntimeError:  # Python < 3.13 raises it for a loop of symbolic links
-        raise SceneError(path, f" = {_short(str(value))}: a loop of symbolic links") from None
+        raise SceneError(path, f" = {str(value)!r}: a loop of symbolic links") from None
     except OSError as error:
         if error.errno == errno.ELOOP:
-            raise SceneError(path, f" = {_short(str(value))}: a loop of symbolic links") from None
+            raise SceneError(path, f" = {str(value)!r}: a loop of symbolic links") from None
         if isinstance(error, FileNotFoundError):
-            raise SceneError(path, f" = {_short(str(resolved))}: file not found") from None
-        raise SceneError(
-            path, f" = {_short(str(value))}: cannot be read ({error.strerror})"
-        ) from None
+            raise SceneError(path, f" = {str(resolved)!r}: file not found") from None
+        raise SceneError(path, f" = {str(value)!r}: cannot be read ({error.strerror})") from None
     if stat.S_ISDIR(kind):
-        raise SceneError(path, f" = {_short(str(resolved))}: is a folder, not a file")
+        raise SceneError(path, f" = {str(resolved)!r}: is a folder, not a file")
     if not stat.S_ISREG(kind):
         raise SceneError(
-            path, f" = {_short(str(resolved))}: not a regular file (a pipe, socket or device)"
+            path, f" = {str(resolved)!r}: not a regular file (a pipe, socket or device)"
         )
     return str(resolved)
 
@@ -659,9 +672,7 @@ class WinchLine(_Validated):
 
     @property
     def mesh(self):
-        """The :class:`~cable_ocp.model.line_mesh.LineMesh` of the line's element lengths."""
-        from cable_ocp.scene.line_mesh import LineMesh
-
+        """The :class:`~cable_ocp.scene.line_mesh.LineMesh` of the line's element lengths."""
         shortest = self.top_length_min
         half = self.element_length / 2
         return LineMesh(self.element_length, half if shortest is None else shortest)
@@ -806,6 +817,12 @@ class Numerics(_Validated):
                 f" = {self.step!r} is out of range: must be >= numerics.duration / {MAX_STEPS:.0e}"
                 f" = {self.duration / MAX_STEPS!r} s (at most {MAX_STEPS:.0e} RK4 steps)",
             )
+        if whole_steps(self.duration, self.step) is None:
+            raise SceneError(
+                "numerics.step",
+                f" = {self.step!r} s must divide numerics.duration = {self.duration!r} s into a "
+                f"whole number of RK4 steps ({self.duration / self.step:.6g} here)",
+            )
 
 
 @_section("lowering")
@@ -912,9 +929,14 @@ class Scene(_Validated):
         from cable_ocp.scene.hanging import check_hanging  # it reads a Scene
 
         check_hanging(self)
-        if self.lowering is not None and self.lowering.land_time > self.numerics.duration:
-            raise self.lowering._fail(
-                "land_time", f"<= numerics.duration = {self.numerics.duration!r}"
+        lowering, numerics = self.lowering, self.numerics
+        if lowering is not None and lowering.land_time > numerics.duration:
+            raise lowering._fail("land_time", f"<= numerics.duration = {numerics.duration!r}")
+        if lowering is not None and whole_steps(lowering.land_time, numerics.step) is None:
+            raise SceneError(
+                "lowering.land_time",
+                f" = {lowering.land_time!r} s is not a whole number of numerics.step = "
+                f"{numerics.step!r} s: the landing is checked, and its hold begins, on a step",
             )
         if self.winch.line is not None:
             self._check_line()
@@ -936,24 +958,59 @@ class Scene(_Validated):
             )
 
     def _check_line(self) -> None:
-        """A line on the drum (``[winch.line]``) that its elements can follow from start to end."""
-        line, mesh = self.winch.line, self.winch.line.mesh
-        least = self.cable.length - line.haul_in_max
+        """A line on the drum (``[winch.line]``) that its elements can follow from start to end.
+
+        Each limit blames the field that breaks it: the mesh's (``element_length``,
+        ``top_length_min``) when the line out at the start cannot be meshed, the drum's
+        (``haul_in_max``, ``pay_out_max``) only when the line it leaves or reaches cannot.
+        """
+        line, mesh, length = self.winch.line, self.winch.line.mesh, self.cable.length
+        fills = (
+            f"the line out at the start, cable.length = {length!r} m, must fill three elements: "
+            "3/2 winch.line.element_length + the shortest top element"
+        )
+        if length < mesh.shortest_line:
+            below = LineMesh(line.element_length, 0.0).below_top(FEWEST_ELEMENTS)
+            top_min = line.top_length_min
+            if top_min is not None and length >= below + line.element_length / 2:
+                raise line._fail(
+                    "top_length_min",
+                    f"<= cable.length - 3/2 winch.line.element_length = {length - below!r} "
+                    f"({fills})",
+                )
+            # The longest Delta with (FEWEST - 1/2) Delta + top <= L, top = Delta / 2 if unset.
+            elements = FEWEST_ELEMENTS - (0.0 if top_min is None else 0.5)
+            largest = (length - (top_min or 0.0)) / elements
+            raise line._fail("element_length", f"<= {largest!r} ({fills})")
+        least = length - line.haul_in_max
         if least < mesh.shortest_line:
             raise line._fail(
                 "haul_in_max",
                 f"<= cable.length - {mesh.shortest_line!r} = "
-                f"{self.cable.length - mesh.shortest_line!r} (the line left must fill three "
+                f"{length - mesh.shortest_line!r} (the line left must fill three "
                 "elements: 3/2 winch.line.element_length + the shortest top element)",
             )
-        most = self.cable.length + line.pay_out_max
-        elements = mesh.starting_elements(most)
-        if elements > MAX_LINE_ELEMENTS:
+        most = length + line.pay_out_max
+        # The shortest Delta with floor((most - top) / Delta + 1/2) <= MAX, top = Delta / 2
+        # if unset.
+        top_min = line.top_length_min
+        shortest = (most - (top_min or 0.0)) / (
+            MAX_LINE_ELEMENTS + (1.0 if top_min is None else 0.5)
+        )
+        longest = f"the longest line, cable.length + winch.line.pay_out_max = {most:.6g} m"
+        if mesh.starting_elements(length) > MAX_LINE_ELEMENTS:
+            raise line._fail(
+                "element_length",
+                f"> {shortest:.6g} (at most {MAX_LINE_ELEMENTS} elements in {longest})",
+            )
+        if mesh.starting_elements(most) > MAX_LINE_ELEMENTS:
+            # most < (MAX + 1/2) Delta + top
+            largest = mesh.below_top(MAX_LINE_ELEMENTS + 1) + mesh.top_length_min - length
             raise line._fail(
                 "pay_out_max",
-                f"<= {mesh.below_top(MAX_LINE_ELEMENTS) - self.cable.length:.6g} (at most "
-                f"{MAX_LINE_ELEMENTS} elements of winch.line.element_length out; or longer "
-                "elements)",
+                f"< {largest:.6g} (at most {MAX_LINE_ELEMENTS} elements of "
+                f"winch.line.element_length out; or winch.line.element_length > {shortest:.6g} "
+                f"for {longest})",
             )
         if self.model.torsion:
             raise SceneError(
@@ -995,6 +1052,7 @@ def _build(cls: type, data: Any, path: str, base_dir: Path | None, **extra: Any)
         if name not in data and f.default is MISSING and f.default_factory is MISSING:
             raise SceneError(join(name), ": missing required key")
     kwargs = dict(extra)
+    relative = {}  # the field paths of relative file paths: how they were resolved
     for name, value in data.items():
         spec = specs[name].metadata["spec"]
         if spec.kind == "section" and not (value is None and spec.optional):
@@ -1004,12 +1062,21 @@ def _build(cls: type, data: Any, path: str, base_dir: Path | None, **extra: Any)
                 _build(spec.item, v, f"{join(name)}[{k}]", base_dir) for k, v in enumerate(value)
             ]
         elif spec.kind == "path" and isinstance(value, str):
+            if not Path(value).expanduser().is_absolute():
+                base = "the scene file's folder" if base_dir else "the working folder"
+                relative[join(name)] = (
+                    f" (the relative path {value!r} was resolved against {base}, "
+                    f"{str(Path(base_dir or Path.cwd()).resolve())!r})"
+                )
             value = str(Path(base_dir or Path.cwd()) / Path(value).expanduser())
         kwargs[name] = value
     try:
         return cls(**kwargs)
     except SceneError as err:
-        raise err.relocated(cls._section, path) from None
+        err = err.relocated(cls._section, path)
+        if err.path in relative:
+            err = SceneError(err.path, err.detail + relative[err.path])
+        raise err from None
 
 
 def scene_from_dict(
