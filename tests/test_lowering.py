@@ -116,6 +116,7 @@ def test_reference_descent_lands_and_passes_every_check(sheared, validation):
     assert names == {
         "landing height error", "landing speed", "hold band", "top tension min",
         "top tension max", "no slack bond", "drum rate", "drum acceleration", "minimum clearance",
+        "slack criterion (DNV-RP-H103)", "seabed slope", "footprint clearance",
     }  # fmt: skip
     # The static landing line lands the dynamic run within a centimetre, at rest.
     validation(
@@ -417,3 +418,76 @@ def test_the_checks_take_a_run_of_fixed_n_too():
     assert abs(report.landing_error) < 1e-9 and abs(report.landing_speed) < 1e-9
     assert report.least_tension == pytest.approx(run.top_tension.min(), rel=1e-9)
     assert report.least_bond_tension > 0
+
+
+def _grid_through(path, landing: np.ndarray, below: float, rise, along: tuple[float, float]):
+    """A grid whose seabed lies ``below`` (m) under ``landing``, rising ``rise(dy)`` (m) with
+    the distance ``dy`` (m) across the run's drift (y), over the end's path ``along`` (x, m).
+    """
+    import xarray as xr
+
+    x = np.arange(along[0] - 20.0, along[1] + 20.0, 5.0)
+    y = landing[1] + np.linspace(-10.0, 10.0, 401)
+    z = landing[2] - below + rise(y - landing[1])
+    elevation = np.broadcast_to(z, (x.size, y.size))
+    xr.Dataset({"elevation": (("x", "y"), elevation)}, coords={"x": x, "y": y}).to_netcdf(path)
+    return str(path)
+
+
+@pytest.mark.parametrize(
+    ("rise", "broken"),
+    [
+        (lambda dy: np.tan(np.radians(66.0)) * dy, {"seabed slope"}),
+        (
+            lambda dy: 34.0 * (1 + np.tanh((dy - 1.0) / 0.1)) / 2,
+            {"seabed slope", "footprint clearance"},
+        ),
+        (lambda dy: np.tan(np.radians(15.0)) * dy, {"seabed slope"}),
+        (lambda dy: 4.0 * np.exp(-(((dy + 1.2) / 0.4) ** 2)), {"seabed slope"}),  # a boulder
+        (lambda dy: np.tan(np.radians(3.0)) * dy, set()),
+    ],
+    ids=["66 deg slope", "34 m cliff 1 m aside", "15 deg slope", "4 m boulder", "3 deg slope"],
+)
+def test_the_seabed_is_checked_over_the_loads_footprint(sheared, tmp_path, rise, broken):
+    """The sheared landing checked over absolute seabeds that pass under its landing point at
+    the same height, sloping or stepping beside it: only the footprint's checks may fail.
+    """
+    scene, descent, run = sheared
+    first = check_landing(run, descent.angle)
+    land = int(np.argmin(np.abs(run.time - scene.lowering.land_time)))
+    landing = run.end[land]
+    grid = _grid_through(tmp_path / "seabed.nc", landing, HEIGHT + first.landing_error, rise,
+                         (run.end[:, 0].min(), run.end[:, 0].max()))  # fmt: skip
+    report = check_landing(run, descent.angle, scene.updated({"seabed.grid.file": grid}))
+    assert report.landing_error == pytest.approx(first.landing_error, abs=1e-3)
+    assert failed(report) == broken, str(report)
+
+
+def test_dnv_slack_criterion_and_dynamic_amplification_on_a_fast_pay_out():
+    """A 1 t load on the hanging rope, 10 m paid out in 4.7 s: the top tension dips to 8 % of
+    its static value without a bond pushing (DNV's criterion fails); in 5.5 s to 33 % (passes).
+    """
+    from test_slack import smooth_pay_out
+
+    scene = co.load_scene(MODELS / "hanging.toml", {
+        "numerics.duration": 6.0, "numerics.step": 0.01, "winch.top_length_max": 60.0,
+        "winch.angle_max": 100.0, "end.payload": {"mass": 1000.0, "volume": 0.1, "drag_area": 1.0},
+        "seabed.clearance": 5.0, "lowering": {"land_time": 5.0, "height": 5.0, "tension_min": 1.0},
+    })  # fmt: skip
+    radius = scene.winch.drum_radius
+    fast, slow = (smooth_pay_out(10.0, duration, radius) for duration in (4.7, 5.5))
+    run = co.simulate(scene, winch=fast, compiled=True)
+    report = check_landing(run, fast)
+    assert "slack criterion (DNV-RP-H103)" in failed(report) and "no slack bond" not in failed(
+        report
+    )
+    assert 0.0 < report.least_static_share < 0.1
+    # The static top tension, independently: the submerged rope out and the load.
+    rope = (scene.cable.density - 1025.0) * scene.cable.cross_section_area * 9.81
+    line = scene.cable.length + radius * fast(run.time)[0]
+    static = rope * line + (1000.0 - 1025.0 * 0.1) * 9.81
+    assert report.dynamic_amplification == pytest.approx(np.max(run.top_tension / static), rel=1e-6)
+    assert report.least_static_share == pytest.approx(np.min(run.top_tension / static), rel=1e-6)
+    assert "dynamic amplification factor" in str(report)
+    calm = check_landing(co.simulate(scene, winch=slow, compiled=True), slow)
+    assert "slack criterion (DNV-RP-H103)" not in failed(calm) and calm.least_static_share > 0.3

@@ -4,10 +4,13 @@
 a :class:`LineTrajectory`, typically the verified full-model run) and the winch profile that
 drove it, and measures each of the lowering's constraints on it (CONVENTIONS.md §5, lowering):
 the landing error and vertical speed at ``lowering.land_time``, the band of the hold after it,
-the least and the peak top tension, the least signed bond tension anywhere (a pushing bond is a
-slack rope), the drum's peak rate and acceleration between the samples, and the minimum
-clearance. Nothing here comes from a solver's own bookkeeping: positions, velocities and bond
-forces are recomputed from the saved states and inputs by the model's outputs.
+the least and the peak top tension, DNV-RP-H103's slack criterion (the top tension above 10 % of
+its static value, :mod:`cable_ocp.simulation.slack`), the least signed bond tension anywhere (a
+pushing bond is a slack rope), the drum's peak rate and acceleration between the samples, the
+minimum clearance, and the seabed over the load's footprint (:func:`footprint_checks`). The
+report also gives the dynamic amplification factor (the peak top tension over its static value).
+Nothing here comes from a solver's own bookkeeping: positions, velocities and bond forces are
+recomputed from the saved states and inputs by the model's outputs.
 """
 
 from __future__ import annotations
@@ -25,11 +28,27 @@ from cable_ocp.model.line_models import line_models
 from cable_ocp.simulation.line_run import pay_out_drive
 from cable_ocp.simulation.line_trajectory import LineTrajectory
 from cable_ocp.simulation.run import winch_function
-from cable_ocp.simulation.seabed import clearance, clearance_reference
+from cable_ocp.simulation.seabed import (
+    OffGridError,
+    clearance,
+    clearance_reference,
+    seabed_elevation,
+)
+from cable_ocp.simulation.slack import SLACK_FRACTION, run_static, signed_tensions, top_values
 from cable_ocp.simulation.trajectory import Trajectory
 
 # Drum samples per output interval for the winch's rate and acceleration between the outputs.
 DRUM_SAMPLES = 16
+# The steepest seabed a load may be set down on, rad. A stated choice, not a standard's figure:
+# subsea foundations (mudmats) are commonly designed for a few degrees of slope and levelled
+# beyond; 10 degrees is twice that, and a load set down on more slides or tips.
+SLOPE_LIMIT = np.radians(10.0)
+# Added to the load's half-diagonal for the footprint's radius, m: a load lowered on a wire is
+# set down within about a metre of its target (the vessel's station keeping, the load's swing).
+FOOTPRINT_MARGIN = 1.0
+# The footprint is sampled on rings at these fractions of its radius, at FOOTPRINT_ANGLES each.
+FOOTPRINT_RINGS = (0.25, 0.5, 0.75, 1.0)
+FOOTPRINT_ANGLES = 24
 
 
 @dataclass(frozen=True)
@@ -82,6 +101,11 @@ class LandingReport:
         The least signed tension of any bond at any sample (negative: a bond pushes).
     hold_deviation : float, m
         The largest ``|z_E - z_sb - lowering.height|`` from the landing time to the run's end.
+    dynamic_amplification : float
+        DNV-RP-H103's dynamic amplification factor: the largest top tension over its static
+        value (the submerged weight hanging from the top then, :mod:`~cable_ocp.simulation.slack`).
+    least_static_share : float
+        The least top tension over its static value (DNV's slack criterion: above 0.1).
     """
 
     checks: tuple[Check, ...]
@@ -91,6 +115,8 @@ class LandingReport:
     peak_tension: float
     least_bond_tension: float
     hold_deviation: float
+    dynamic_amplification: float = float("nan")
+    least_static_share: float = float("nan")
 
     @property
     def passed(self) -> bool:
@@ -108,7 +134,8 @@ class LandingReport:
         return "; ".join(str(check) for check in self.failures)
 
     def __str__(self) -> str:
-        return "\n".join(str(check) for check in self.checks)
+        amplification = f"dynamic amplification factor: {self.dynamic_amplification:.4g}"
+        return "\n".join([*(str(check) for check in self.checks), amplification])
 
 
 def check_landing(run: Trajectory | LineTrajectory, winch=None, scene=None) -> LandingReport:
@@ -151,6 +178,10 @@ def check_landing(run: Trajectory | LineTrajectory, winch=None, scene=None) -> L
     land = int(np.argmin(np.abs(time - lowering.land_time)))
     speed = float(_end_velocity(run)[land, 2])
     tensions, top = _bond_tensions(run)
+    static = run_static(run, spec_from_scene(run.scene))
+    static_top = top_values(static)
+    with np.errstate(invalid="ignore", divide="ignore"):
+        share = np.where(static_top > 0, top / static_top, np.nan)
     after = slice(land, None)
     worst_hold = land + int(np.argmax(np.abs(deviation[after])))
     checks = [
@@ -167,6 +198,14 @@ def check_landing(run: Trajectory | LineTrajectory, winch=None, scene=None) -> L
         checks.append(
             _bounded("top tension max", top[worst], lowering.tension_max, "N",
                      f"at t = {time[worst]:g} s")
+        )  # fmt: skip
+    if np.isfinite(share).any():
+        worst = int(np.nanargmin(share))
+        checks.append(
+            Check("slack criterion (DNV-RP-H103)", float(share[worst]), SLACK_FRACTION,
+                  "of static", bool(share[worst] > SLACK_FRACTION),
+                  f"at t = {time[worst]:g} s (top tension {top[worst]:.4g} N, static "
+                  f"{static_top[worst]:.4g} N)")
         )  # fmt: skip
     sample, bond = np.unravel_index(int(np.argmin(tensions)), tensions.shape)
     checks.append(
@@ -185,6 +224,7 @@ def check_landing(run: Trajectory | LineTrajectory, winch=None, scene=None) -> L
             Check("minimum clearance", float(height[k]), least, "m",
                   bool(height[k] >= least - CLEARANCE_TOLERANCE), where)
         )  # fmt: skip
+    checks += footprint_checks(scene, end[land], end[0], f"at t = {time[land]:g} s")
     return LandingReport(
         checks=tuple(checks),
         landing_error=float(deviation[land]),
@@ -193,7 +233,70 @@ def check_landing(run: Trajectory | LineTrajectory, winch=None, scene=None) -> L
         peak_tension=float(top.max()),
         least_bond_tension=float(tensions.min()),
         hold_deviation=float(abs(deviation[worst_hold])),
+        dynamic_amplification=float(np.nanmax(share)) if np.isfinite(share).any() else np.nan,
+        least_static_share=float(np.nanmin(share)) if np.isfinite(share).any() else np.nan,
     )
+
+
+def footprint_radius(scene) -> float:
+    """The radius of the seabed a landed load covers, m.
+
+    The half-diagonal of a square of the payload's plan area (its drag area, the area it shows
+    to vertical flow; none without a payload), plus :data:`FOOTPRINT_MARGIN` for where it is
+    set down.
+    """
+    payload = scene.end.payload
+    area = 0.0 if payload is None else payload.drag_area
+    return float(np.sqrt(area / 2)) + FOOTPRINT_MARGIN
+
+
+def footprint_checks(scene, landing: np.ndarray, start: np.ndarray, where: str) -> list[Check]:
+    """The seabed over the load's footprint at the landing: its slope and its highest point.
+
+    Rule: on rings of the footprint's radius (:func:`footprint_radius`; fractions
+    :data:`FOOTPRINT_RINGS` of it, :data:`FOOTPRINT_ANGLES` points each) around the end's
+    landing position,
+
+    - **seabed slope**: the steepest rise or fall from the seabed under the end to a point of
+      the footprint, ``atan(|z_sb(p) - z_sb(E)| / |p - E|)``, must stay within
+      :data:`SLOPE_LIMIT` (a load set down on more slides or tips);
+    - **footprint clearance**: the end must be above the highest seabed point of its footprint
+      (``z_E - max z_sb >= 0``): a cliff or a boulder beside the target is under the load.
+
+    Parameters
+    ----------
+    scene : Scene
+    landing : array (3,), m
+        The end at the landing.
+    start : array (3,), m
+        The end at the run's start (a relative seabed's reference).
+    where : str
+        When, for the checks' text.
+    """
+    radius = footprint_radius(scene)
+    angles = np.linspace(0.0, 2 * np.pi, FOOTPRINT_ANGLES, endpoint=False)
+    distance = (radius * np.asarray(FOOTPRINT_RINGS))[:, None] * np.ones_like(angles)
+    x = landing[0] + distance * np.cos(angles)
+    y = landing[1] + distance * np.sin(angles)
+    reference = clearance_reference(scene.seabed, start)
+    try:
+        ground = seabed_elevation(scene.seabed, x, y, reference)
+    except OffGridError as error:
+        return [Check("seabed footprint", radius, radius, "m", False, f"{where}: {error}")]
+    centre = float(seabed_elevation(scene.seabed, landing[0], landing[1], reference))
+    slopes = np.arctan(np.abs(ground - centre) / distance)
+    k = np.unravel_index(int(np.argmax(slopes)), slopes.shape)
+    highest = np.unravel_index(int(np.argmax(ground)), ground.shape)
+    above = float(landing[2] - ground[highest])
+    footprint = f"within {radius:.3g} m of the end"
+    return [
+        Check("seabed slope", float(np.degrees(slopes[k])), float(np.degrees(SLOPE_LIMIT)),
+              "deg", bool(slopes[k] <= SLOPE_LIMIT),
+              f"{where}, {footprint}, towards ({x[k]:.1f}, {y[k]:.1f}) m"),
+        Check("footprint clearance", above, 0.0, "m", bool(above >= 0.0),
+              f"{where}, over the highest seabed {footprint}, at ({x[highest]:.1f}, "
+              f"{y[highest]:.1f}) m"),
+    ]  # fmt: skip
 
 
 def _bounded(name: str, value: float, limit: float, unit: str, where: str) -> Check:
@@ -236,10 +339,8 @@ def _bond_tensions(run: Trajectory | LineTrajectory) -> tuple[np.ndarray, np.nda
         joints, forces = _joints_and_forces(model_of(n), segment.states.T, segment.inputs.T)
         joints = np.array(joints).reshape(3, n + 2, count, order="F")
         forces = np.array(forces).reshape(3, n + 1, count, order="F")
-        axes = np.diff(joints, axis=1)
-        axes /= np.linalg.norm(axes, axis=0)
         padded = np.full((count, width), np.inf)
-        padded[:, : n + 1] = -np.sum(forces * axes, axis=0).T  # as statics.bond_tensions
+        padded[:, : n + 1] = signed_tensions(joints.transpose(2, 0, 1), forces.transpose(2, 0, 1))
         return padded
 
     tensions = _over_run(run, signed)

@@ -89,13 +89,17 @@ def compression_tolerance(static: np.ndarray) -> float:
     One per cent of the rope's whole hanging weight is a force that moves the run: the
     paper's rope (62 kN) fails from 0.62 kN of push.
     """
-    top = static[np.arange(static.shape[0]), _top_index(static)]
-    return COMPRESSION_SHARE * float(np.nanmax(np.abs(top)))
+    return COMPRESSION_SHARE * float(np.nanmax(np.abs(top_values(static))))
 
 
 def _top_index(values: np.ndarray) -> np.ndarray:
     """Index of the last finite value of each row (the top bond of a padded line run)."""
     return values.shape[1] - 1 - np.argmax(np.isfinite(values[:, ::-1]), axis=1)
+
+
+def top_values(values: np.ndarray) -> np.ndarray:
+    """The top bond's value of each sample (k,) of per-bond values (k, m) padded with NaN."""
+    return values[np.arange(values.shape[0]), _top_index(values)]
 
 
 @dataclass(frozen=True)
