@@ -20,6 +20,7 @@ from cable_ocp.model.parameters import parameter_names
 from cable_ocp.scene.axial_choice import RIGID_ERROR, axial_choice, axial_period
 from cable_ocp.scene.schema import SceneError
 from cable_ocp.simulation.statics import equilibrium
+from cable_ocp.studies.validation import catenary_check
 
 PAYLOAD = 40000.0  # kg
 
@@ -64,7 +65,7 @@ def _crossings(signal: np.ndarray, step: float) -> np.ndarray:
     return (k + -centred[k] / (centred[k + 1] - centred[k])) * step
 
 
-def test_statics_stretch_is_the_vertical_elastic_catenary():
+def test_statics_stretch_is_the_vertical_elastic_catenary(validation):
     """Hanging in water with its payload: the end lies (W L + w' L^2 / 2) / EA below L (0.5 %)."""
     scene = co.load_scene(MODELS / "deep_lift.toml")
     model = CableModel.from_scene(scene)
@@ -76,13 +77,19 @@ def test_statics_stretch_is_the_vertical_elastic_catenary():
     length = cable.length
     stretch = (payload_weight * length + line_weight * length**2 / 2) / cable.axial_stiffness_value
     model_stretch = -found.end[2] - length
+    error = abs(model_stretch / stretch - 1)
+    validation("deep_lift statics: 40 t on 2000 m of 40 mm steel, EA = 126 MN, n = 20, in water",
+               "analytic", "vertical elastic catenary (eq. 34): (W L + w' L^2 / 2) / EA",
+               "stretch of the line (relative error)",
+               f"{model_stretch:.4f} m against {stretch:.4f} m ({error:.1e})",
+               "<= 0.5 %")  # fmt: skip
     assert stretch > 1.0  # metres: the test would not notice a rigid rope otherwise
     assert model_stretch == pytest.approx(stretch, rel=5e-3)
     top_tension = payload_weight + line_weight * length
     assert found.tensions[-1] == pytest.approx(top_tension, rel=1e-6)
 
 
-def test_free_period_and_damping_match_the_spring_and_mass():
+def test_free_period_and_damping_match_the_spring_and_mass(validation):
     """Released in air: T0 = 2 pi sqrt((M + m L / 3) / (EA / L)) within 0.5 %, zeta from decay."""
     zeta = 0.05
     scene, model, start, u = _released({**IN_AIR, "cable.axial_damping": zeta})
@@ -92,14 +99,20 @@ def test_free_period_and_damping_match_the_spring_and_mass():
     strain = states[model.state_size // 2 - 1]
     measured = np.diff(_crossings(strain, step))
     damped = period / math.sqrt(1 - zeta**2)
-    assert measured.mean() == pytest.approx(damped, rel=5e-3)
     rest = equilibrium(model, Drive.from_scene(scene)).state[model.state_size // 2 - 1]
     peaks = [np.max(np.abs(strain[k : k + 100] - rest)) for k in range(0, 700, 100)]
     decrement = np.log(peaks[0] / peaks[-1]) / (len(peaks) - 1)
+    validation("40 t on 300 m of 70 mm steel in air, released from 60 t, zeta = 0.05, n = 10",
+               "analytic", "spring and mass: T0 sqrt(1 - zeta^2), T0 = 2 pi sqrt((M + m L/3) L/EA)",
+               "free period (relative error); damping ratio from the decrement",
+               f"{measured.mean():.5f} s against {damped:.5f} s "
+               f"({abs(measured.mean() / damped - 1):.1e}); {decrement / (2 * math.pi):.4f}",
+               "<= 0.5 %; 0.05 +- 10 %")  # fmt: skip
+    assert measured.mean() == pytest.approx(damped, rel=5e-3)
     assert decrement / (2 * math.pi) == pytest.approx(zeta, rel=0.1)
 
 
-def test_energy_with_the_elastic_energy_is_conserved_over_100_periods():
+def test_energy_with_the_elastic_energy_is_conserved_over_100_periods(validation):
     """In air, no damping: kinetic + gravity + strain energy drifts by < 1e-6 relative."""
     scene, model, start, u = _released(IN_AIR)
     period = axial_period(scene, scene.cable.length)
@@ -109,15 +122,20 @@ def test_energy_with_the_elastic_energy_is_conserved_over_100_periods():
     energy = np.array(model.energy.map(count)(states, np.tile(u[:, None], count)))
     initial = float(model.energy(start, u))
     drift = np.max(np.abs(energy - initial))
-    assert drift / abs(initial) < 1e-6
     # The oscillation's own energy, 1/2 EA L s_a^2, drifts by far less than itself too.
     strain = states[model.state_size // 2 - 1]
     amplitude = (strain.max() - strain.min()) / 2
     oscillation = 0.5 * scene.cable.axial_stiffness_value * scene.cable.length * amplitude**2
+    validation("40 t on 300 m of steel in air, no damping, 100 axial periods, h = T0 / 200",
+               "conservation", "kinetic + gravity + elastic energy is constant",
+               "largest drift relative to the total; to the oscillation's energy",
+               f"{drift / abs(initial):.1e}; {drift / oscillation:.1e}",
+               "< 1e-6; < 1e-4")  # fmt: skip
+    assert drift / abs(initial) < 1e-6
     assert drift / oscillation < 1e-4
 
 
-def test_bordered_thomas_solve_equals_the_sparse_kkt_solve():
+def test_bordered_thomas_solve_equals_the_sparse_kkt_solve(validation):
     """At a moving state of the elastic model the two eliminations agree to rounding."""
     scene = co.load_scene(MODELS / "deep_lift.toml", {"model.elements": 6})
     model = CableModel.from_scene(scene)
@@ -127,7 +145,27 @@ def test_bordered_thomas_solve_equals_the_sparse_kkt_solve():
     state[half:] = 0.05 * np.random.default_rng(44).standard_normal(half)
     thomas = np.array(model.rhs(state, found.inputs)).ravel()
     sparse = np.array(model.rhs_sparse(state, found.inputs)[0]).ravel()
-    assert np.max(np.abs(thomas - sparse)) <= 1e-9 * np.max(np.abs(thomas))
+    error = np.max(np.abs(thomas - sparse)) / np.max(np.abs(thomas))
+    validation("deep_lift, n = 6, elastic, random velocities", "second formulation",
+               "assembled sparse KKT solve (csparse) with the strain's border",
+               "largest difference in x' relative to its largest entry", f"{error:.1e}",
+               "<= 1e-9")  # fmt: skip
+    assert error <= 1e-9
+
+
+def test_the_elastic_rope_meets_the_inclined_elastic_catenary(validation):
+    """The paper's catenary (H = 20 kN, V = 50 kN, in air) with the elastic rope, n = 60."""
+    scene = co.load_scene(MODELS / "catenary.toml", {"model.axial": "elastic"})
+    elastic = catenary_check(scene, 60)
+    rigid = catenary_check(co.load_scene(MODELS / "catenary.toml"), 60)
+    error = 100 * max(elastic.max_error_x, elastic.max_error_z)
+    rigid_error = 100 * max(rigid.max_error_x, rigid.max_error_z)
+    validation("catenary statics with the elastic rope, n = 60 (paper 4.1)", "analytic",
+               "elastic catenary eq. 34", "max(eps_x, eps_z); the rigid rope's",
+               f"{error:.4f} %; {rigid_error:.4f} %",
+               "<= 0.015 % and below a third of the rigid rope's")  # fmt: skip
+    assert error <= 0.015
+    assert error < rigid_error / 3
 
 
 def test_auto_keeps_the_paper_rope_rigid_and_its_parameters_unchanged():
