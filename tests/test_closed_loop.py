@@ -396,3 +396,60 @@ def test_a_users_loop_steps_the_plant_and_the_estimator_sample_by_sample(short_h
         ends.append(measured.states[:, :3])
     whole = simulate(calm, compiled=True)
     np.testing.assert_allclose(np.concatenate(ends), whole.end, atol=1e-9)
+
+
+def test_the_plant_guards_its_order_and_its_time(short_hill):
+    """Each misuse of Plant.make_step is a clear error naming the argument and its range,
+    before any work (issue 45: an IndexError, 'negative dimensions', CasADi's 'N>0', silence).
+    """
+    from cable_ocp.control.closed_loop.plant import Plant
+
+    calm = short_hill.updated({"top.heave": None, "numerics.duration": 2.0})
+    plant = Plant(calm, (calm.winch.angle_min, calm.winch.angle_max), 0.5)
+    locked = lambda t, left=None: tuple(np.zeros((3, np.size(t))))  # noqa: E731
+    with pytest.raises(RuntimeError, match=r"before Plant\.start"):
+        plant.make_step(locked, 1.0)
+    plant.start(locked)
+    assert plant.make_step(locked, 0.5).now == 0.5
+    whole = r"whole number \(>= 1\) of plant steps \(numerics\.step = 0\.05 s\) after the plant"
+    for until in (0.25, 0.5, 0.52, 0.57, float("nan")):  # back, still, short, between steps
+        with pytest.raises(ValueError, match=rf"until = {until!r} s: must be a {whole}"):
+            plant.make_step(locked, until)
+    with pytest.raises(ValueError, match=r"until = 2\.05 s: past the scene's end \(numerics\."
+                       r"duration = 2 s\); the plant runs in \[0\.5, 2\] s"):  # fmt: skip
+        plant.make_step(locked, 2.05)
+    with pytest.raises(ValueError, match=r"until = None: expected a time in s"):
+        plant.make_step(locked, None)
+    with pytest.raises(ValueError, match=r"command = None: expected the winch angle function"):
+        plant.make_step(None, 1.0)
+    assert plant.now == 0.5 and plant.make_step(locked, 2.0).now == 2.0  # nothing moved
+
+
+def test_the_estimator_controller_and_command_guard_their_arguments(short_hill):
+    """None for a measurement, a solve or an estimate is a ValueError naming it; a solve at or
+    after the scene's end is a failed solve that says why, not a success."""
+    from cable_ocp.control.closed_loop.loop import loop_parts
+
+    parts = loop_parts(short_hill, MpcSettings(**SHORT))
+    measured = parts.start()
+    winch = parts.command.winch(0.0)
+    with pytest.raises(ValueError, match=r"measured = None: expected the Measurement"):
+        parts.estimator.make_step(None, *winch)
+    with pytest.raises(ValueError, match=r"rate = nan: expected a finite number"):
+        parts.estimator.make_step(measured, winch[0], float("nan"))
+    estimate = parts.estimator.make_step(measured, *winch)
+    with pytest.raises(ValueError, match=r"estimate = None: expected the Estimate"):
+        parts.controller.make_step(0.0, None, *winch)
+    duration = short_hill.numerics.duration
+    for now in (duration, duration + 7.0, -1.0):
+        late = parts.controller.make_step(now, estimate, *winch)
+        assert not late.success and late.iterations == 0
+        assert f"now = {now!r} s is outside [0, {duration:g}) s" in late.status
+    solve = parts.controller.make_step(0.0, estimate, *winch)
+    assert solve.success, solve.status
+    with pytest.raises(ValueError, match=r"solve = None: expected the Solve"):
+        parts.command.make_step(0.0, None, estimate)
+    with pytest.raises(ValueError, match=r"estimate = None: expected the Estimate"):
+        parts.command.make_step(0.0, solve, None)
+    angle = parts.command.make_step(0.0, solve, estimate)
+    assert parts.plant.make_step(angle, parts.settings.sample).now == parts.settings.sample

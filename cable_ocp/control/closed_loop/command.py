@@ -132,8 +132,21 @@ class WinchCommand:
 
         A successful solve's plan takes over (blended in over one controller step); a failed
         one leaves the plan in force. The heave reference blends to the estimate's forecast
-        over the sample.
+        over the sample. ValueError, naming the argument, for a ``solve`` or an ``estimate``
+        of another kind (None, say) or a ``now`` before the plan in force.
         """
+        for name, value, kind in (("solve", solve, Solve), ("estimate", estimate, Estimate)):
+            if not isinstance(value, kind):
+                raise ValueError(
+                    f"{name} = {value!r:.60}: expected the {kind.__name__} that "
+                    f"{'RecedingHorizon' if kind is Solve else 'Estimator'}.make_step returned"
+                )
+        number = isinstance(now, int | float | np.number) and not isinstance(now, bool)
+        if not number or not np.isfinite(now) or now < self.plan.start:
+            raise ValueError(
+                f"now = {now!r} s: must be finite and not before the plan in force "
+                f"(from t = {self.plan.start:g} s)"
+            )
         if solve.success:
             self.plan = Plan(
                 now, solve.parameters, self.control, self.plan.settled(), self.settings.step

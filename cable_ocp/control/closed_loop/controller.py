@@ -151,12 +151,34 @@ class RecedingHorizon:
             bias=-reference_error(self.scene, now + self.problem.grid, estimate.start_error),
         )
 
+    def outside(self, now) -> str:
+        """Why the controller cannot solve at ``now`` (s); empty when it can."""
+        end = self.scene.numerics.duration
+        if isinstance(now, bool) or not isinstance(now, int | float | np.number):
+            return f"now = {now!r:.40}: not a time (s); nothing solved"
+        if not np.isfinite(now) or now < self.plan_start or now >= end:
+            return (
+                f"now = {now!r} s is outside [{self.plan_start:g}, {end:g}) s (from the plan in "
+                "force to the scene's numerics.duration): nothing left to control; not solved"
+            )
+        return ""
+
     def make_step(self, now: float, estimate: Estimate, angle: float, rate: float) -> Solve:
         """Solve at the sample ``now`` with the plan starting at the winch's ``angle``, ``rate``.
 
         The guess is the plan in force moved on to ``now`` (a failed solve leaves that plan in
-        force, as the loop does).
+        force, as the loop does). A ``now`` outside the scene's time, from the plan in force's
+        start up to ``numerics.duration``, is a failed solve that says so; an ``estimate`` of
+        another kind (None, say) a ValueError naming it.
         """
+        if not isinstance(estimate, Estimate):
+            raise ValueError(
+                f"estimate = {estimate!r:.60}: expected the Estimate that Estimator.make_step "
+                "returned"
+            )
+        outside = self.outside(now)
+        if outside:
+            return Solve(self.plan, outside, False, 0, 0.0)
         values = self.parameter_values(now, estimate)
         guess = self.control.resampled(self.plan, now - self.plan_start)
         fixed = {self._start_angle: angle, self._start_rate: rate}

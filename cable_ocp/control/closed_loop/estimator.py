@@ -76,8 +76,18 @@ class Estimator:
 
         The top heights measured since the last call go through the filter; the state and
         inputs at the sample's end make the estimate. ``angle``, ``rate`` (rad, rad/s): the
-        plan's winch then, which sets the reduced model's top element.
+        plan's winch then, which sets the reduced model's top element. ValueError, naming the
+        argument, for a ``measured`` that is no :class:`~.plant.Measurement` or an angle or
+        rate that is not a finite number.
         """
+        if not isinstance(measured, Measurement):
+            raise ValueError(
+                f"measured = {measured!r:.60}: expected the Measurement that Plant.start or "
+                "Plant.make_step returned"
+            )
+        for name, value in (("angle", angle), ("rate", rate)):
+            if isinstance(value, bool) or not np.isfinite(np.asarray(value, dtype=float)).all():
+                raise ValueError(f"{name} = {value!r:.40}: expected a finite number (rad, rad/s)")
         new = measured.time > self.times[-1][-1]
         if np.any(new):
             self.measure(measured.time[new], measured.inputs[new], measured.step)

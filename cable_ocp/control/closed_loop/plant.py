@@ -141,12 +141,15 @@ class Plant:
         # n = 29), not in the first sample.
         self.model.parametric.bonds  # noqa: B018 - a cached property, built once
         self.state, self.now = np.zeros(0), 0.0  # set by start()
+        self.started = False
 
     def start(self, command: AngleFunction) -> Measurement:
         """Put the plant at its start (:meth:`initial_state`) under ``command``; report it."""
+        _check_command(command)
         zero = np.zeros(1)
         applied = self.apply(command, zero)
         self.state, self.now = self.initial_state(applied), 0.0
+        self.started = True
         inputs = self.inputs(applied, zero).T
         return Measurement(0.0, zero, self.state[None, :], inputs, applied, self.step)
 
@@ -154,14 +157,39 @@ class Plant:
         """Run from the plant's time to ``until`` (s, whole steps) under ``command``.
 
         Returns the sample's steps after its start. Raises as :meth:`advance` does, the plant
-        left at the sample's start.
+        left at the sample's start; and, before any work, RuntimeError before :meth:`start`,
+        ValueError for an ``until`` that is not whole steps ahead of the plant's time, or is
+        past the scene's ``numerics.duration``.
         """
+        count = self.steps_to(until)
+        _check_command(command)
         start = self.now
-        count = round((until - start) / self.step)
         states, inputs, applied = self.advance(self.state, start, count, command)
         self.state, self.now = states[-1], until
         times = start + np.arange(1, count + 1) * self.step
         return Measurement(until, times, states[1:], inputs[1:], applied.tail(count), self.step)
+
+    def steps_to(self, until) -> int:
+        """The plant's steps from its time to ``until`` (s); the error naming what is wrong."""
+        if not self.started:
+            raise RuntimeError("Plant.make_step before Plant.start: start the plant (its "
+                               "equilibrium under the command) first")  # fmt: skip
+        if isinstance(until, bool) or not isinstance(until, int | float | np.number):
+            raise ValueError(f"until = {until!r}: expected a time in s")
+        until, h, end = float(until), self.step, self.scene.numerics.duration
+        count = round((until - self.now) / h) if np.isfinite(until) else 0
+        tolerance = 1e-9 * max(1.0, abs(until))
+        if count < 1 or abs(until - self.now - count * h) > tolerance:
+            raise ValueError(
+                f"until = {until!r} s: must be a whole number (>= 1) of plant steps "
+                f"(numerics.step = {h:g} s) after the plant's time {self.now:g} s"
+            )
+        if until > end + tolerance:
+            raise ValueError(
+                f"until = {until!r} s: past the scene's end (numerics.duration = {end:g} s); "
+                f"the plant runs in [{self.now:g}, {end:g}] s"
+            )
+        return count
 
     def apply(self, angle: AngleFunction, t: np.ndarray, left=None) -> Applied:
         """Limit a commanded angle history to the winch range at the times ``t``.
@@ -336,6 +364,15 @@ class Plant:
                 f"t = {t:.6g} s at h = {h:g} s"
             )
         return None
+
+
+def _check_command(command) -> None:
+    """ValueError unless ``command`` is an angle function (:meth:`WinchCommand.make_step`'s)."""
+    if not callable(command):
+        raise ValueError(
+            f"command = {command!r:.60}: expected the winch angle function t -> (angle, rate, "
+            "acceleration) that WinchCommand.make_step returns"
+        )
 
 
 def plant_run(
