@@ -51,8 +51,14 @@ def test_a_case_lands_and_holds_and_a_bad_case_is_a_row_not_a_raise():
     # From the hover: optimised and closed-loop, each landed with every check passed.
     assert row["optimised"] and row["looped"], row
     assert abs(row["optimised_error"]) < 0.1 and abs(row["looped_error"]) < 0.1
+    # DNV-RP-H103 on every landing run: the slack criterion held, a heave's amplification.
+    for name in bl.LANDINGS:
+        assert row[f"{name}_slack"] and row[f"{name}_static_share"] > 0.1, row
+        assert 1.0 < row[f"{name}_amplification"] < 3.0, row
     bad = bl.run_case({**case, "lowering": {**case["lowering"], "land_time": 1.0}})
     assert not bad["success"] and "lowering.land_time" in bad["raised"]
     figures = bl.summary([row, bad])
     assert figures["landed"] == 1 and figures["raised"] == 1 and figures["cases"] == 2
     assert figures["optimised"] == 1 and figures["looped"] == 1
+    assert figures["dnv_runs"] == 3 and figures["slack_failures"] == 0
+    assert figures["amplification_max"] == max(row[f"{n}_amplification"] for n in bl.LANDINGS)

@@ -9,7 +9,9 @@ then lands it from its hover (:func:`cable_ocp.lowering.landing.land`) by :func:
 (Gauss-Newton, default settings) and by :func:`cable_ocp.mpc` (the measured heave fed back).
 It prints how many succeeded, how many raised (which must be none), the landing errors and
 speeds, the hold's deviation and compensation ratio, the median wall time of a planned landing
-and of ``optimize``, and the closed loops' real-time factors.
+and of ``optimize``, the closed loops' real-time factors, and DNV-RP-H103's slack criterion
+(the least top tension over its static value, above 10 %) and dynamic amplification factor (the
+largest over it) of every landing run (:func:`cable_ocp.lowering.checks.check_landing`).
 
 A case is a dict of scene overrides of the bundled ``paper_flat`` (its water and its
 hydrodynamics), with a flat seabed ``depth`` below the end's start (``seabed.clearance``).
@@ -198,6 +200,7 @@ def run_case(overrides: dict) -> dict:
             row.update(landing_error=report.landing_error, landing_speed=report.landing_speed,
                        peak_tension=report.peak_tension, least_tension=report.least_tension,
                        elements=int(plan.run.element_count.max()))  # fmt: skip
+            row.update(dnv_figures("planned", report))
         held = hold(scene)
         row.update(hold_success=held.success, hold_status=held.status,
                    hold_deviation=held.deviation, ratio=held.compensation_ratio,
@@ -213,12 +216,30 @@ def run_case(overrides: dict) -> dict:
         for name, result in (("optimised", optimised), ("looped", looped)):
             if result.report is not None:
                 row[f"{name}_error"] = result.report.landing_error
+                row.update(dnv_figures(name, result.report))
     except KeyboardInterrupt:
         raise
     except Exception as error:  # a raise is what the benchmark counts; its row says where
         row.update(success=False, raised=f"{type(error).__name__}: {error}",
                    trace=traceback.format_exc(limit=3))  # fmt: skip
     return row
+
+
+LANDINGS = ("planned", "optimised", "looped")  # the landing runs of a case, as rows name them
+
+
+def dnv_figures(name: str, report) -> dict:
+    """A landing report's DNV-RP-H103 figures, keyed for a row.
+
+    ``{name}_amplification`` (the dynamic amplification factor), ``{name}_static_share`` (the
+    least top tension over static) and ``{name}_slack`` (whether the slack criterion held).
+    """
+    held = all(c.passed for c in report.checks if c.name.startswith("slack criterion"))
+    return {
+        f"{name}_amplification": report.dynamic_amplification,
+        f"{name}_static_share": report.least_static_share,
+        f"{name}_slack": held,
+    }
 
 
 def _line(k: int, row: dict) -> str:
@@ -248,6 +269,14 @@ def _line(k: int, row: dict) -> str:
         for name in ("optimised", "looped"):
             if not row[name]:
                 text += f"\n    {name}: {row[name + '_status']}"
+    dnv = [
+        f"{name} DAF {row[name + '_amplification']:.3g}, min {row[name + '_static_share']:.0%}"
+        f"{'' if row[name + '_slack'] else ' SLACK'}"
+        for name in LANDINGS
+        if name + "_amplification" in row
+    ]
+    if dnv:
+        text += "\n    DNV-RP-H103: " + "; ".join(dnv) + " of static"
     return text
 
 
@@ -269,6 +298,23 @@ def summary(rows: list[dict]) -> dict:
         "rtf_min": float(min((r["rtf"] for r in holds), default=np.nan)),
         "rtf_median": float(np.median([r["rtf"] for r in holds] or [np.nan])),
         **_hover_summary([r for r in rows if "looped" in r]),
+        **_dnv_summary(rows),
+    }
+
+
+def _dnv_summary(rows: list[dict]) -> dict:
+    """DNV-RP-H103's figures over every landing run of the rows.
+
+    The runs checked, those whose slack criterion failed, the largest dynamic amplification
+    and the least share of static.
+    """
+    runs = [(r[f"{n}_amplification"], r[f"{n}_static_share"], r[f"{n}_slack"])
+            for r in rows for n in LANDINGS if f"{n}_amplification" in r]  # fmt: skip
+    return {
+        "dnv_runs": len(runs),
+        "slack_failures": sum(not held for *_, held in runs),
+        "amplification_max": float(np.nanmax([a for a, *_ in runs] or [np.nan])),
+        "static_share_min": float(np.nanmin([s for _, s, _ in runs] or [np.nan])),
     }
 
 
@@ -315,7 +361,11 @@ def report(cases: int = 10, seed: int = 0, quiet: bool = False) -> tuple[list[di
             "(Gauss-Newton, verified on the scene's own model)\n"
             f"  mpc real time      min {figures['looped_rtf_min']:.0f}x, median "
             f"{figures['looped_rtf_median']:.0f}x faster than real time; compensation median "
-            f"{figures['looped_ratio_median']:.1f} % (in a sea state)",
+            f"{figures['looped_ratio_median']:.1f} % (in a sea state)\n"
+            f"  DNV-RP-H103        slack criterion failed in {figures['slack_failures']} of "
+            f"{figures['dnv_runs']} landing runs (least top tension "
+            f"{figures['static_share_min']:.0%} of static); dynamic amplification at most "
+            f"{figures['amplification_max']:.3g}",
             flush=True,
         )
     return rows, figures
