@@ -235,6 +235,28 @@ def test_a_landing_refuses_bad_input_before_any_work():
         land(co.load_scene(MODELS / "paper_flat.toml"))
 
 
+def test_a_hover_beyond_the_landing_line_is_refused_naming_hover_and_its_range():
+    """Not blamed on the landing scene's cable.length or winch.angle_min (issue 45, item 8)."""
+    scene = lowering_scene()
+    for hover in (400.0, 214.0):  # beyond the 215 m landing line, and just inside it
+        with pytest.raises(ValueError) as caught:
+            landing_scene(scene, hover=hover)
+        message = str(caught.value)
+        assert message.startswith(f"hover = {hover} m is out of range: must be > 0 and <= about")
+        assert "cable.length" not in message and "angle_min" not in message
+
+
+def test_a_step_that_does_not_divide_a_second_still_gives_a_landing_on_whole_steps():
+    """The approach (whole seconds) is rounded up to whole steps (issue 45, item 8: co.land)."""
+    scene = lowering_scene(**{"numerics.step": 0.03, "numerics.duration": 230.1,
+                              "lowering.land_time": 200.1})  # fmt: skip
+    landed = landing_scene(scene)
+    for duration in (landed.lowering.land_time, landed.numerics.duration):
+        steps = duration / 0.03
+        assert abs(steps - round(steps)) < 1e-6, duration
+    assert landed.numerics.duration - landed.lowering.land_time == pytest.approx(30.0)
+
+
 @pytest.mark.slow
 def test_deploy_lands_from_its_hover_optimised_by_both_solvers_and_by_the_closed_loop():
     """The bundled deploy scene, from 10 m above its target: 1005 m of line, H_s = 2 m."""

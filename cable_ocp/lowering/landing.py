@@ -43,7 +43,7 @@ from cable_ocp.lowering.hold import (
     vessel_heights,
 )
 from cable_ocp.model.cable import CableModel
-from cable_ocp.scene.schema import Scene
+from cable_ocp.scene.schema import Scene, whole_steps
 from cable_ocp.simulation.run import TOP_SHARE, joints_and_tensions
 from cable_ocp.simulation.statics import starting_state
 
@@ -166,10 +166,20 @@ def landing_scene(scene, hover: float = HOVER) -> Scene:
     hold = held_on_station(scene, "a landing")
     if not hover > 0:
         raise ValueError(f"hover = {hover!r} m is out of range: must be > 0")
-    lowering = scene.lowering
-    approach = approach_time(scene, hover, hold)
+    lowering, step = scene.lowering, scene.numerics.step
+    landing = landing_line(scene)
+    # With no top element at all the hover's pay-out would still be too much of the line.
+    largest = _largest_hover(landing + HOLD_RANGE, 0.0)
+    if hover > largest:
+        raise ValueError(
+            f"hover = {hover!r} m is out of range: must be > 0 and <= about {largest:.4g} m "
+            f"here: the landing pays it out through the top element, which may hold at most "
+            f"{TOP_SHARE:.0%} of the {landing:.4g} m of line that lands the load (more is a "
+            "rigid rod, not a rope)"
+        )
+    approach = _on_steps(approach_time(scene, hover, hold), step)
     table = {**scene.to_dict()["lowering"], "land_time": approach}
-    line = landing_line(scene) - hover
+    line = landing - hover
     landed = trimmed_line(
         scene, lowering.height + hover, line, approach + hold, hover + HOLD_RANGE, table
     )
@@ -178,7 +188,7 @@ def landing_scene(scene, hover: float = HOVER) -> Scene:
     # moves the drum and leaves the load (and the tension) still. So they lengthen the approach.
     allowed, _ = tension_acceleration(landed, hover)
     if allowed > 0:
-        needed = math.ceil(math.sqrt(PEAK_ACCELERATION * hover / allowed))
+        needed = _on_steps(math.ceil(math.sqrt(PEAK_ACCELERATION * hover / allowed)), step)
         if needed > approach:
             landed = landed.updated(
                 {"lowering.land_time": float(needed), "numerics.duration": needed + hold}
@@ -195,12 +205,32 @@ def _check_rod(landed: Scene, hover: float) -> None:
     reach = landed.winch.angle_max * landed.winch.drum_radius
     top, line = landed.top_element_length, landed.cable.length
     if top + reach > TOP_SHARE * (line + reach):
-        largest = TOP_SHARE * (line + reach) - top - (reach - hover)
+        largest = _largest_hover(line + reach, top)
         raise ValueError(
             f"hover = {hover!r} m is out of range: its pay-out would make the top element "
             f"{top + reach:.4g} m of {line + reach:.4g} m of line, more than {TOP_SHARE:.0%} "
-            f"(a rigid rod, not a rope); must be <= about {max(largest, 0.0):.3g} m here"
+            f"(a rigid rod, not a rope); must be <= about {largest:.3g} m here"
         )
+
+
+def _largest_hover(line: float, top: float) -> float:
+    """The largest hover (m) whose pay-out keeps the top element within ``TOP_SHARE`` of the line.
+
+    ``line`` (m) is all the line once the hover and :data:`~.hold.HOLD_RANGE` are paid out,
+    ``top`` (m) the top element before.
+    """
+    return max(TOP_SHARE * line - top - HOLD_RANGE, 0.0)
+
+
+def _on_steps(duration: float, step: float) -> float:
+    """``duration`` (s) rounded up to a whole number of RK4 steps of ``step`` (s).
+
+    The landing scene's land time and duration must be whole steps (the scene refuses others);
+    an approach of whole seconds is already, wherever the step divides a second.
+    """
+    if whole_steps(duration, step) is not None:
+        return duration
+    return math.ceil(duration / step) * step
 
 
 @dataclass(frozen=True)
