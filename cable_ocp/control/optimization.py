@@ -38,6 +38,7 @@ from cable_ocp.control.verification import Verification, correction_step
 from cable_ocp.drive.drive import Drive
 from cable_ocp.result_files import dataset, format_1
 from cable_ocp.result_files.units import units_of
+from cable_ocp.scene.given import scene_given
 from cable_ocp.scene.schema import scene_of
 from cable_ocp.simulation.progress import check_verbosity
 from cable_ocp.simulation.trajectory import Trajectory
@@ -573,7 +574,9 @@ def optimize(
 
     Parameters
     ----------
-    scene : Scene
+    scene : Scene, str or path-like
+        A scene, a scene file's path or a bundled scene's name
+        (:func:`~cable_ocp.scene.given.scene_given`).
     solver : {"gauss-newton", "ipopt", "nelder-mead"}, optional
         Gauss-Newton SQP or IPOPT on the direct-shooting transcription, or the paper's
         Nelder-Mead over spline knots (:data:`cable_ocp.control.solvers.SOLVERS`). None: the
@@ -609,8 +612,11 @@ def optimize(
     ValueError
         Bad input (a solver, setting or scene field out of range, settings that do not fit
         together), before any heavy work.
+    TypeError
+        A ``scene`` that is neither a scene nor a scene file's path or name.
     """
     check_verbosity(quiet, verbose)
+    scene = scene_given(scene, "optimize")
     refuse_line_scene(scene, "optimize")
     settings = ocp_settings(solver, settings, model, grid, transcription)
     method = method_of(settings.solver)

@@ -43,6 +43,7 @@ from cable_ocp.lowering.hold import (
     vessel_heights,
 )
 from cable_ocp.model.cable import CableModel
+from cable_ocp.scene.given import scene_given
 from cable_ocp.scene.schema import Scene, whole_steps
 from cable_ocp.simulation.run import TOP_SHARE, joints_and_tensions
 from cable_ocp.simulation.statics import starting_state
@@ -144,8 +145,9 @@ def landing_scene(scene, hover: float = HOVER) -> Scene:
 
     Parameters
     ----------
-    scene : Scene
-        With ``[lowering]`` and ``[winch.line]``, its vessel holding station.
+    scene : Scene, str or path-like
+        With ``[lowering]`` and ``[winch.line]``, its vessel holding station (a path or a
+        bundled name is loaded, :func:`~cable_ocp.scene.given.scene_given`).
     hover : float, m
         How far above the target height the descent stopped.
 
@@ -163,6 +165,7 @@ def landing_scene(scene, hover: float = HOVER) -> Scene:
         A scene without ``[lowering]`` or ``[winch.line]``, a moving vessel, a hover that is not
         positive or that would make the top element a rigid rod of the line, or no hold.
     """
+    scene = scene_given(scene, "landing_scene")
     hold = held_on_station(scene, "a landing")
     if not hover > 0:
         raise ValueError(f"hover = {hover!r} m is out of range: must be > 0")
@@ -292,9 +295,9 @@ def land(
 
     Parameters
     ----------
-    scene : Scene
+    scene : Scene, str or path-like
         With ``[lowering]`` and ``[winch.line]`` (see :func:`landing_scene`), or a landing scene
-        already (a fixed-``n`` scene with ``[lowering]``).
+        already (a fixed-``n`` scene with ``[lowering]``); a path or a bundled name is loaded.
     closed_loop : bool
         :func:`cable_ocp.mpc` (the measured heave fed back) instead of :func:`cable_ocp.optimize`.
     hover : float, m
@@ -312,6 +315,7 @@ def land(
         why (the solver's or the loop's status, or the failed checks).
     """
     started = time.perf_counter()
+    scene = scene_given(scene, "land")
     landing = scene if scene.winch.line is None else landing_scene(scene, hover)
     if landing.lowering is None:
         raise ValueError(f"scene {landing.name!r} has no [lowering] table: nothing to land")
