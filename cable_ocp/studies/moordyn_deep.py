@@ -288,7 +288,7 @@ class DeepRun:
         return 1e3 * self.wall_time / float(self.time[-1])
 
 
-def run_moordyn(scene: Scene, top, duration: float, segments: int,
+def run_moordyn(scene: Scene, top: TopMotionFunction, duration: float, segments: int,
                 step: float | None = None, ratio: float = DAMPING_RATIO) -> DeepRun:  # fmt: skip
     """Run the scene's line in MoorDyn from its static equilibrium with the top moved by ``top``.
 
