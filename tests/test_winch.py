@@ -46,3 +46,28 @@ def test_tabulated_angle_interpolates_a_good_series():
 def test_tabulated_angle_rejects_bad_series(times, angles):
     with pytest.raises(ValueError, match="winch time series"):
         winch.tabulated_angle(np.array(times, float), np.array(angles, float))
+
+
+@pytest.mark.parametrize(
+    ("function", "message"),
+    [
+        (lambda t: 1.5, r"returned float 1\.5; a winch function must return \(phi"),
+        (lambda t: (0.0 * t, 0.0 * t), r"returned tuple .*; a winch function must return"),
+        (lambda t: (0.2, 0.0, 0.0), r"phi has shape \(\) for t of shape \(2,\)"),
+        (lambda t: (0.0 * t, np.full_like(t, np.inf), 0.0 * t), r"phi' at t = 0 s is inf"),
+        (lambda t: (0.0 * t, 0.0 * t, np.full_like(t, np.nan)), r"phi'' at t = 0 s is nan"),
+    ],
+    ids=["number", "two values", "scalars", "infinite rate", "NaN acceleration"],
+)
+def test_a_winch_function_that_returns_no_angle_history_is_refused_naming_the_winch(
+    function, message
+):
+    """Checked once, where every drive takes its angle (issue 45, item 8)."""
+    from cable_ocp.drive.drive import Drive
+    from cable_ocp.scene.schema import scene_from_dict
+
+    scene = scene_from_dict({"model": {"elements": 4}, "top": {}, "numerics": {}})
+    with pytest.raises(ValueError, match=r"^winch: the function") as caught:
+        Drive.from_scene(scene, function)
+    assert caught.match(message)
+    Drive.from_scene(scene, lambda t: (0.0 * t, 0.0 * t, 0.0 * t))  # an angle history passes

@@ -57,6 +57,9 @@ class Drive:
     drum_radius: float
     heave_compensation: bool = False
 
+    def __post_init__(self) -> None:
+        winch.check_angle(self.angle)
+
     @classmethod
     def from_scene(
         cls, scene, angle: winch.WinchAngleFunction | None = None, elements: int | None = None

@@ -36,6 +36,41 @@ def with_left(angle: WinchAngleFunction) -> WinchAngleFunction:
     return angle if takes_left else lambda t, left=None: angle(t)
 
 
+def check_angle(angle: WinchAngleFunction) -> None:
+    """Raise ValueError, naming the winch, unless ``angle`` gives an angle history at t = 0.
+
+    An angle history returns ``(phi, phi', phi'')`` in rad, rad/s, rad/s^2, each an array
+    like its ``t``, finite. A user's callable that returns a number, or NaN, is caught here,
+    before it reaches the statics as an unpacking error or a failed equilibrium.
+    """
+    t = np.zeros(2)  # two times: a number returned for an array of them is caught too
+    values = angle(t, None)
+    wanted = (
+        "a winch function must return (phi, phi', phi'') in rad, rad/s, rad/s^2, each an array "
+        "like its t"
+    )
+    if isinstance(values, str | bytes) or not isinstance(values, tuple | list) or len(values) != 3:
+        text = repr(values)
+        text = text if len(text) <= 60 else text[:57] + "..."
+        raise ValueError(f"winch: the function returned {type(values).__name__} {text}; {wanted}")
+    for name, value in zip(("phi", "phi'", "phi''"), values, strict=True):
+        try:
+            value = np.asarray(value, dtype=float)
+        except (TypeError, ValueError):
+            raise ValueError(
+                f"winch: the function's {name} is {type(value).__name__}, not numbers; {wanted}"
+            ) from None
+        if value.shape != t.shape:
+            raise ValueError(
+                f"winch: the function's {name} has shape {value.shape} for t of shape "
+                f"{t.shape}; {wanted}"
+            )
+        if not np.all(np.isfinite(value)):
+            raise ValueError(
+                f"winch: the function's {name} at t = 0 s is {value[0]}: {wanted}, finite"
+            )
+
+
 def knot_times(duration: float, knots: int) -> np.ndarray:
     """Equidistant knot times ``t_i = i T / p`` for ``i = 0..p`` (eq. 41), s."""
     return np.linspace(0.0, duration, knots + 1)
