@@ -104,3 +104,68 @@ def test_a_trajectory_variable_over_other_dimensions_is_named(tmp_path):
     data.to_netcdf(tmp_path / "t.nc")
     with pytest.raises(ValueError, match=r"t\.nc: not a readable trajectory .*top_position over"):
         Trajectory.load(tmp_path / "t")
+
+
+# --- a line run's file: its groups against the file's size, its root and its scene (issue 45) ---
+
+
+@pytest.fixture(scope="module")
+def line_file(tmp_path_factory):
+    """A line run's file (2 segments of paper_flat with a line on the drum) to copy and damage."""
+    from conftest import MODELS
+
+    import cable_ocp as co
+
+    scene = co.load_scene(
+        MODELS / "paper_flat.toml",
+        {"top.motion": "fixed", "cable.length": 50.0, "numerics.duration": 12.0,
+         "numerics.constraint_tolerance": 1e-4, "winch.knots": 4,
+         "winch.line": {"element_length": 10.0, "pay_out_max": 30.0},
+         "end.payload": {"mass": 2000.0, "volume": 0.256}},
+    )  # fmt: skip
+    run = co.simulate(scene, winch=[10.0, 20.0, 30.0, 40.0], quiet=True)
+    assert len(run.segments) == 2
+    return run.save(tmp_path_factory.mktemp("line") / "landing")
+
+
+def _scene_edit(dataset) -> None:
+    import json
+
+    group = dataset["segment_1"]
+    record = json.loads(group.getncattr("scene_record"))
+    record["cable"]["diameter"] *= 2
+    group.setncattr("scene_record", json.dumps(record))
+
+
+def _huge_group(dataset) -> None:
+    group = dataset["segment_1"]
+    group.createDimension("sample", 20_000_000)
+    group.createVariable("extra", "f8", ("sample", "element"), chunksizes=(1024, 1))
+
+
+@pytest.mark.parametrize(
+    ("change", "message"),
+    [
+        (_huge_group, r"declares more data than its \d+ bytes can hold \(segment_1/extra over"),
+        (lambda d: d.setncattr("segments", -1), r"segments = -1: expected the number of its "),
+        (lambda d: d.setncattr("segments", 5), r"segments = 5: .* \(2, at least 1\)"),
+        (lambda d: d.setncattr("element_length", 5.0),
+         r"element_length = 5 m: its scene's winch.line.element_length is 10 m"),
+        (lambda d: d.setncattr("element_length", np.nan), r"element_length = nan: expected a "),
+        (_scene_edit, r"segment_1: its scene differs from segment_0's \(cable.diameter: "),
+    ],
+)  # fmt: skip
+def test_a_line_runs_groups_are_checked_against_the_file_and_the_scene(
+    tmp_path, line_file, change, message
+):
+    """A landing.nc or a pay-out's trajectory.nc: every group, not the root alone (a segment's
+    2e8 x 4 x 3 values raised a MemoryError); its attributes against its groups and its scene
+    (element_length = 5 made check_landing report 270.9 kN instead of 27.2 kN)."""
+    import shutil
+
+    from cable_ocp.simulation.line_trajectory import LineTrajectory
+
+    path = shutil.copy(line_file, tmp_path / "landing.nc")
+    _edit(path, change)
+    with pytest.raises(ValueError, match=r"landing\.nc: (.*landing\.nc: )?" + message):
+        LineTrajectory.load(path)

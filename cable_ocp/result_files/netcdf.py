@@ -9,6 +9,7 @@ objective history in m^2. This module writes 3 and reads 2 and 3 (each result's 
 
 from __future__ import annotations
 
+import json
 import os
 import secrets
 import signal
@@ -168,8 +169,9 @@ DEFLATE_RATIO = 1032
 def read(path: Path, kind: str, group: str | None = None) -> xr.Dataset:
     """A result's Dataset from ``path`` (or its ``group``), loaded into memory (file closed).
 
-    Before any data is read, the file's declared contents are checked (:func:`_check_declared`):
-    its kind and format, sizes that the file can hold, booleans stored as 0 or 1.
+    Before any data is read, the file's declared contents are checked: its kind and format
+    (:func:`_check_declared`), then over every group (:func:`_check_contents`) sizes that the
+    file can hold, booleans stored as 0 or 1, and a line run's segments.
 
     Raises
     ------
@@ -182,6 +184,7 @@ def read(path: Path, kind: str, group: str | None = None) -> xr.Dataset:
     try:
         with xr.open_dataset(path, decode_cf=False) as raw:
             _check_declared(path, raw, kind)
+        _check_contents(path)
         with xr.open_dataset(path, group=group) as dataset:
             dataset = dataset.load()
     except FileNotFoundError:
@@ -199,7 +202,7 @@ class _Refused(Exception):
 
 
 def _check_declared(path: Path, raw: xr.Dataset, kind: str) -> None:
-    """Check what the file declares, reading no more than its booleans; _Refused if it is bad."""
+    """Check the kind and format the file declares; _Refused if it is bad."""
     found, version = raw.attrs.get(KIND), raw.attrs.get(VERSION)
     if found is None:
         raise _Refused(f"not a cable_ocp result (no attribute {KIND})")
@@ -218,28 +221,153 @@ def _check_declared(path: Path, raw: xr.Dataset, kind: str) -> None:
             f"{VERSION} = {version}: not a format of netCDF results (those are "
             f"{', '.join(map(str, READ_FORMATS))})"
         )
-    size = path.stat().st_size
-    declared = 0.0
-    for variable in raw.variables.values():
-        nbytes = float(np.prod(variable.shape, dtype=float)) * variable.dtype.itemsize
-        packed = variable.encoding.get("zlib") or variable.encoding.get("compression")
-        declared += nbytes / DEFLATE_RATIO if packed else nbytes
-    if declared > size:
-        largest = max(raw.variables, key=lambda name: raw.variables[name].size)
-        shape = dict(zip(raw.variables[largest].dims, raw.variables[largest].shape, strict=True))
-        raise _Refused(
-            f"declares more data than its {size} bytes can hold ({largest} over {shape}): "
-            "a damaged or forged file"
-        )
-    booleans = [name for name, variable in raw.variables.items() if variable.dtype == bool]
-    if booleans:  # xarray reads any byte as a bool: the stored bytes, from netCDF4 itself
-        import netCDF4
 
-        with netCDF4.Dataset(path) as stored:
-            for name in booleans:
-                variable = stored[name]
-                variable.set_auto_maskandscale(False)
-                values = np.asarray(variable[...])
-                if not np.isin(values, (0, 1)).all():
-                    shown = values.tolist()
-                    raise _Refused(f"{name} = {shown!r:.40}: expected true or false (0 or 1)")
+
+# Files whose contents passed _check_contents, by (path, device, inode, size, modification time):
+# a line run's reader reads the root, then every segment's group.
+_CHECKED: dict[tuple, None] = {}
+_CHECKED_KEPT = 64
+
+
+def _check_contents(path: Path) -> None:
+    """Check every group of the file against its size and each other; _Refused if one is bad.
+
+    Reads the groups' metadata and booleans only:
+
+    - the data every group declares (root included) fits in the file's size (deflate packs at
+      most :data:`DEFLATE_RATIO` bytes into one);
+    - booleans are stored as 0 or 1 (xarray reads any byte as a bool);
+    - a line run's root (attribute ``segments``): ``segments`` is the count of its groups
+      ``segment_0 ..``, ``element_length`` is finite, positive and its scene's
+      ``winch.line.element_length``, and every segment holds the same scene.
+    """
+    import netCDF4
+
+    stat = path.stat()
+    key = (str(path.resolve()), stat.st_dev, stat.st_ino, stat.st_size, stat.st_mtime_ns)
+    if key in _CHECKED:
+        return
+    with netCDF4.Dataset(path) as stored:
+        groups = {"": stored, **{f"{name}/": group for name, group in _groups(stored)}}
+        declared = {where: _declared_bytes(group) for where, group in groups.items()}
+        if sum(size for size, _ in declared.values()) > stat.st_size:
+            where = max(declared, key=lambda name: declared[name][0])
+            raise _Refused(
+                f"declares more data than its {stat.st_size} bytes can hold ({where}"
+                f"{declared[where][1]}): a damaged or forged file"
+            )
+        for where, group in groups.items():
+            _check_booleans(group, where)
+        if "segments" in stored.ncattrs():
+            _check_segments(stored)
+    _CHECKED[key] = None
+    while len(_CHECKED) > _CHECKED_KEPT:
+        del _CHECKED[next(iter(_CHECKED))]
+
+
+def _groups(group, prefix: str = ""):
+    """(path, group) of every group below ``group``, depth first."""
+    for name, child in group.groups.items():
+        yield prefix + name, child
+        yield from _groups(child, f"{prefix}{name}/")
+
+
+def _declared_bytes(group) -> tuple[float, str]:
+    """Bytes a netCDF4 group's variables declare, and its largest variable (for the message).
+
+    A packed (compressed) variable counts at the best ratio, :data:`DEFLATE_RATIO`.
+    """
+    total, largest, most = 0.0, "", -1.0
+    for name, variable in group.variables.items():
+        itemsize = variable.dtype.itemsize if isinstance(variable.dtype, np.dtype) else 8
+        nbytes = float(np.prod(variable.shape, dtype=float)) * itemsize
+        filters = variable.filters() or {}
+        packed = any(filters.get(f) for f in ("zlib", "szip", "zstd", "bzip2", "blosc"))
+        total += nbytes / DEFLATE_RATIO if packed else nbytes
+        if nbytes > most:
+            shape = dict(zip(variable.dimensions, variable.shape, strict=True))
+            largest, most = f"{name} over {shape}", nbytes
+    return total, largest
+
+
+def _check_booleans(group, where: str) -> None:
+    for name, variable in group.variables.items():
+        if "dtype" in variable.ncattrs() and variable.getncattr("dtype") == "bool":
+            variable.set_auto_maskandscale(False)
+            values = np.asarray(variable[...])
+            if not np.isin(values, (0, 1)).all():
+                shown = values.tolist()
+                raise _Refused(f"{where}{name} = {shown!r:.40}: expected true or false (0 or 1)")
+
+
+def _check_segments(stored) -> None:
+    """A line run's root attributes against its groups and their scenes (see _check_contents)."""
+    count = _plain(stored.getncattr("segments"))
+    names = sorted(stored.groups)
+    expected = [f"segment_{k}" for k in range(len(names))]
+    if (
+        not isinstance(count, int | np.integer)
+        or isinstance(count, bool | np.bool_)
+        or count < 1
+        or count != len(names)
+        or names != sorted(expected)
+    ):
+        raise _Refused(
+            f"segments = {count!r:.40}: expected the number of its groups segment_0 .. "
+            f"segment_{max(len(names) - 1, 0)} ({len(names)}, at least 1)"
+        )
+    scenes = {
+        name: group.getncattr("scene_record") if "scene_record" in group.ncattrs() else ""
+        for name, group in ((name, stored.groups[name]) for name in expected)
+    }
+    first = scenes["segment_0"]
+    for name, record in scenes.items():
+        if record != first:
+            field = _first_difference(_parsed(first), _parsed(record)) or "its scene_record"
+            raise _Refused(
+                f"{name}: its scene differs from segment_0's ({field}); a line run's segments "
+                "all hold the run's one scene"
+            )
+    length = (
+        _plain(stored.getncattr("element_length")) if "element_length" in stored.ncattrs() else None
+    )
+    if not isinstance(length, float | int | np.floating | np.integer) or not (
+        np.isfinite(length) and length > 0
+    ):
+        raise _Refused(f"element_length = {length!r:.40}: expected a finite length > 0, m")
+    winch = _parsed(first).get("winch")
+    line = winch.get("line") if isinstance(winch, dict) else None
+    scene_length = line.get("element_length") if isinstance(line, dict) else None
+    known = isinstance(scene_length, float | int) and not isinstance(scene_length, bool)
+    if known and not np.isclose(length, scene_length, rtol=1e-12, atol=0):
+        raise _Refused(
+            f"element_length = {float(length):g} m: its scene's winch.line.element_length is "
+            f"{scene_length:g} m"
+        )
+
+
+def _plain(value):
+    """A numpy scalar attribute as the Python number it holds (for messages)."""
+    return value.item() if isinstance(value, np.generic) else value
+
+
+def _parsed(record: str) -> dict:
+    """A scene record (JSON text) as a dict; {} if it is not one."""
+    try:
+        value = json.loads(record) if record else {}
+    except ValueError:
+        return {}
+    return value if isinstance(value, dict) else {}
+
+
+def _first_difference(a: dict, b: dict, prefix: str = "") -> str:
+    """The dotted name of the first field where two scene records differ."""
+    for key in sorted(set(a) | set(b)):
+        left, right = a.get(key), b.get(key)
+        if isinstance(left, dict) and isinstance(right, dict):
+            found = _first_difference(left, right, f"{prefix}{key}.")
+            if found:
+                return found
+        elif left != right:
+            return f"{prefix}{key}: {left!r:.30} against {right!r:.30}"
+    return ""
