@@ -1,6 +1,8 @@
-"""The command line: ``cable-ocp simulate|optimize|compare|mpc|lower|sweep|validate|study|bench``.
+"""The command line, ``cable-ocp COMMAND``.
 
-``cable-ocp scenes`` lists the bundled scenes, ``cable-ocp schema [KEY]`` the fields of a scene.
+Commands: simulate, replay, optimize, compare, mpc, lower, sweep, validate, study, bench;
+``cable-ocp scenes`` lists the bundled scenes, ``cable-ocp schema [KEY]`` the fields of a scene;
+``cable-ocp COMMAND --help`` tells what each command does.
 
 Every expected failure is one line ``cable-ocp COMMAND: error: ...`` on stderr and a non-zero exit
 code: 2 for bad input (arguments, scene and sweep files, a results folder that must not be
@@ -598,8 +600,11 @@ def build_parser() -> argparse.ArgumentParser:
     sim.add_argument("scene", type=scene_argument, help=SCENE_HELP)
     sim.add_argument("--out", type=Path, required=True, help=OUT_HELP)
     sim.add_argument("--knots", type=_knots,
-                     help="winch knot angles phi_1..phi_p in rad, comma-separated (write "
-                     "--knots=-1,0.5 when the first is negative)")  # fmt: skip
+                     help="winch knot angles phi_1..phi_p in rad, comma-separated, p = "
+                     "winch.knots (write --knots=-1,0.5 when the first is negative): phi(0) = 0 "
+                     "is put before them, knot i sits at t = i T / p (T = numerics.duration), and "
+                     "the cubic spline through them starts at rest (zero rate; free at the end); "
+                     "phi > 0 pays out; default: the winch locked")  # fmt: skip
     sim.add_argument("--set", action="append", default=[], metavar="KEY=VALUE",
                      help="override a scene field, e.g. --set model.elements=30")  # fmt: skip
     sim.add_argument("--quiet", action="store_true", help="no progress bar")
@@ -686,7 +691,20 @@ def build_parser() -> argparse.ArgumentParser:
     )
     study.set_defaults(run=_study)
 
-    bench = commands.add_parser("bench", **shown, help="speed benchmarks against baselines")
+    bench = commands.add_parser(
+        "bench",
+        **shown,
+        help="speed benchmarks against baselines (long: see bench --help)",
+        description="Speed of the toolkit against its baselines, each part comparing within "
+        "one run: rk4 (the simulation loop, interpreted against compiled), simulate (the "
+        "command end to end), moordyn (MoorDyn at the same accuracy), payout (a line paid out "
+        "by elements against fixed n), ocp (IPOPT against Nelder-Mead), ocp-speed (the default "
+        "optimize, cold and warm), mpc (the closed loop's solve times). The default parts run "
+        "for tens of minutes on 2 cores (MoorDyn and the optimisers dominate); --quick runs "
+        "short versions; --only picks parts. robustness (random scenes) and lowering (random "
+        "landings: 10 cases took 5 min on 2 cores) run only when named. Nothing is written "
+        "without --out.",
+    )
     bench.add_argument(
         "--quick", action="store_true", help="scene steps only, short MoorDyn runs, small OCP"
     )

@@ -8,6 +8,8 @@ The repository's top-level ``models/`` folder is installed as the data package `
 
 from __future__ import annotations
 
+import argparse
+import difflib
 from importlib import resources
 from pathlib import Path
 
@@ -45,9 +47,20 @@ def scene_path(name: str) -> Path:
     path = models_dir() / f"{name.removesuffix('.toml')}.toml"
     if not path.is_file():
         raise ValueError(
-            f"scene name {name!r} is not a bundled scene; choose one of: {', '.join(scene_names())}"
+            f"scene name {name!r} is not a bundled scene{_did_you_mean(name)}; choose one of: "
+            f"{', '.join(scene_names())}"
         )
     return path
+
+
+def closest_names(name: str) -> list[str]:
+    """The bundled scenes' names closest to a mistyped ``name`` (difflib), best first."""
+    return difflib.get_close_matches(name.removesuffix(".toml"), scene_names(), n=3, cutoff=0.6)
+
+
+def _did_you_mean(name: str) -> str:
+    close = closest_names(name)
+    return f" (did you mean {' or '.join(close)}?)" if close else ""
 
 
 def scene_summary(name: str) -> str:
@@ -67,9 +80,22 @@ def scene_argument(text: str) -> Path:
 
     An existing file wins; otherwise a bundled scene of that name (``paper_hill`` or
     ``paper_hill.toml``); otherwise the path as given, which loading then reports as missing.
+
+    Raises
+    ------
+    argparse.ArgumentTypeError
+        A name that is neither a file nor a bundled scene but close to bundled scenes' names
+        (``paper_hil``), naming them.
     """
     path = Path(text)
     if path.exists() or path.parent != Path("."):
         return path
     name = text.removesuffix(".toml")
-    return scene_path(name) if name in scene_names() else path
+    if name in scene_names():
+        return scene_path(name)
+    if closest_names(name):
+        raise argparse.ArgumentTypeError(
+            f"{text!r} is neither a scene file nor a bundled scene{_did_you_mean(name)}; "
+            "cable-ocp scenes lists the bundled ones"
+        )
+    return path
