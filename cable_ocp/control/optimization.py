@@ -36,6 +36,12 @@ from cable_ocp.control.settings import (
 from cable_ocp.control.solvers import SOLVERS, ocp_settings
 from cable_ocp.control.verification import Verification, correction_step
 from cable_ocp.drive.drive import Drive
+from cable_ocp.drive.winch import (
+    RETIMES,
+    check_retime,
+    played_then_resting,
+    replayed_duration,
+)
 from cable_ocp.result_files import dataset, format_1
 from cable_ocp.result_files.units import units_of
 from cable_ocp.scene.given import scene_given
@@ -171,7 +177,12 @@ class OcpResult:
         name = self.trajectory.scene_name if self.trajectory is not None else "scene"
         return scene_of(self.scene_record, name)
 
-    def winch_profile(self, scene=None):
+    @property
+    def duration(self) -> float | None:
+        """The horizon T (s) the profile was optimised over; None in files without their scene."""
+        return self.scene.numerics.duration if self.scene_record else None
+
+    def winch_profile(self, scene=None, retime: str | None = None):
         """The optimised winch angle as ``t -> (phi, phi', phi'')`` (rad, rad/s, rad/s^2).
 
         Parameters
@@ -181,14 +192,36 @@ class OcpResult:
             feedforward (``heave_feedforward``) and this scene does not compensate its heave,
             the feedforward (eq. 38) is added, so that ``simulate(scene, winch=result)`` drives
             the winch as the verification did on either scene.
+        retime : {None, "hold", "stretch"}
+            On a scene of another ``numerics.duration`` than :attr:`duration`: None refuses it
+            (a profile laid over another horizon is stretched in time), ``"hold"`` plays it in
+            its own time and brings the winch to rest after its end, ``"stretch"`` lays it over
+            the scene's duration (:data:`~cable_ocp.drive.winch.RETIMES`; :meth:`retimed`).
+
+        Raises
+        ------
+        ValueError
+            Another duration with ``retime`` None, naming both and the choices.
         """
         scene = scene if scene is not None else self.scene
-        control = control_of(self.control, scene.numerics.duration)
+        wanted = "result.retimed({})"
+        own = replayed_duration(self.duration, scene.numerics.duration, retime, wanted)
+        control = control_of(self.control, own)
         profile = control.angle_function(self.parameters)
+        if own < scene.numerics.duration:
+            profile = played_then_resting(profile, own)
         if self.heave_feedforward and not scene.top.heave_compensated:
             compensated = scene.updated({"top.heave.compensation": True})
             return Drive.from_scene(compensated, profile).winch_angle
         return profile
+
+    def retimed(self, retime: str) -> RetimedOptimum:
+        """The optimum to replay on a scene of another duration as ``retime`` says.
+
+        ``co.simulate(scene, winch=result.retimed("hold"))``: see :meth:`winch_profile`.
+        """
+        check_retime(retime)
+        return RetimedOptimum(self, retime)
 
     def winch_angle(self, t) -> np.ndarray:
         """The drum's angle (rad) at the times ``t`` (s) on :attr:`scene`.
@@ -270,6 +303,28 @@ class OcpResult:
         if (folder / RESULT_FILE).exists() or not (folder / "result.json").exists():
             return result_files.load(cls, folder / RESULT_FILE, WHAT)
         return _from_format_1(cls, folder)
+
+
+@dataclass(frozen=True)
+class RetimedOptimum:
+    """An optimum replayed on a scene of another duration, as the user chose (``retime``).
+
+    Anything that takes an ``optimize`` result as its winch takes it (``winch_profile``).
+    """
+
+    result: OcpResult
+    retime: str
+
+    def winch_profile(self, scene):
+        """The optimum's winch angle on ``scene``, retimed (:meth:`OcpResult.winch_profile`)."""
+        return self.result.winch_profile(scene, self.retime)
+
+    def note(self, scene) -> str:
+        """What the retiming did on ``scene``, for a run's notes ("" where nothing changed)."""
+        own, duration = self.result.duration, scene.numerics.duration
+        if own is None or np.isclose(own, duration, rtol=1e-9, atol=1e-9):
+            return ""
+        return f"the {own:g} s optimum {RETIMES[self.retime]}, on a {duration:g} s scene"
 
 
 RESULT_FILE = "result.nc"

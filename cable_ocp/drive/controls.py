@@ -23,7 +23,7 @@ from dataclasses import dataclass
 import numpy as np
 from scipy.interpolate import CubicSpline
 
-from cable_ocp.drive.winch import knot_times, spline_angle
+from cable_ocp.drive.winch import coming_to_rest, knot_times, spline_angle
 
 
 def hermite_polynomials(s: np.ndarray) -> tuple[np.ndarray, ...]:
@@ -86,10 +86,9 @@ class HermiteIntervals:
     being held at ``phi = phi' = 0`` (the winch at rest at the start). With ``free_start`` (a
     receding horizon, which starts where the winch is) node 0 is a parameter too:
     ``[phi_0..phi_N, phi'_0..phi'_N]``. Beyond ``duration`` (where a closed loop holds a plan
-    after its last successful solve) the angle continues C2 and comes to rest: its rate decays
-    as ``(v + (a + v/c) tau) exp(-tau/c)`` from the end's rate ``v`` and acceleration ``a``,
-    ``c`` one interval. (Holding the end value dropped the rate to zero at once, and the jump
-    in the top element's speed opened the plant's bonds one horizon after the last solve.)
+    after its last successful solve) the angle continues C2 and comes to rest
+    (:func:`~cable_ocp.drive.winch.coming_to_rest`, ``c`` one interval; holding the end value
+    opened the plant's bonds one horizon after the last solve).
     """
 
     duration: float
@@ -184,18 +183,7 @@ class HermiteIntervals:
 
     def _extension(self, end: np.ndarray, tau: np.ndarray) -> np.ndarray:
         """Rows (3, k, size) of the angle ``tau`` (s) past the end, from its rows there."""
-        c = self.duration / self.intervals
-        decay = np.exp(-tau / c)[:, None]
-        angle, rate, acceleration = end
-        slope = acceleration + rate / c  # B = a + v / c
-        tau = tau[:, None]
-        return np.stack(
-            [
-                angle + rate * c * (1 - decay) + slope * c * (c - (tau + c) * decay),
-                (rate + slope * tau) * decay,
-                (slope - (rate + slope * tau) / c) * decay,
-            ]
-        )
+        return np.stack(coming_to_rest(*end, tau[:, None], self.duration / self.intervals))
 
     def resampled(self, parameters: np.ndarray, offset: float) -> np.ndarray:
         """Free-start parameters of the same angle moved on by ``offset`` (s): a warm start.

@@ -16,6 +16,8 @@ from collections.abc import Callable
 import numpy as np
 
 WinchAngleFunction = Callable[..., tuple[np.ndarray, np.ndarray, np.ndarray]]
+PROFILE_SAMPLES = 2001  # samples of a profile where its largest acceleration is looked for
+SHORTEST_SETTLE = 0.1  # s, the least time constant of a winch brought to rest
 
 
 def locked(t: np.ndarray, left=None) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
@@ -69,6 +71,109 @@ def check_angle(angle: WinchAngleFunction) -> None:
             raise ValueError(
                 f"winch: the function's {name} at t = 0 s is {value[0]}: {wanted}, finite"
             )
+
+
+def coming_to_rest(angle, rate, acceleration, tau, settle: float):
+    """The angle ``tau`` (s) past an end where it had ``angle``, ``rate``, ``acceleration``.
+
+    A C2 continuation that comes to rest: the rate decays as ``(v + (a + v/c) tau) exp(-tau/c)``
+    from the end's rate ``v`` and acceleration ``a``, ``c = settle`` (s), so the angle settles
+    at ``angle + v c + (a + v/c) c^2``. (Holding the end's angle dropped the rate to zero at
+    once, and the jump in the top element's speed opened the bonds.) Linear in the end's
+    values, which may be arrays (or basis rows) broadcasting with ``tau``.
+
+    Returns
+    -------
+    phi, phi', phi'' : arrays, rad, rad/s, rad/s^2
+    """
+    c = settle
+    decay = np.exp(-tau / c)
+    slope = acceleration + rate / c
+    return (
+        angle + rate * c * (1 - decay) + slope * c * (c - (tau + c) * decay),
+        (rate + slope * tau) * decay,
+        (slope - (rate + slope * tau) / c) * decay,
+    )
+
+
+def played_then_resting(angle: WinchAngleFunction, end: float) -> WinchAngleFunction:
+    """``angle`` up to ``end`` (s), then :func:`coming_to_rest`, braked as the profile moved.
+
+    The history of a profile replayed in its own time on a longer run. Its end's values are
+    taken from the left (a piecewise profile continues its last piece), and the time constant is
+    ``c = |phi'(end)| / max |phi''|``: the brake's deceleration peaks at ``1/e`` of the
+    profile's largest acceleration (at least :data:`SHORTEST_SETTLE`).
+    """
+    times = np.linspace(0.0, end, PROFILE_SAMPLES)
+    peak = float(np.abs(angle(times, None)[2]).max())
+    last = [float(np.ravel(v)[0]) for v in angle(np.array([end]), np.array([True]))]
+    settle = max(abs(last[1]) / peak if peak > 0 else 0.0, SHORTEST_SETTLE)
+
+    def played(t, left=None):
+        t = np.atleast_1d(np.asarray(t, dtype=float))
+        phi, rate, acceleration = (
+            np.array(v, dtype=float) for v in angle(np.minimum(t, end), left)
+        )
+        beyond = t > end
+        if beyond.any():
+            rest = coming_to_rest(*last, t[beyond] - end, settle)
+            phi[beyond], rate[beyond], acceleration[beyond] = rest
+        return phi, rate, acceleration
+
+    return played
+
+
+# How a profile saved from a run of one duration is replayed on a scene of another (by choice).
+RETIMES = {
+    "hold": "played in its own time, then brought to rest and held (cut where the scene is "
+    "shorter)",
+    "stretch": "stretched in time over the scene's duration",
+}
+
+
+def check_retime(retime: str) -> None:
+    """Raise ValueError unless ``retime`` is one of :data:`RETIMES`, naming them."""
+    if retime not in RETIMES:
+        raise ValueError(
+            f"retime = {retime!r}: must be one of " + ", ".join(repr(name) for name in RETIMES)
+        )
+
+
+def replayed_duration(own: float | None, duration: float, retime: str | None, what: str) -> float:
+    """The duration (s) to lay a saved profile over when it drives a scene of ``duration`` s.
+
+    Parameters
+    ----------
+    own : float or None, s
+        The duration the profile was made for (None when its file does not say: laid over the
+        scene's, as before results kept their scene).
+    duration : float, s
+        The scene's ``numerics.duration``.
+    retime : {None, "hold", "stretch"}
+        None refuses another duration; ``"hold"`` keeps the profile's own time
+        (:func:`played_then_resting` past its end), ``"stretch"`` lays it over the scene's.
+    what : str
+        How the user asks for a retimed profile, named in the refusal, e.g.
+        ``"result.retimed('hold')"`` with ``{}`` for the choice.
+
+    Raises
+    ------
+    ValueError
+        An unknown ``retime``, or another duration with ``retime`` None, naming both durations
+        and the choices.
+    """
+    if retime is not None:
+        check_retime(retime)
+    if own is None or retime == "stretch":
+        return duration
+    if retime is None and not np.isclose(own, duration, rtol=1e-9, atol=1e-9):
+        choices = "; ".join(f"{what.format(repr(name))}: {text}" for name, text in RETIMES.items())
+        raise ValueError(
+            f"numerics.duration = {duration:g} s, but the winch profile was made for {own:g} s: "
+            f"replayed as it is, it would be stretched in time {duration / own:.3g}x. Replay it "
+            f"on a scene of {own:g} s, or choose how: {choices}"
+        )
+    return own
 
 
 def knot_times(duration: float, knots: int) -> np.ndarray:
