@@ -88,3 +88,12 @@ def test_a_land_time_off_the_steps_is_refused_naming_it():
     with pytest.raises(SceneError, match=r"^lowering\.land_time = 7\.02 s is not a whole number"):
         scene_from_dict({**LINE, "lowering": lowering})
     assert scene_from_dict({**LINE, "lowering": {**lowering, "land_time": 7.05}}).lowering
+
+
+@pytest.mark.parametrize("key", ["", "winch.", ".length", "winch..knots", " "])
+def test_an_override_key_with_an_empty_name_is_refused_naming_the_key(models_dir, key):
+    """Not an empty field name further down (``--set =3``, issue 45 item 8): here, ``updated``."""
+    scene = load_scene(models_dir / "hanging.toml")
+    with pytest.raises(SceneError) as caught:
+        scene.updated({key: 3})
+    assert str(caught.value).startswith(f"{key!r}: not a field path")

@@ -1029,6 +1029,12 @@ def _apply_overrides(data: Mapping[str, Any], overrides: Mapping[str, Any] | Non
     data = copy.deepcopy(dict(data))
     for key, value in (overrides or {}).items():
         parts = str(key).split(".")
+        if not all(part.strip() for part in parts):
+            raise SceneError(
+                repr(str(key)),
+                ": not a field path: a key names a field by its sections and name, dotted, none "
+                "empty (e.g. 'model.elements'; cable-ocp schema lists them)",
+            )
         node = data
         for depth, part in enumerate(parts[:-1]):
             node = node.setdefault(part, {})
