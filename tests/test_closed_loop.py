@@ -453,3 +453,42 @@ def test_the_estimator_controller_and_command_guard_their_arguments(short_hill):
         parts.command.make_step(0.0, solve, None)
     angle = parts.command.make_step(0.0, solve, estimate)
     assert parts.plant.make_step(angle, parts.settings.sample).now == parts.settings.sample
+
+
+def test_the_plants_drum_saturates_at_the_winchs_limits_and_says_when(short_hill, closed_loop):
+    """Under a 1 m heave of 8 s the heave feedback asks the line for 0.79 m/s and 0.64 m/s^2;
+    a drum of 0.6 m/s and 0.4 m/s^2 (0.5 m radius) never exceeds them in the plant, and the
+    result says when and how long it saturated. Unlimited, the run is the drum-free one.
+    """
+    from cable_ocp.model.layout import INPUTS
+
+    radius = short_hill.winch.drum_radius
+    wanted = closed_loop.trajectory.inputs
+    assert np.abs(wanted[:, INPUTS.top_length_rate]).max() > 0.75
+    assert np.abs(wanted[:, INPUTS.top_length_acceleration]).max() > 0.6
+    assert closed_loop.saturated_steps == 0 and closed_loop.saturation == ""
+    weak = short_hill.updated({"winch.rate_max": 0.6 / radius, "winch.acceleration_max": 0.8})
+    result = mpc(weak, quiet=True, **SHORT)
+    assert result.success, result.status
+    line = result.trajectory.inputs
+    rate_limit, acceleration_limit = 0.6, 0.8 * radius
+    assert np.abs(line[:, INPUTS.top_length_rate]).max() <= rate_limit * (1 + BOUND_TOLERANCE)
+    assert np.abs(line[:, INPUTS.top_length_acceleration]).max() <= acceleration_limit * (
+        1 + BOUND_TOLERANCE
+    )
+    # The drum's line is what its rate and acceleration integrate to (the inputs are one).
+    time, length = result.time, line[:, INPUTS.top_length]
+    rate, acceleration = line[:, INPUTS.top_length_rate], line[:, INPUTS.top_length_acceleration]
+    h = np.diff(time)
+    # Each step's change of length by the Hermite rule (exact for a cubic), to 1e-5 m; but the
+    # first step of a sample, whose acceleration may jump at its start (as the plan's does at
+    # its nodes, on step ends), the sample before reporting its left limit there.
+    hermite = (rate[1:] + rate[:-1]) * h / 2 + (acceleration[:-1] - acceleration[1:]) * h**2 / 12
+    inside = np.round(time[:-1] / 5.0, 9) % 1 != 0
+    np.testing.assert_allclose(np.diff(length)[inside], hermite[inside], atol=1e-5)
+    assert result.saturated_steps > 0
+    summary = result.summary()
+    assert summary["saturated_steps"] == result.saturated_steps
+    assert summary["saturated_time"] == pytest.approx(result.saturated_steps * 0.05)
+    assert result.saturation.startswith("the drum saturated at its rate or acceleration limit")
+    assert result.saturation in result.status and summary["units"]["saturated_time"] == "s"

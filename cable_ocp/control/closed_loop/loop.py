@@ -20,6 +20,7 @@ import numpy as np
 
 from cable_ocp.control.closed_loop.command import WinchCommand
 from cable_ocp.control.closed_loop.controller import WIDENED, RecedingHorizon
+from cable_ocp.control.closed_loop.drum import saturation_note
 from cable_ocp.control.closed_loop.estimator import Estimator
 from cable_ocp.control.closed_loop.plant import Measurement, Plant, plant_run
 from cable_ocp.control.closed_loop.result import MpcResult, SolveLog
@@ -195,6 +196,9 @@ def mpc(scene, settings: MpcSettings | None = None, quiet: bool = False, **field
     )
     widened = sum(WIDENED in text for text in solve_log.status)
     notes = [f"{widened} solves {WIDENED}"] if widened else []
+    saturated = np.concatenate([np.zeros(1, bool)] + [run.applied.saturated for run in runs[1:]])
+    saturation = saturation_note(time_grid, saturated, h)
+    notes += [saturation] if saturation else []
     return MpcResult(
         trajectory=trajectory,
         planned_angle=np.concatenate(planned),
@@ -207,6 +211,8 @@ def mpc(scene, settings: MpcSettings | None = None, quiet: bool = False, **field
         worst_solve_time=float(np.max(solve_log.solve_time)),
         limited_steps=sum(int(np.count_nonzero(run.applied.limited)) for run in runs[1:]),
         projected_samples=plant.projections,
+        saturated_steps=int(np.count_nonzero(saturated)),
+        saturation=saturation,
         angle_range=plant.angle_range,
         real_time_factor=float(trajectory.time[-1]) / wall_time,  # the time simulated
         wall_time=wall_time,
@@ -232,7 +238,7 @@ def _status(
 ) -> str:
     """One line on how the loop went: plant, minimum clearance, solves, then ``notes``.
 
-    The notes: solves on the winch's own range.
+    The notes: solves on the winch's own range, the drum's saturation.
     """
     parts = [reason for reason in (plant_failure, too_low) if reason]
     parts.append(

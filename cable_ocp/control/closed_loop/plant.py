@@ -4,16 +4,19 @@ The winch angle applied is the controller's plan (the commanded angle, for the t
 forecast) plus, with heave feedback, the pay-out ``(z_A - z_forecast) / r_D`` of the measured top
 height's departure from the forecast (the compensation of eq. 38 on the measured motion, at the
 plant's rate, as an active heave-compensated winch does). The applied angle is held inside the
-winch's angle range (with the top-element length range) by a soft limiter (:meth:`Plant.apply`).
+winch's angle range (with the top-element length range) by a soft limiter (:meth:`Plant.apply`),
+and the drum follows it within the winch's rate and acceleration limits (:mod:`.drum`): where the
+command asks for more, the drum saturates and lags, and the plant reports when.
 """
 
 from __future__ import annotations
 
 from collections.abc import Callable
-from dataclasses import dataclass
+from dataclasses import dataclass, field, replace
 
 import numpy as np
 
+from cable_ocp.control.closed_loop.drum import GRID_PER_STAGE, ON_COMMAND, Drum, Lag
 from cable_ocp.control.closed_loop.projection import chain_state, onto_bonds, plant_joints
 from cable_ocp.control.interrupts import keeping_interrupts
 from cable_ocp.drive.drive import Drive, end_force, stage_times
@@ -75,17 +78,26 @@ class Applied:
     angle, rate, acceleration : arrays (k,), rad, rad/s, rad/s^2
     limited : array of bool (k,)
         The soft limiter changed the commanded angle.
+    saturated : array of bool (k,)
+        The drum was held at its rate or acceleration limit (at a plant step: in the step that
+        ends there); all False where it never was.
+    lag : Lag
+        The drum's lag behind the command after the last time (:mod:`.drum`).
     """
 
     angle: np.ndarray
     rate: np.ndarray
     acceleration: np.ndarray
     limited: np.ndarray
+    saturated: np.ndarray = field(default_factory=lambda: np.zeros(0, dtype=bool))
+    lag: Lag = ON_COMMAND
 
     def tail(self, count: int) -> Applied:
         """The last ``count`` times."""
-        return Applied(*(values[-count:] for values in (
-            self.angle, self.rate, self.acceleration, self.limited)))  # fmt: skip
+        saturated = self.saturated[-count:] if self.saturated.size else self.saturated
+        return replace(self, angle=self.angle[-count:], rate=self.rate[-count:],
+                       acceleration=self.acceleration[-count:], limited=self.limited[-count:],
+                       saturated=saturated)  # fmt: skip
 
 
 @dataclass(frozen=True)
@@ -137,6 +149,7 @@ class Plant:
         self.angle_range = angle_range
         self.band = band
         self.projections = 0  # samples started from a state moved onto its bonds
+        self.drum, self.lag = Drum.of(scene.winch), ON_COMMAND  # the drum's lag at the plant's time
         # The bond check's Function is built here, with the rest of the loop's set-up (0.4 s at
         # n = 29), not in the first sample.
         self.model.parametric.bonds  # noqa: B018 - a cached property, built once
@@ -144,10 +157,14 @@ class Plant:
         self.started = False
 
     def start(self, command: AngleFunction) -> Measurement:
-        """Put the plant at its start (:meth:`initial_state`) under ``command``; report it."""
+        """Put the plant at its start (:meth:`initial_state`) under ``command``; report it.
+
+        The drum starts at the command's angle, its rate and acceleration within the winch's
+        limits (:meth:`.drum.Drum.start`).
+        """
         _check_command(command)
         zero = np.zeros(1)
-        applied = self.apply(command, zero)
+        applied, self.lag = self.drum.start(self.apply(command, zero))
         self.state, self.now = self.initial_state(applied), 0.0
         self.started = True
         inputs = self.inputs(applied, zero).T
@@ -164,8 +181,8 @@ class Plant:
         count = self.steps_to(until)
         _check_command(command)
         start = self.now
-        states, inputs, applied = self.advance(self.state, start, count, command)
-        self.state, self.now = states[-1], until
+        states, inputs, applied = self.advance(self.state, start, count, command, self.lag)
+        self.state, self.now, self.lag = states[-1], until, applied.lag
         times = start + np.arange(1, count + 1) * self.step
         return Measurement(until, times, states[1:], inputs[1:], applied.tail(count), self.step)
 
@@ -253,8 +270,12 @@ class Plant:
         length, length_rate = u[INPUTS.top_length], u[INPUTS.top_length_rate]
         return chain_state(model, top, velocity, length, length_rate, directions, rates)
 
-    def advance(self, x: np.ndarray, start: float, count: int, angle: AngleFunction):
+    def advance(
+        self, x: np.ndarray, start: float, count: int, angle: AngleFunction, lag: Lag = ON_COMMAND
+    ):
         """Integrate ``count`` steps from ``x`` at ``start`` (s) under a commanded angle.
+
+        The drum starts ``lag`` behind the command (:mod:`.drum`; on it by default).
 
         Returns
         -------
@@ -262,7 +283,7 @@ class Plant:
             At ``start + k h``, ``k = 0..count``.
         inputs : array (count + 1, 15)
         applied : Applied
-            At the same times.
+            At the same times, with the drum's lag at the end.
 
         Raises
         ------
@@ -278,10 +299,10 @@ class Plant:
         on a paper_hill variant), which RK4 at h = 0.05 s resolves badly enough to open the
         bonds by 1e-3 m; at h / 4 it stays at the health of the other samples.
         """
-        x = self.onto_bonds(x, start, angle, count * self.step)
+        x = self.onto_bonds(x, start, angle, count * self.step, lag)
         failures = []
         for substeps in SUBSTEPS:
-            states, inputs, applied = self._integrate(x, start, count, angle, substeps)
+            states, inputs, applied = self._integrate(x, start, count, angle, substeps, lag)
             failure = self._health(states[-1], inputs[-1], start + count * self.step, substeps)
             if failure is None:
                 times = start + np.arange(count + 1) * self.step
@@ -295,9 +316,11 @@ class Plant:
         )
 
     def onto_bonds(
-        self, x: np.ndarray, start: float, angle: AngleFunction, span: float
+        self, x: np.ndarray, start: float, angle: AngleFunction, span: float, lag: Lag = ON_COMMAND
     ) -> np.ndarray:
         """``x`` at ``start`` (s), moved onto its bonds if they have opened or are opening.
+
+        The bonds are those of the drum ``lag`` behind the commanded ``angle`` (:mod:`.drum`).
 
         When the bond residual plus its rate times ``span`` (s, the sample ahead) is above
         :data:`PROJECT_ABOVE` of the tolerance, the joints are chained down again from
@@ -309,7 +332,9 @@ class Plant:
         if self.model.spec.element.torsion:
             return x
         at = np.array([float(start)])
-        u = self.inputs(self.apply(angle, at), at)[:, 0]
+        applied = self.apply(angle, at)
+        drum = replace(applied, angle=applied.angle + lag.angle, rate=applied.rate + lag.rate)
+        u = self.inputs(drum, at)[:, 0]
         residual, rate = self.model.bond_values(x, u)
         residual = float(np.max(np.abs(residual))) + span * float(np.max(np.abs(rate)))
         if residual <= PROJECT_ABOVE * self.scene.numerics.constraint_tolerance:
@@ -320,7 +345,7 @@ class Plant:
             float(u[INPUTS.top_length]), float(u[INPUTS.top_length_rate]),
         )  # fmt: skip
 
-    def _integrate(self, x: np.ndarray, start: float, count: int, angle, substeps: int):
+    def _integrate(self, x: np.ndarray, start: float, count: int, angle, substeps: int, lag: Lag):
         """``count`` plant steps of ``substeps`` RK4 steps each: states, inputs, applied."""
         h = self.step / substeps
         steps = count * substeps
@@ -332,6 +357,7 @@ class Plant:
         outputs = start + np.arange(count + 1) * self.step
         every = np.concatenate([times, outputs])
         applied = self.apply(angle, every, np.concatenate([left, np.zeros(count + 1, bool)]))
+        applied = self.drum_under(applied, angle, start, h, steps, substeps, lag)
         inputs = self.inputs(applied, every)
         # One map per sample length and step, kept on the model for every loop of the process
         # (building it costs 0.1 s at n = 15).
@@ -349,6 +375,56 @@ class Plant:
             evaluate_into(run, [x, stages.T], [run_states])
         states = np.vstack([x, run_states[substeps - 1 :: substeps]])
         return states, inputs[:, times.size :].T, applied.tail(count + 1)
+
+    def drum_under(
+        self, applied: Applied, angle, start: float, h: float, steps: int, substeps: int, lag: Lag
+    ) -> Applied:
+        """The drum under a sample's command ``applied`` at its stage and output times.
+
+        The command as it is where the drum is on it and the command keeps within the limits
+        at these times (a run that never saturates is unchanged); otherwise the drum of
+        :meth:`.drum.Drum.follow` on the grid of the stages, from ``lag``. The stage times are
+        ``steps`` RK4 steps of ``h`` (s) from ``start``, then the plant's steps (``substeps``
+        RK4 steps each).
+        """
+        within = self.drum.within(applied.rate, applied.acceleration)
+        if not self.drum.limited or (lag.on_track and within):
+            never = np.zeros(applied.angle.size, dtype=bool)
+            return replace(applied, saturated=never, lag=ON_COMMAND)
+        per_step = 2 * GRID_PER_STAGE
+        spacing = h / per_step
+        grid = start + np.arange(steps * per_step + 1) * spacing
+        ends = np.arange(per_step, grid.size, per_step)  # step ends: the command's nodes
+        command = self.apply(
+            angle,
+            np.concatenate([grid, grid[ends]]),
+            np.concatenate([np.zeros(grid.size, bool), np.ones(ends.size, bool)]),
+        )
+        acceleration_left = command.acceleration[: grid.size].copy()
+        acceleration_left[ends] = command.acceleration[grid.size :]
+        drum_angle, rate, acceleration, left_limit, saturated, end = self.drum.follow(
+            ON_COMMAND if lag.on_track else lag, spacing, command.angle[: grid.size],
+            command.rate[: grid.size], command.acceleration[: grid.size], acceleration_left,
+        )  # fmt: skip
+        # Stage k of step i sits at grid index i * per_step + (0, per_step / 2, per_step)[k].
+        index = (np.arange(steps)[:, None] * per_step
+                 + np.array([0, per_step // 2, per_step])[None, :]).ravel()  # fmt: skip
+        outputs = np.arange(0, grid.size, per_step * substeps)
+        at = np.concatenate([index, outputs])
+        # The end stages take the left limit, and so does the sample's end, whose interval
+        # beyond is the next sample's (from its own command).
+        is_end = np.concatenate([np.tile([False, False, True], steps),
+                                 np.arange(outputs.size) == outputs.size - 1])  # fmt: skip
+        # A plant step saturated if the drum was in any interval of it.
+        in_step = np.concatenate([[False], saturated[:-1].reshape(-1, per_step * substeps).any(1)])
+        return replace(
+            applied,
+            angle=drum_angle[at],
+            rate=rate[at],
+            acceleration=np.where(is_end, left_limit[at], acceleration[at]),
+            saturated=np.concatenate([saturated[index], in_step]),
+            lag=end,
+        )
 
     def _health(self, x: np.ndarray, u: np.ndarray, t: float, substeps: int) -> str | None:
         """Why the plant's state at ``t`` cannot be trusted (None when it can)."""

@@ -80,7 +80,7 @@ class MpcResult:
         Every solve succeeded and the plant ran to the end.
     status : str
         How the loop went: the plant's failure (when and why; the run then ends there), the
-        failed solves, solves on the winch's own range.
+        failed solves, solves on the winch's own range, the drum's saturation.
     iterations : int
         Iterations of all the solves.
     solve_time : float, s
@@ -102,6 +102,11 @@ class MpcResult:
         The loop's wall time.
     build_time : float, s
         Building the controller's transcription (compiling or loading its libraries).
+    saturated_steps : int
+        Plant steps in which the drum was held at the winch's rate or acceleration limit
+        (``winch.rate_max``, ``winch.acceleration_max``; :mod:`.drum`).
+    saturation : str
+        When and how long the drum saturated (empty if never).
     settings : dict
         The fields of :class:`.settings.MpcSettings` (:meth:`.settings.MpcSettings.record`; the
         model's and the solver's as tables, :meth:`.settings.MpcSettings.from_record` rebuilds
@@ -126,6 +131,8 @@ class MpcResult:
     wall_time: float
     build_time: float
     settings: dict
+    saturated_steps: int = 0
+    saturation: str = ""
 
     # The plant's run, as a closed loop's figures and notebooks read it (one copy: the trajectory).
     @property
@@ -216,6 +223,11 @@ class MpcResult:
             "build_time": self.build_time,
             "limited_steps": self.limited_steps,
             "projected_samples": self.projected_samples,
+            "saturated_steps": self.saturated_steps,
+            "saturated_time": (
+                self.saturated_steps * self.setting("plant_step") if self.saturated_steps else 0.0
+            ),
+            "saturation": self.saturation,
             "angle_range": list(self.angle_range),
             "applied_angle_range": [
                 float(np.min(self.trajectory.winch_angle)),
@@ -224,7 +236,7 @@ class MpcResult:
             "settings": self.settings,
         }
         units = {**units_of(type(self), figures), "omega": "m", "mean_solve_time": "s",
-                 "applied_angle_range": "rad"}  # fmt: skip
+                 "applied_angle_range": "rad", "saturated_time": "s"}  # fmt: skip
         return {**figures, "units": units}
 
     def to_xarray(self) -> xr.Dataset:
@@ -376,6 +388,8 @@ class _Format2Kept:
     wall_time: float
     build_time: float
     settings: dict
+    saturated_steps: int = 0
+    saturation: str = ""
     projected_samples: int = 0
     status: str = ""
 
