@@ -56,6 +56,7 @@ def parse_overrides(pairs: list[str]) -> dict:
 
 
 def _simulate(args) -> int:
+    from cable_ocp.simulation.progress import stage
     from cable_ocp.simulation.run import simulate
 
     scene = load_scene(args.scene, parse_overrides(args.set))
@@ -67,7 +68,8 @@ def _simulate(args) -> int:
         )
     # Compiled unless --interpreted: without a compiler or a writable cache, the interpreted
     # model runs after the same warning as the API's.
-    trajectory = simulate(scene, winch=knots, quiet=args.quiet, compiled=not args.interpreted)
+    with stage(f"simulate {scene.name}", scene.numerics.duration, quiet=args.quiet):
+        trajectory = simulate(scene, winch=knots, quiet=args.quiet, compiled=not args.interpreted)
     _write_run(trajectory, scene, Path(args.out), args.animate)
     return 0
 
@@ -75,6 +77,7 @@ def _simulate(args) -> int:
 def _replay(args) -> int:
     from cable_ocp.control.optimization import OcpResult
     from cable_ocp.control.results import load_result
+    from cable_ocp.simulation.progress import stage
     from cable_ocp.simulation.run import simulate
 
     source = args.result.expanduser().resolve()
@@ -92,7 +95,8 @@ def _replay(args) -> int:
             "(result.nc), whose profile it drives"
         )
     scene = result.scene.updated(parse_overrides(args.set)) if args.set else result.scene
-    trajectory = simulate(scene, winch=result, quiet=args.quiet)
+    with stage(f"replay {scene.name}", scene.numerics.duration, quiet=args.quiet):
+        trajectory = simulate(scene, winch=result, quiet=args.quiet)
     _write_run(trajectory, scene, Path(args.out), args.animate, {"saved_omega": result.omega})
     return 0
 

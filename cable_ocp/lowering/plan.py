@@ -29,6 +29,7 @@ from cable_ocp.lowering.checks import LandingReport, check_landing
 from cable_ocp.lowering.descent import ReferenceDescent, reference_descent
 from cable_ocp.simulation.integrate import SimulationError
 from cable_ocp.simulation.line_trajectory import LineTrajectory
+from cable_ocp.simulation.progress import stage
 from cable_ocp.simulation.run import simulate
 from cable_ocp.simulation.seabed import clearance, clearance_reference
 
@@ -226,10 +227,12 @@ def plan_landing(scene, quiet: bool = True) -> LandingPlan:
     hold = HoldCorrection.none(lowering.land_time)
     errors: list[float] = []
     run = report = None
-    for _ in range(CORRECTIONS + 1):
+    for attempt in range(1, CORRECTIONS + 2):
         angle = _landing_angle(scene, descent, feedforward, hold)
+        label = f"landing run {attempt} of {scene.name}"  # one bar for its segments
         try:
-            run = simulate(scene, winch=angle, quiet=quiet)
+            with stage(label, scene.numerics.duration, quiet=quiet):
+                run = simulate(scene, winch=angle, quiet=quiet)
         except SimulationError as error:
             return LandingPlan(scene, descent, feedforward, None, None, tuple(errors),
                                time.perf_counter() - started, str(error), hold)  # fmt: skip

@@ -1,10 +1,19 @@
-"""Progress: a tqdm bar for long runs (a widget in Jupyter), one line per optimiser iteration."""
+"""Progress: a tqdm bar for long runs (a widget in Jupyter), one line per optimiser iteration.
+
+A run made of parts (a line paid out by elements integrates each segment of constant ``n`` on
+its own) shows one bar for the whole run: :func:`stage` opens it, and every :class:`Progress` of
+the same label made inside it moves that bar instead of drawing its own (a pipe got one line
+``100% 10/10`` per segment, up to 200 of them, naming no stage).
+"""
 
 from __future__ import annotations
 
 import math
 import sys
+import threading
 import time
+from collections.abc import Iterator
+from contextlib import contextmanager
 
 from tqdm.auto import tqdm
 
@@ -39,8 +48,10 @@ class Progress:
         self.total, self.label = float(total), label
         self.bar = None
         self.count, self.note, self.start = 0, "", time.perf_counter()
-        self.log = not quiet and not (IN_NOTEBOOK or _terminal(sys.stderr))
-        if not quiet and not self.log:
+        # A part of a stage (see stage()) moves the stage's bar.
+        self.stage = next((s for s in reversed(_stages()) if s.parts == label), None)
+        self.log = not quiet and self.stage is None and not (IN_NOTEBOOK or _terminal(sys.stderr))
+        if not quiet and self.stage is None and not self.log:
             self.bar = tqdm(
                 total=_whole(self.total),
                 desc=label,
@@ -53,6 +64,9 @@ class Progress:
     def update(self, done: float, note: str = "") -> None:
         """Move the bar to ``done`` units (whole units done), with a ``note`` after it."""
         done = min(max(float(done), 0.0), self.total)
+        if self.stage is not None:
+            self.stage.progress.update(self.stage.done + done, note)
+            return
         whole = _whole(self.total)
         self.count = whole if done >= self.total else min(int(done), whole)
         self.note = note or self.note
@@ -65,7 +79,10 @@ class Progress:
 
     def close(self) -> None:
         """Finish: the bar cleared in a terminal, kept in Jupyter; a log gets its one line."""
-        if self.bar is not None:
+        if self.stage is not None:
+            self.stage.done += self.total
+            self.stage = None
+        elif self.bar is not None:
             self.bar.close()
         elif self.log:
             whole = _whole(self.total)
@@ -74,6 +91,47 @@ class Progress:
             write_line(f"{self.label}: {100 * self.count / whole:3.0f}% {self.count}/{whole} "
                        f"[{elapsed}{note}]")  # fmt: skip
             self.log = False
+
+
+class _Stage:
+    """A bar for a run of parts: ``parts`` is their label, ``done`` the units of closed parts."""
+
+    def __init__(self, progress: Progress, parts: str):
+        self.progress, self.parts, self.done = progress, parts, 0.0
+
+
+_LOCAL = threading.local()  # each thread's open stages (a sweep's workers run in threads)
+
+
+def _stages() -> list[_Stage]:
+    if not hasattr(_LOCAL, "stages"):
+        _LOCAL.stages = []
+    return _LOCAL.stages
+
+
+@contextmanager
+def stage(label: str, total: float, parts: str = "simulate", quiet: bool = False) -> Iterator[None]:
+    """One bar, ``label``, for a run of ``total`` units made of parts (see the module docstring).
+
+    Parameters
+    ----------
+    label : str
+        What the run is, e.g. ``"simulate deploy (line on the drum)"``.
+    total : float
+        Units of the whole run (simulated seconds for ``"simulate"`` parts).
+    parts : str
+        The label of the :class:`Progress` objects that are its parts, made one after another
+        inside the block; each moves the bar from where the parts before it ended.
+    quiet : bool
+        No bar, and none of the parts' either.
+    """
+    progress = Progress(label, total, quiet)
+    _stages().append(_Stage(progress, parts))
+    try:
+        yield
+    finally:
+        _stages().pop()
+        progress.close()
 
 
 def _whole(total: float) -> int:
