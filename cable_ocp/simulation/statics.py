@@ -269,9 +269,9 @@ def moving_with_the_top(model: CableModel, state: np.ndarray, u: np.ndarray) -> 
     """The state in the same shape, moving as the top does under the inputs ``u``.
 
     Every element translates with the lower end of the top element: the top's velocity less the
-    winch's pay-out along the top element's axis. The bonds then hold at velocity level too, so a
-    run whose top starts moving (a heave) starts consistently; a top at rest leaves the state as
-    it is.
+    winch's pay-out along the top element's axis (stretched with the line in an elastic rope, whose
+    strain holds still). The bonds then hold at velocity level too, so a run whose top starts
+    moving (a heave) starts consistently; a top at rest leaves the state as it is.
 
     Parameters
     ----------
@@ -283,9 +283,10 @@ def moving_with_the_top(model: CableModel, state: np.ndarray, u: np.ndarray) -> 
     """
     q, _ = model.coordinates(state)
     top_axis = np.array(axis_direction(q[-1][3], q[-1][4])).ravel()
-    velocity = u[INPUTS.top_velocity] - u[INPUTS.top_length_rate] * top_axis
     moving = np.array(state, dtype=float)
     half = model.state_size // 2
+    stretch = 1 + moving[half - 1] if model.axial else 1.0
+    velocity = u[INPUTS.top_velocity] - u[INPUTS.top_length_rate] * stretch * top_axis
     for i in range(model.element_count):
         start = half + i * model.dofs
         moving[start : start + 3] = velocity
