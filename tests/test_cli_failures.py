@@ -254,6 +254,7 @@ def test_the_open_loop_reference_without_a_heave_table(tmp_path, capsys):
     assert code == 0, stderr
     summary = json.loads((out / "summary.json").read_text())
     assert set(summary["reference_omegas"]) == {"locked", "open-loop"}
+    assert not any("an ideal" in note for note in summary["reference_notes"])  # nothing to explain
 
 
 def test_the_open_loop_reference_knows_no_sea_state(tmp_path, capsys, monkeypatch):
@@ -273,6 +274,9 @@ def test_the_open_loop_reference_knows_no_sea_state(tmp_path, capsys, monkeypatc
     assert seen == [None]
     summary = json.loads((out / "summary.json").read_text())
     assert "open-loop + heave feedback" in summary["reference_omegas"]
+    # Why that reference can beat the closed loop (issue 45 item 10): it knows the heave exactly.
+    (note,) = [note for note in summary["reference_notes"] if "an ideal" in note]
+    assert "pays out the scene's own heave exactly at every RK4 step" in note
 
 
 @pytest.mark.parametrize("option", ["--horizon", "--sample", "--interval", "--step"])
