@@ -12,6 +12,7 @@ from __future__ import annotations
 import numpy as np
 
 from cable_ocp.control.closed_loop.controller import Estimate, Solve
+from cable_ocp.control.closed_loop.drum import ON_COMMAND, Lag
 from cable_ocp.control.closed_loop.forecast import BlendedHeight, TopForecast
 from cable_ocp.control.closed_loop.settings import MpcSettings
 from cable_ocp.drive.controls import HermiteIntervals
@@ -74,6 +75,22 @@ class Plan:
         return Plan(self.start, self.parameters, self.control)
 
 
+class Shifted:
+    """A plan moved by the drum's angle lag at ``start`` (s), as the plan before a new one.
+
+    A new plan starts at the drum's angle (:meth:`WinchCommand.winch` with the lag), so the one
+    it takes over from is the old plan moved by the lag's angle.
+    """
+
+    def __init__(self, plan: Plan, start: float, lag: Lag):
+        self.plan, self.start, self.lag = plan, start, lag
+
+    def __call__(self, t: np.ndarray, left=None) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """Angle, rate and acceleration (rad, rad/s, rad/s^2) at the times ``t``."""
+        angle, rate, acceleration = self.plan(t, left)
+        return angle + self.lag.angle, rate, acceleration
+
+
 class WinchCommand:
     """The commanded winch angle across a closed loop's samples.
 
@@ -110,10 +127,16 @@ class WinchCommand:
         self.previous = forecast
         self.height = BlendedHeight(forecast, forecast, 0.0, settings.sample)
 
-    def winch(self, now: float) -> tuple[float, float]:
-        """The planned angle and rate (rad, rad/s) at ``now`` (s): where a new plan starts."""
+    def winch(self, now: float, lag: Lag = ON_COMMAND) -> tuple[float, float]:
+        """The planned angle and rate (rad, rad/s) at ``now`` (s): where a new plan starts.
+
+        With the plant's drum ``lag`` behind the command (:mod:`.drum`), at the drum's angle:
+        the controller plans from there, so that a saturated drum does not wind the plan up.
+        The rate stays the plan's (the drum's may lie beyond the plan's bounds, the heave
+        feedback's share added); its lag stays with the drum.
+        """
         phi, rate, _ = self.plan(np.array([now]))
-        return float(phi[0]), float(rate[0])
+        return float(phi[0]) + lag.angle, float(rate[0])
 
     def angle(self, t, left=None) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """Angle, rate and acceleration commanded at the times ``t`` (s)."""
@@ -127,13 +150,14 @@ class WinchCommand:
         )
         return phi + payout[0], rate + payout[1], acc + payout[2]
 
-    def make_step(self, now: float, solve: Solve, estimate: Estimate):
+    def make_step(self, now: float, solve: Solve, estimate: Estimate, lag: Lag = ON_COMMAND):
         """The command from ``now`` (s) on, after the solve there: :meth:`angle`.
 
-        A successful solve's plan takes over (blended in over one controller step); a failed
-        one leaves the plan in force. The heave reference blends to the estimate's forecast
-        over the sample. ValueError, naming the argument, for a ``solve`` or an ``estimate``
-        of another kind (None, say) or a ``now`` before the plan in force.
+        A successful solve's plan takes over (blended in over one controller step) from the
+        plan in force moved by the drum's angle ``lag`` (:meth:`.plant.Plant.take_lag`); a
+        failed one leaves the plan in force. The heave reference blends to the estimate's
+        forecast over the sample. ValueError, naming the argument, for a ``solve`` or an
+        ``estimate`` of another kind (None, say) or a ``now`` before the plan in force.
         """
         for name, value, kind in (("solve", solve, Solve), ("estimate", estimate, Estimate)):
             if not isinstance(value, kind):
@@ -148,9 +172,10 @@ class WinchCommand:
                 f"(from t = {self.plan.start:g} s)"
             )
         if solve.success:
-            self.plan = Plan(
-                now, solve.parameters, self.control, self.plan.settled(), self.settings.step
-            )
+            previous = self.plan.settled()
+            if not lag.on_track:
+                previous = Shifted(previous, now, lag)
+            self.plan = Plan(now, solve.parameters, self.control, previous, self.settings.step)
         if self.settings.heave_feedback:
             self.height = BlendedHeight(self.previous, estimate.forecast, now, self.settings.sample)
         self.previous = estimate.forecast

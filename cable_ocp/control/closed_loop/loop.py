@@ -20,7 +20,7 @@ import numpy as np
 
 from cable_ocp.control.closed_loop.command import WinchCommand
 from cable_ocp.control.closed_loop.controller import WIDENED, RecedingHorizon
-from cable_ocp.control.closed_loop.drum import saturation_note
+from cable_ocp.control.closed_loop.drum import ON_COMMAND, saturation_note
 from cable_ocp.control.closed_loop.estimator import Estimator
 from cable_ocp.control.closed_loop.plant import Measurement, Plant, plant_run
 from cable_ocp.control.closed_loop.result import MpcResult, SolveLog
@@ -84,10 +84,11 @@ def loop_parts(scene, settings: MpcSettings) -> LoopParts:
         measured = parts.start()
         for k in range(samples):
             now = k * parts.settings.sample
-            winch = parts.command.winch(now)  # the plan's angle and rate now
+            winch = parts.command.winch(now, parts.plant.lag)  # where the drum is now
             estimate = parts.estimator.make_step(measured, *winch)
             solve = parts.controller.make_step(now, estimate, *winch)
-            angle = parts.command.make_step(now, solve, estimate)
+            lag = parts.plant.take_lag() if solve.success else ON_COMMAND
+            angle = parts.command.make_step(now, solve, estimate, lag)
             measured = parts.plant.make_step(angle, now + parts.settings.sample)
 
     Raises ValueError for a setting that does not fit the scene, before any heavy work.
@@ -127,9 +128,11 @@ def mpc(scene, settings: MpcSettings | None = None, quiet: bool = False, **field
     MpcResult
         ``success`` is False if any solve failed (see ``failures``), the plant failed or its end
         left the bathymetry grid (the loop then stops there, with the arrays up to that time),
-        or the end came under ``seabed.minimum_clearance``; ``status`` says which, when and
-        where. The runs it is judged against (the winch locked, the open-loop optimum) are
-        left to :func:`~.references.reference_runs`.
+        the end came under ``seabed.minimum_clearance``, or the plant's run fails its physics
+        check (a rope that pushes, an end under an absolute seabed:
+        :mod:`cable_ocp.simulation.slack`); ``status`` says which, when and where. The runs
+        it is judged against (the winch locked, the open-loop optimum) are left to
+        :func:`~.references.reference_runs`.
 
     Raises
     ------
@@ -156,13 +159,14 @@ def mpc(scene, settings: MpcSettings | None = None, quiet: bool = False, **field
     progress = Progress("mpc", duration, quiet)
     for k in range(samples):
         now = k * settings.sample
-        winch = command.winch(now)
+        winch = command.winch(now, plant.lag)
         estimate = estimator.make_step(measured, *winch)
         solve = controller.make_step(now, estimate, *winch)
         solves.append(solve)
         if not solve.success:
             failures.append(f"t = {now:g} s: {solve.status}")
-        angle = command.make_step(now, solve, estimate)
+        lag = plant.take_lag() if solve.success else ON_COMMAND
+        angle = command.make_step(now, solve, estimate, lag)
         try:
             measured = plant.make_step(angle, (k + 1) * settings.sample)
         except SimulationError as error:
@@ -188,6 +192,9 @@ def mpc(scene, settings: MpcSettings | None = None, quiet: bool = False, **field
         np.concatenate([run.applied.angle for run in runs]),
     )
     _, _, too_low = lowest_clearance(scene.seabed, trajectory)
+    # The end under the minimum clearance; the plant's rope pushing, or its end under an
+    # absolute seabed (simulation.slack).
+    broken = "; ".join(filter(None, [too_low, *trajectory.physics.failures])) or None
     solve_log = SolveLog(
         sample_time=settings.sample * np.arange(len(solves)),
         solve_time=np.array([solve.solve_time for solve in solves]),
@@ -204,8 +211,8 @@ def mpc(scene, settings: MpcSettings | None = None, quiet: bool = False, **field
         planned_angle=np.concatenate(planned),
         solves=solve_log,
         failures=failures,
-        success=not failures and plant_failure is None and too_low is None,
-        status=_status(samples, failures, plant_failure, too_low, notes),
+        success=not failures and plant_failure is None and broken is None,
+        status=_status(samples, failures, plant_failure, broken, notes),
         iterations=int(np.sum(solve_log.iterations)),
         solve_time=float(np.sum(solve_log.solve_time)),
         worst_solve_time=float(np.max(solve_log.solve_time)),
@@ -233,14 +240,14 @@ def _status(
     samples: int,
     failures: list[str],
     plant_failure: str | None,
-    too_low: str | None,
+    broken: str | None,
     notes: list[str],
 ) -> str:
-    """One line on how the loop went: plant, minimum clearance, solves, then ``notes``.
+    """One line on how the loop went: plant, minimum clearance and physics, solves, ``notes``.
 
     The notes: solves on the winch's own range, the drum's saturation.
     """
-    parts = [reason for reason in (plant_failure, too_low) if reason]
+    parts = [reason for reason in (plant_failure, broken) if reason]
     parts.append(
         f"{len(failures)} of {samples} solves failed (the plant kept the previous plan): "
         + "; ".join(failures[:SHOWN_FAILURES])

@@ -186,6 +186,15 @@ class Plant:
         times = start + np.arange(1, count + 1) * self.step
         return Measurement(until, times, states[1:], inputs[1:], applied.tail(count), self.step)
 
+    def take_lag(self) -> Lag:
+        """The drum's angle lag behind the command, handed to a new plan.
+
+        The new plan starts at the drum's angle (:meth:`.command.WinchCommand.make_step`); the
+        drum keeps the lag of its rate.
+        """
+        lag, self.lag = Lag(self.lag.angle, 0.0), Lag(0.0, self.lag.rate)
+        return lag
+
     def steps_to(self, until) -> int:
         """The plant's steps from its time to ``until`` (s); the error naming what is wrong."""
         if not self.started:
