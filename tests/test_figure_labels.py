@@ -292,3 +292,69 @@ def test_an_old_sweeps_lock_that_is_held_is_left_to_it(tmp_path):
     with folder_lock(folder):
         pass
     assert not (folder / LOCK).exists()
+
+
+# --- axes that read as what they show (issue 45 item 10) -----------------------------------------
+
+
+def _tick_texts(ax, axis: str = "y") -> list[str]:
+    ax.figure.canvas.draw()
+    ticks = ax.get_yticklabels() if axis == "y" else ax.get_xticklabels()
+    return [t.get_text().replace("\N{MINUS SIGN}", "-") for t in ticks if t.get_text()]
+
+
+def test_the_iteration_count_of_one_a_solve_has_whole_ticks_from_zero():
+    """One real-time iteration a solve drew a count axis of 0.96-1.04."""
+    fig = closed_loop.solve_times(mpc_result(), scene_name="paper_hill")
+    twin = fig.axes[1]
+    assert twin.get_ylim()[0] == 0 and twin.get_ylim()[1] >= 1.5
+    texts = _tick_texts(twin)
+    assert texts and all(re.fullmatch(r"\d+", text) for text in texts), texts
+    plt.close(fig)
+
+
+def test_a_clearance_within_a_millimetre_shows_heights_without_an_offset():
+    """An optimum's replay: the end within 0.6 mm of 5 m drew '+5' and ticks of 1e-4."""
+    t = np.linspace(0, 60, 121)
+    fig = plots.clearance(_run(t, 6e-4 * np.sin(t), 4e-4), 5.0)
+    ax = fig.axes[0]
+    texts = _tick_texts(ax)
+    assert ax.yaxis.get_offset_text().get_text() == ""
+    assert all(abs(float(text) - 5.0) < 0.01 for text in texts), texts
+    plt.close(fig)
+
+
+def test_the_landings_middle_panel_spans_its_content_and_its_legend_spares_the_heave(models_dir):
+    """landing.png: the middle panel's axis ran over the whole 960 s for 120 s of content, and
+    its legend sat over the vessel's heave."""
+    from types import SimpleNamespace
+
+    from cable_ocp.plots import landing
+
+    scene = co.load_scene(
+        models_dir / "paper_flat.toml",
+        {"top.motion": "fixed", "cable.length": 100.0, "seabed.clearance": 95.0,
+         "end.payload": {"mass": 2000.0, "volume": 0.256},
+         "lowering": {"land_time": 200.0, "height": 5.0, "tension_min": 1e3},
+         "numerics.duration": 230.0},
+    )  # fmt: skip
+    t = np.linspace(0.0, 230.0, 461)
+    depth = -100.0 - 90.0 * np.clip(t / 200.0, 0, 1) + 0.01 * np.sin(t)
+    heave = 1.5 * np.sin(2 * np.pi * t / 9.0)
+    run = SimpleNamespace(
+        scene=scene, scene_name="paper_flat", time=t, end=np.stack([0 * t, 0 * t, depth], 1),
+        top=np.stack([0 * t, 0 * t, heave], 1), top_tension=np.full(t.size, 2e4),
+    )  # fmt: skip
+    fig = landing.landing(run, label="optimised", path=None)
+    middle = fig.axes[1]
+    assert middle.get_xlim() == pytest.approx((180.0, 230.0))
+    sea = next(ax for ax in fig.axes if ax.get_ylabel().startswith("vessel heave"))
+    legend = sea.get_legend()
+    assert legend is not None and "vessel heave (right axis)" in legend_texts(sea)
+    fig.canvas.draw()
+    box = legend.get_window_extent()
+    (line,) = sea.get_lines()
+    points = sea.transData.transform(line.get_xydata())
+    inside = [box.contains(x, y) for x, y in points]
+    assert not np.any(inside)
+    plt.close(fig)

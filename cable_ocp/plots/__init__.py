@@ -200,6 +200,7 @@ def clearance(
             ax.axhline(minimum_clearance, color="r", lw=1.2,
                        label=f"minimum c_min = {minimum_clearance} m")  # fmt: skip
         ax.set_ylabel("end height above the seabed [m]")
+        ax.ticklabel_format(axis="y", useOffset=False)  # heights as they are, not "+5" and 1e-4
         ax.grid(alpha=0.3)
         ax.legend(fontsize=8)
     _title(axes[0], "height of the end E above the seabed (eq. 39)", pairs)

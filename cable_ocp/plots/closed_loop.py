@@ -13,6 +13,7 @@ from pathlib import Path
 import matplotlib.pyplot as plt
 import numpy as np
 from matplotlib.figure import Figure
+from matplotlib.ticker import MaxNLocator
 
 from cable_ocp.control.closed_loop.result import MpcResult
 from cable_ocp.plots import finish_figure, result_label, run_title, significant
@@ -55,6 +56,9 @@ def solve_times(
     twin = ax.twinx()
     twin.plot(solves.sample_time + 0.4 * sample, solves.iterations, "C1.", label="iterations")
     twin.set_ylabel("iterations per solve [count]")
+    # A count from 0, in whole ticks (one iteration a solve read 0.96-1.04).
+    twin.set_ylim(0, 1.15 * max(solves.iterations.max(initial=1), 1) + 0.5)
+    twin.yaxis.set_major_locator(MaxNLocator(integer=True))
     lines, labels = ax.get_legend_handles_labels()
     more, more_labels = twin.get_legend_handles_labels()
     ax.legend(lines + more, labels + more_labels, fontsize=8, loc="upper right")

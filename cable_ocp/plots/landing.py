@@ -52,7 +52,9 @@ def landing(
     lowering = scene.lowering
     time, end = run.time, run.end
     height = clearance(scene.seabed, end, clearance_reference(scene.seabed, end[0]))
-    fig, (upper, middle, lower) = plt.subplots(3, 1, figsize=(10, 9.5), sharex=True)
+    fig, (upper, middle, lower) = plt.subplots(3, 1, figsize=(10, 9.5))
+    upper.sharex(lower)  # the middle panel spans the landing's last tenth and the hold only
+    upper.tick_params(labelbottom=False)
     upper.plot(time, height, label=label)
     if descent is not None:
         line = descent.line_out(time)[0]
@@ -83,13 +85,21 @@ def landing(
     scale = 4 * max(lowering.hold_band, lowering.height_tolerance)
     middle.set_ylim(-scale, scale)
     heave = run.top[:, 2]
+    on_top = middle  # the axes drawn last, which holds the legend so that nothing covers it
     if np.ptp(heave[near]) > HEAVE_SHOWN:  # the vessel's heave on its own scale: what the load
         # is spared (the top joint's bond residual, 1e-6 m, is no heave)
-        sea = middle.twinx()
-        sea.plot(time[near], heave[near] - heave[near].mean(), color="0.6", lw=0.8)
-        sea.set_ylabel("vessel heave at the winch [m]", color="0.4")
+        on_top = middle.twinx()
+        swell = heave[near] - heave[near].mean()
+        on_top.plot(time[near], swell, color="0.6", lw=0.8, label="vessel heave (right axis)")
+        reach = np.abs(swell).max()
+        on_top.set_ylim(-1.1 * reach, 3.3 * reach)  # the lower half: the legend keeps the upper
+        on_top.set_ylabel("vessel heave at the winch [m]", color="0.4")
     middle.set_ylabel("end above the target [m]")
-    middle.legend(fontsize=8, loc="upper right")
+    middle.set_xlim(time[near][0], time[-1])
+    middle.set_xlabel("t [s]")
+    shown = [middle] if on_top is middle else [middle, on_top]
+    handles = [h for ax in shown for h in ax.get_legend_handles_labels()[0]]
+    on_top.legend(handles=handles, fontsize=8, loc="upper right", ncol=2)
     upper.set_ylabel("end above the seabed [m]")
     upper.legend(fontsize=8, loc="upper right")
     lower.plot(time, 1e-3 * run.top_tension, label="top tension")
