@@ -492,3 +492,30 @@ def test_the_plants_drum_saturates_at_the_winchs_limits_and_says_when(short_hill
     assert summary["saturated_time"] == pytest.approx(result.saturated_steps * 0.05)
     assert result.saturation.startswith("the drum saturated at its rate or acceleration limit")
     assert result.saturation in result.status and summary["units"]["saturated_time"] == "s"
+
+
+def test_a_new_plan_starts_at_a_lagging_drums_angle(short_hill):
+    """Anti-windup: after a solve the plan starts where a saturated drum is, and the command
+    takes over from the plan before moved by the drum's angle lag, so the drum stays put."""
+    from cable_ocp.control.closed_loop.drum import Lag
+    from cable_ocp.control.closed_loop.loop import loop_parts
+
+    parts = loop_parts(short_hill, MpcSettings(**SHORT))
+    measured = parts.start()
+    lag = Lag(0.3, -0.1)  # rad, rad/s: as a saturated sample leaves it
+    parts.plant.lag = lag
+    planned = parts.command.winch(0.0)
+    winch = parts.command.winch(0.0, parts.plant.lag)
+    assert winch == (planned[0] + 0.3, planned[1])
+    estimate = parts.estimator.make_step(measured, *winch)
+    solve = parts.controller.make_step(0.0, estimate, *winch)
+    assert solve.success, solve.status
+    handed = parts.plant.take_lag()
+    assert handed == Lag(0.3, 0.0) and parts.plant.lag == Lag(0.0, -0.1)
+    before = parts.command.angle(np.array([0.0]))
+    angle = parts.command.make_step(0.0, solve, estimate, handed)
+    after = angle(np.array([0.0]))
+    # The command jumps by the angle handed over, which the drum no longer lags by.
+    assert after[0][0] == pytest.approx(before[0][0] + 0.3, abs=1e-12)
+    assert after[1][0] == pytest.approx(before[1][0], abs=1e-12)
+    assert parts.command.winch(0.0)[0] == pytest.approx(planned[0] + 0.3, abs=1e-12)
