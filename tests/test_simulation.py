@@ -155,9 +155,16 @@ def test_joints_and_tensions_in_blocks_are_those_of_one_call(monkeypatch, compil
                        {"model.elements": 6, "numerics.duration": 2.0})  # fmt: skip
     run = simulate(scene, compiled=compiled)
     model = simulation.CableModel.from_scene(scene)
-    whole = simulation.joints_and_tensions(model, run.states, run.inputs, compiled)
+    whole = simulation.run_outputs(model, run.states, run.inputs, compiled)
     monkeypatch.setattr(simulation, "OUTPUT_BLOCK", 7)
-    blocks = simulation.joints_and_tensions(model, run.states, run.inputs, compiled)
+    blocks = simulation.run_outputs(model, run.states, run.inputs, compiled)
     assert len(run.states) % 7  # a shorter last block
     for single, blocked in zip(whole, blocks, strict=True):
         np.testing.assert_array_equal(blocked, single)
+    # The norms are the model's own tensions output to the last bit, compiled or not.
+    outputs = model.outputs.map(len(run.states))(run.states.T, run.inputs.T)
+    np.testing.assert_allclose(whole[1], np.array(outputs[5]).T, rtol=1e-13)
+    if compiled:
+        structured_norms = simulation.structured.compiled_structured(model, "outputs", 1)
+        first = structured_norms(run.states[0], run.inputs[0])[1]
+        np.testing.assert_array_equal(whole[1][0], np.array(first).ravel())
