@@ -170,8 +170,9 @@ def read(path: Path, kind: str, group: str | None = None) -> xr.Dataset:
     """A result's Dataset from ``path`` (or its ``group``), loaded into memory (file closed).
 
     Before any data is read, the file's declared contents are checked: its kind and format
-    (:func:`_check_declared`), then over every group (:func:`_check_contents`) sizes that the
-    file can hold, booleans stored as 0 or 1, and a line run's segments.
+    (:func:`_check_declared`), and, when the root is read, over every group
+    (:func:`_check_contents`) sizes that the file can hold, booleans stored as 0 or 1, and a line
+    run's segments (a line run's reader reads the root before its segments' groups).
 
     Raises
     ------
@@ -184,7 +185,8 @@ def read(path: Path, kind: str, group: str | None = None) -> xr.Dataset:
     try:
         with xr.open_dataset(path, decode_cf=False) as raw:
             _check_declared(path, raw, kind)
-        _check_contents(path)
+        if group is None:  # the whole file, once: a group's reader reads the root first
+            _check_contents(path)
         with xr.open_dataset(path, group=group) as dataset:
             dataset = dataset.load()
     except FileNotFoundError:
@@ -223,12 +225,6 @@ def _check_declared(path: Path, raw: xr.Dataset, kind: str) -> None:
         )
 
 
-# Files whose contents passed _check_contents, by (path, device, inode, size, modification time):
-# a line run's reader reads the root, then every segment's group.
-_CHECKED: dict[tuple, None] = {}
-_CHECKED_KEPT = 64
-
-
 def _check_contents(path: Path) -> None:
     """Check every group of the file against its size and each other; _Refused if one is bad.
 
@@ -243,26 +239,20 @@ def _check_contents(path: Path) -> None:
     """
     import netCDF4
 
-    stat = path.stat()
-    key = (str(path.resolve()), stat.st_dev, stat.st_ino, stat.st_size, stat.st_mtime_ns)
-    if key in _CHECKED:
-        return
+    size = path.stat().st_size
     with netCDF4.Dataset(path) as stored:
         groups = {"": stored, **{f"{name}/": group for name, group in _groups(stored)}}
         declared = {where: _declared_bytes(group) for where, group in groups.items()}
-        if sum(size for size, _ in declared.values()) > stat.st_size:
+        if sum(nbytes for nbytes, _ in declared.values()) > size:
             where = max(declared, key=lambda name: declared[name][0])
             raise _Refused(
-                f"declares more data than its {stat.st_size} bytes can hold ({where}"
+                f"declares more data than its {size} bytes can hold ({where}"
                 f"{declared[where][1]}): a damaged or forged file"
             )
         for where, group in groups.items():
             _check_booleans(group, where)
         if "segments" in stored.ncattrs():
             _check_segments(stored)
-    _CHECKED[key] = None
-    while len(_CHECKED) > _CHECKED_KEPT:
-        del _CHECKED[next(iter(_CHECKED))]
 
 
 def _groups(group, prefix: str = ""):
