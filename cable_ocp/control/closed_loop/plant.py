@@ -17,7 +17,12 @@ from dataclasses import dataclass, field, replace
 import numpy as np
 
 from cable_ocp.control.closed_loop.drum import GRID_PER_STAGE, ON_COMMAND, Drum, Lag
-from cable_ocp.control.closed_loop.projection import chain_state, onto_bonds, plant_joints
+from cable_ocp.control.closed_loop.projection import (
+    chain_state,
+    onto_bonds,
+    plant_joints,
+    strain_of,
+)
 from cable_ocp.control.interrupts import keeping_interrupts
 from cable_ocp.drive.drive import Drive, end_force, stage_times
 from cable_ocp.drive.vessel import top_motion
@@ -277,7 +282,8 @@ class Plant:
         rates = np.zeros_like(directions)
         rates[-1] = velocity / np.linalg.norm(directions[-1])
         length, length_rate = u[INPUTS.top_length], u[INPUTS.top_length_rate]
-        return chain_state(model, top, velocity, length, length_rate, directions, rates)
+        strain = strain_of(model, x)  # an elastic rope starts at its static stretch
+        return chain_state(model, top, velocity, length, length_rate, directions, rates, strain)
 
     def advance(
         self, x: np.ndarray, start: float, count: int, angle: AngleFunction, lag: Lag = ON_COMMAND

@@ -60,6 +60,7 @@ def chain_state(
     top_length_rate: float,
     directions: np.ndarray,
     direction_rates: np.ndarray,
+    strain: tuple[float, float] = (0.0, 0.0),
 ) -> np.ndarray:
     """A state whose bonds hold exactly, chained down from the top point.
 
@@ -75,6 +76,9 @@ def chain_state(
         Direction of each element (normalised here).
     direction_rates : array (n+1, 3), 1/s
         Rate of each direction; the part along the direction is dropped.
+    strain : (float, float)
+        An elastic rope's axial strain and its rate (1/s), which stretch every element
+        (:mod:`cable_ocp.model.axial`); ignored by a rigid model.
 
     Returns
     -------
@@ -83,9 +87,11 @@ def chain_state(
     if model.spec.element.torsion:
         raise ValueError("the state projection supports 5-DOF models only (model.torsion = false)")
     count = model.element_count
-    lengths = np.array([float(v) for v in model.element_lengths(top_length)])
-    rates = np.zeros(count)
-    rates[-1] = top_length_rate
+    strain, strain_rate = strain if model.axial else (0.0, 0.0)
+    rest = np.array([float(v) for v in model.element_lengths(top_length)])
+    lengths = (1 + strain) * rest
+    rates = strain_rate * rest
+    rates[-1] += (1 + strain) * top_length_rate
     q = np.zeros((count, 5))
     qd = np.zeros((count, 5))
     point = np.asarray(top, float).copy()
@@ -102,11 +108,24 @@ def chain_state(
         velocity = velocity - rates[i] * e - lengths[i] * e_rate
         q[i] = [*point, psi, theta]
         qd[i] = [*velocity, psi_rate, theta_rate]
-    return np.concatenate([q.ravel(), qd.ravel()])
+    axial = [strain] * model.axial, [strain_rate] * model.axial
+    return np.concatenate([q.ravel(), axial[0], qd.ravel(), axial[1]])
+
+
+def strain_of(model: CableModel, x: np.ndarray) -> tuple[float, float]:
+    """An elastic state's axial strain and its rate (1/s); zeros for a rigid model."""
+    if not model.axial:
+        return 0.0, 0.0
+    strain, rate = model.strain(np.asarray(x, float))
+    return float(strain), float(rate)
 
 
 def joint_arcs(model: CableModel, top_length: float) -> np.ndarray:
-    """Arc length (m) from the end ``E`` to each joint ``A_0 .. A_{n+1}``."""
+    """Rest arc length (m) from the end ``E`` to each joint ``A_0 .. A_{n+1}``.
+
+    An elastic rope's strain is uniform: each arc stretches by the same factor, so rest arcs
+    interpolate the stretched line as they do the rigid one.
+    """
     lengths = [float(v) for v in model.element_lengths(top_length)]
     return np.concatenate([[0.0], np.cumsum(lengths)])
 
@@ -166,6 +185,7 @@ def project_state(
         top_length_rate,
         chords,
         (upper_rates - rates) / chord_lengths,
+        strain_of(plant, x),
     )
     return ProjectedState(state=state, end_offset=joints[0] - state[:3])
 
@@ -199,5 +219,12 @@ def onto_bonds(
     d_psi, d_theta = axis_derivatives(psi, theta)
     rates = (psi_rate * d_psi + theta_rate * d_theta).T
     return chain_state(
-        model, top, top_velocity, top_length, top_length_rate, axis(psi, theta).T, rates
+        model,
+        top,
+        top_velocity,
+        top_length,
+        top_length_rate,
+        axis(psi, theta).T,
+        rates,
+        strain_of(model, x),
     )
