@@ -13,10 +13,10 @@ bit. Where the command asks for more, the drum's acceleration is clipped:
   beyond its rate limit (a command moving at t = 0) comes back to it at the acceleration limit;
 
 and the lag is steered back to zero by a critically damped servo of bandwidth
-:data:`DRUM_BANDWIDTH` (``d'' = -w^2 d - 2 w d'`` where nothing clips), itself clipped. The lag is
-integrated on a grid of :data:`GRID_PER_STAGE` points per half RK4 step, its acceleration held
-over each grid interval, so that the drum's angle, rate and acceleration are exactly consistent
-at the RK4 stages (which lie on the grid).
+:data:`DRUM_BANDWIDTH` (``d'' = -w^2 d - 2 w d'`` where nothing clips), itself clipped. The drum
+is integrated on a grid of :data:`GRID_PER_STAGE` points per half RK4 step, its acceleration held
+over each grid interval, so that its angle, rate and acceleration are exactly consistent at the
+RK4 stages (which lie on the grid) and its limits hold exactly.
 """
 
 from __future__ import annotations
@@ -92,8 +92,12 @@ class Drum:
         lag = Lag(0.0, float(rate[0] - applied.rate[0]))
         return replace(applied, rate=rate, acceleration=acceleration), lag
 
-    def follow(self, lag: Lag, spacing: float, angle, rate, acceleration, acceleration_left):
+    def follow(self, lag: Lag, spacing: float, angle, rate, acceleration):
         """The drum on a uniform grid under a command, from ``lag`` at the grid's first point.
+
+        The drum's acceleration is held over each grid interval, at the command's plus the
+        servo's pull on the lag, clipped; its angle and rate are that acceleration's integrals,
+        so that they are exactly consistent at the grid's points, and the limits hold exactly.
 
         Parameters
         ----------
@@ -103,14 +107,12 @@ class Drum:
             Of the grid.
         angle, rate, acceleration : arrays (g,), rad, rad/s, rad/s^2
             The command at the grid's points (the acceleration's right limit).
-        acceleration_left : array (g,), rad/s^2
-            The command's acceleration's left limit there.
 
         Returns
         -------
         angle, rate, acceleration, acceleration_left : arrays (g,)
-            The drum's, its acceleration held over each grid interval on top of the command's
-            change (the left limit at a point is the interval before it).
+            The drum's; its acceleration over the interval that starts at each point, and over
+            the one that ends there.
         saturated : array of bool (g,)
             The acceleration was clipped over the interval that starts there.
         lag : Lag
@@ -118,37 +120,27 @@ class Drum:
         """
         stiffness, damping = DRUM_BANDWIDTH**2, 2 * DRUM_BANDWIDTH
         a_max, w_max = self.acceleration_max, self.rate_max
-        ramp = min(a_max / (RATE_BAND * w_max), 0.5 / spacing) if np.isfinite(w_max) else 0.0
+        ramp = min(a_max / (RATE_BAND * w_max), 1 / spacing) if np.isfinite(w_max) else 0.0
         count = angle.size
-        # The command's own change of rate over each interval beyond its acceleration's, so that
-        # the drum's rate at the next point is known exactly (and kept within the limit).
-        drift = np.append(np.diff(rate) - acceleration[:-1] * spacing, 0.0) / spacing
-        offset, offset_rate = np.empty(count), np.empty(count)
-        extra = np.zeros(count)  # the lag's acceleration over the interval starting at each point
+        drum_angle, drum_rate = np.empty(count), np.empty(count)
+        drum_acceleration = np.empty(count)
         saturated = np.zeros(count, dtype=bool)
-        d, v = lag.angle, lag.rate
+        phi, omega = angle[0] + lag.angle, rate[0] + lag.rate
         for j in range(count):
-            offset[j], offset_rate[j] = d, v
-            wanted = acceleration[j] - stiffness * d - damping * v
-            drum_rate = rate[j] + v
+            drum_angle[j], drum_rate[j] = phi, omega
+            wanted = acceleration[j] - stiffness * (phi - angle[j]) - damping * (omega - rate[j])
             upper, lower = a_max, -a_max
             if ramp:  # beyond the rate limit (a start there), back at the acceleration limit
-                upper = min(upper, max(ramp * (w_max - drum_rate) - drift[j], -a_max))
-                lower = max(lower, min(-ramp * (w_max + drum_rate) - drift[j], a_max))
+                upper = min(upper, max(ramp * (w_max - omega), -a_max))
+                lower = max(lower, min(-ramp * (w_max + omega), a_max))
             applied = min(max(wanted, lower), upper)
             saturated[j] = applied != wanted
-            extra[j] = applied - acceleration[j]
-            d += v * spacing + extra[j] * spacing**2 / 2
-            v += extra[j] * spacing
-        left = acceleration_left + np.concatenate([extra[:1], extra[:-1]])
-        return (
-            angle + offset,
-            rate + offset_rate,
-            acceleration + extra,
-            left,
-            saturated,
-            Lag(float(offset[-1]), float(offset_rate[-1])),
-        )
+            drum_acceleration[j] = applied
+            phi += omega * spacing + applied * spacing**2 / 2
+            omega += applied * spacing
+        left = np.concatenate([drum_acceleration[:1], drum_acceleration[:-1]])
+        end = Lag(float(drum_angle[-1] - angle[-1]), float(drum_rate[-1] - rate[-1]))
+        return drum_angle, drum_rate, drum_acceleration, left, saturated, end
 
 
 def saturation_note(time: np.ndarray, saturated: np.ndarray, step: float) -> str:

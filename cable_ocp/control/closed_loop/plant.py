@@ -409,17 +409,10 @@ class Plant:
         per_step = 2 * GRID_PER_STAGE
         spacing = h / per_step
         grid = start + np.arange(steps * per_step + 1) * spacing
-        ends = np.arange(per_step, grid.size, per_step)  # step ends: the command's nodes
-        command = self.apply(
-            angle,
-            np.concatenate([grid, grid[ends]]),
-            np.concatenate([np.zeros(grid.size, bool), np.ones(ends.size, bool)]),
-        )
-        acceleration_left = command.acceleration[: grid.size].copy()
-        acceleration_left[ends] = command.acceleration[grid.size :]
+        command = self.apply(angle, grid)
         drum_angle, rate, acceleration, left_limit, saturated, end = self.drum.follow(
-            ON_COMMAND if lag.on_track else lag, spacing, command.angle[: grid.size],
-            command.rate[: grid.size], command.acceleration[: grid.size], acceleration_left,
+            ON_COMMAND if lag.on_track else lag, spacing, command.angle, command.rate,
+            command.acceleration,
         )  # fmt: skip
         # Stage k of step i sits at grid index i * per_step + (0, per_step / 2, per_step)[k].
         index = (np.arange(steps)[:, None] * per_step
