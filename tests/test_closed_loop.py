@@ -492,6 +492,9 @@ def test_the_plants_drum_saturates_at_the_winchs_limits_and_says_when(short_hill
     assert summary["saturated_time"] == pytest.approx(result.saturated_steps * 0.05)
     assert result.saturation.startswith("the drum saturated at its rate or acceleration limit")
     assert result.saturation in result.status and summary["units"]["saturated_time"] == "s"
+    # The plant's signed top tension: the rope pulled throughout.
+    assert 0 < summary["top_tension_min"] < summary["top_tension_max"]
+    assert summary["top_tension_min"] == result.trajectory.top_tension.min()
 
 
 def test_a_new_plan_starts_at_a_lagging_drums_angle(short_hill):

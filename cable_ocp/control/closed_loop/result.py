@@ -237,6 +237,13 @@ class MpcResult:
         }
         units = {**units_of(type(self), figures), "omega": "m", "mean_solve_time": "s",
                  "applied_angle_range": "rad", "saturated_time": "s"}  # fmt: skip
+        if self.trajectory.kept_signs:  # the plant's signed top tension (simulation.slack)
+            slack = self.trajectory.physics.slack
+            tensions = {"top_tension_min": slack.least_top_tension,
+                        "top_tension_max": slack.peak_top_tension,
+                        "least_bond_tension": slack.least_bond_tension}  # fmt: skip
+            figures |= tensions
+            units |= dict.fromkeys(tensions, "N")
         return {**figures, "units": units}
 
     def to_xarray(self) -> xr.Dataset:
