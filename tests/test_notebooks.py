@@ -37,6 +37,11 @@ def test_notebook_runs_and_shows_its_figures(path, monkeypatch):
         if "plots.animate(" in cell.source:
             assert any("image/gif" in out.get("data", {}) for out in cell.outputs), (path.name, i)
     cache_for_the_site(path, source, notebook)
+    if "CABLE_OCP_QUICK" in path.read_text(encoding="utf-8"):  # the page says it was shortened
+        shown = [out for _, cell in code for out in cell.outputs]
+        banner = [out for out in shown if "**Shortened run**" in out.get("data", {}).get(
+            "text/markdown", "")]  # fmt: skip
+        assert len(banner) == 1, f"{path.name}: a shortened run that does not say so on its page"
 
 
 def cache_for_the_site(path: Path, source, executed) -> None:

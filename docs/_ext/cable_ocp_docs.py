@@ -139,12 +139,30 @@ def report_unresolved(app, exception) -> None:
         logger.info(f"unresolved_in_docstrings: {count} references")
 
 
+# The sidebar lists the site two levels deep: the guide's pages, the gallery's notebooks and the
+# API's packages, not the 146 modules under them (each package's page lists its modules).
+SIDEBAR_DEPTH = 2
+
+
+def short_sidebar(app, pagename, templatename, context, doctree) -> None:
+    """Furo's navigation tree cut to :data:`SIDEBAR_DEPTH` (Furo draws the whole toctree)."""
+    if "furo_navigation_tree" not in context or "toctree" not in context:
+        return
+    from furo.navigation import get_navigation_tree
+
+    tree = context["toctree"](
+        collapse=False, titles_only=True, maxdepth=SIDEBAR_DEPTH, includehidden=True
+    )
+    context["furo_navigation_tree"] = get_navigation_tree(tree)
+
+
 def setup(app):
-    """Register the directives and the docstring filter."""
+    """Register the directives, the docstring filter and the short sidebar."""
     app.connect("warn-missing-reference", lenient_in_docstrings)
     app.connect("build-finished", report_unresolved)
     app.add_directive("scene-schema", SceneSchema)
     app.add_directive("front-door", FrontDoor)
     app.connect("autodoc-process-docstring", escape_bars)
     app.add_directive("cli-help", CliHelp)
+    app.connect("html-page-context", short_sidebar, priority=900)  # after Furo's own (500)
     return {"parallel_read_safe": True, "parallel_write_safe": True}
