@@ -30,3 +30,17 @@ def bending_energies(axis_below, axis_above, rate_below, rate_above, spec):
     relative_rate = rate_above - rate_below
     dissipation = 0.5 * spec.bending_damping * bending * ca.dot(relative_rate, relative_rate)
     return potential, dissipation
+
+
+def top_bond_kernel(model) -> ca.Function:
+    """Right-hand side of the top bond from its quadratic part, rate and residual (Baumgarte).
+
+    ``(quadratic, rate, residual, p)``: a kernel of the structured loops, whose gains are the
+    parametric ``model``'s.
+    """
+    quadratic, rate, residual = (ca.SX.sym(name, 3) for name in ("quadratic", "rate", "residual"))
+    return ca.Function(
+        "top_bond",
+        [quadratic, rate, residual, model.p],
+        [baumgarte(quadratic, rate, residual, model.spec)],
+    )

@@ -22,9 +22,14 @@ from typing import NamedTuple
 
 import casadi as ca
 
+from cable_ocp.model.axial_structured import (
+    ElasticKernels,
+    elastic_kernels_of,
+    elastic_structured_graph,
+)
 from cable_ocp.model.cable import CableModel
 from cable_ocp.model.compile import CompileReport, compile_in_background, compiled_from
-from cable_ocp.model.joints import baumgarte, bending_energies
+from cable_ocp.model.joints import baumgarte, bending_energies, top_bond_kernel
 from cable_ocp.model.kinematics import POSITION
 from cable_ocp.model.kkt import cholesky_solve, inverse_3x3
 from cable_ocp.model.layout import INPUT_SIZE, INPUTS
@@ -36,9 +41,9 @@ from cable_ocp.model.rk4 import parametric_rk4_step
 def supports(model: ModelLayout) -> bool:
     """Whether :func:`structured_rhs` can build this model's right-hand side (5 DOF, n >= 2).
 
-    An elastic rope (:mod:`cable_ocp.model.axial`) is built flat.
+    An elastic rope's loops are those of :mod:`cable_ocp.model.axial_structured`.
     """
-    return not model.spec.element.torsion and model.spec.elements >= 2 and not model.axial
+    return not model.spec.element.torsion and model.spec.elements >= 2
 
 
 def _element_solve(model: ParametricModel, end: bool) -> ca.Function:
@@ -108,16 +113,6 @@ def _bond_blocks(model: ParametricModel) -> ca.Function:
         -top_a @ along_p_a,
     ]
     return ca.Function("bond", inputs, outputs, {"cse": True})
-
-
-def _top_bond(model: ParametricModel) -> ca.Function:
-    """Right-hand side of the top bond from its quadratic part, rate and residual (Baumgarte)."""
-    quadratic, rate, residual = (ca.SX.sym(name, 3) for name in ("quadratic", "rate", "residual"))
-    return ca.Function(
-        "top_bond",
-        [quadratic, rate, residual, model.p],
-        [baumgarte(quadratic, rate, residual, model.spec)],
-    )
 
 
 def _forward_sweep() -> ca.Function:
@@ -369,15 +364,17 @@ class Kernels:
         return getattr(self, name).mapaccum(count)
 
 
-def kernels_of(model: ParametricModel) -> Kernels:
+def kernels_of(model: ParametricModel) -> Kernels | ElasticKernels:
     """The structured loops' Functions of ``model`` itself (SX, interpreted until compiled)."""
+    if model.axial:
+        return elastic_kernels_of(model)
     matrix = ca.SX.sym("m", 3, 3)
     return Kernels(
         joint=_joint_forces(model),
         element=_element_solve(model, end=False),
         element_end=_element_solve(model, end=True),
         bond=_bond_blocks(model),
-        top_bond=_top_bond(model),
+        top_bond=top_bond_kernel(model),
         forward=_forward_sweep(),
         backward=_backward_sweep(),
         accelerations=_accelerations(model.dofs),
@@ -386,7 +383,7 @@ def kernels_of(model: ParametricModel) -> Kernels:
     )
 
 
-def structured_graph(model: ModelLayout, kernels: Kernels) -> tuple[ca.MX, ...]:
+def structured_graph(model: ModelLayout, kernels: Kernels | ElasticKernels) -> tuple[ca.MX, ...]:
     """Inputs ``x, u, p`` and the MX expressions of ``x'``, bond forces, joints, bond residuals.
 
     ``model`` gives the layout (``n``, the state's size, the size of ``p``), ``kernels`` the
@@ -394,6 +391,8 @@ def structured_graph(model: ModelLayout, kernels: Kernels) -> tuple[ca.MX, ...]:
     """
     if not supports(model):
         raise ValueError("the structured right-hand side needs 5-DOF elements and n >= 2")
+    if model.axial:
+        return elastic_structured_graph(model, kernels)
     dofs, count = model.dofs, model.element_count
     size = dofs * count
     x, u = ca.MX.sym("x", model.state_size), ca.MX.sym("u", INPUT_SIZE)
