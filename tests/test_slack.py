@@ -16,6 +16,7 @@ import xarray as xr
 import cable_ocp as co
 from cable_ocp.scene.schema import scene_of
 from cable_ocp.simulation import slack
+from cable_ocp.simulation.line_trajectory import LineTrajectory
 from cable_ocp.simulation.trajectory import Trajectory
 
 MODELS = "models"
@@ -109,7 +110,7 @@ def test_slack_report_names_first_time_duration_and_worst():
     assert report.pushing and report.least_static_share == pytest.approx(-0.3)
 
 
-def test_a_line_paid_out_faster_than_the_frame_sinks_fails():
+def test_a_line_paid_out_faster_than_the_frame_sinks_fails(tmp_path):
     """Deploy's 5 t frame (terminal speed about 3.3 m/s) under 200 m paid out in 30 s."""
     record = co.load_scene(f"{MODELS}/deploy.toml").to_dict()
     record.pop("lowering")
@@ -122,6 +123,9 @@ def test_a_line_paid_out_faster_than_the_frame_sinks_fails():
     summary = run.summary()
     assert summary["top_tension_min"] < -1e4 < summary["top_tension_max"]
     assert summary["line_out_range"] == pytest.approx([20.0, 220.0])
+    # Saved and read again, the run keeps its signs and fails the same way.
+    back = LineTrajectory.load(run.save(tmp_path / "line"))
+    assert back.summary() == summary
 
 
 def _flat_grid(path, depth: float):
