@@ -166,3 +166,22 @@ def test_signed_tensions_are_saved_and_read(tmp_path, loaded_hanging):
     run = co.simulate(loaded_hanging.updated({"numerics.duration": 0.5}), compiled=True)
     back = Trajectory.load(run.save(tmp_path / "run"))
     assert back.equals(run) and back.kept_signs
+
+
+def test_a_line_paid_out_under_the_seabed_grid_fails_with_time_and_depth(tmp_path):
+    """Deploy's frame on 20 m of line over a flat seabed 50 m deep, 60 m paid out in 40 s
+    (1.7 m/s at most, slower than the frame sinks): the end goes about 30 m under the grid."""
+    record = co.load_scene(f"{MODELS}/deploy.toml").to_dict()
+    record.pop("lowering")
+    record["top"].pop("heave")
+    record["numerics"] |= {"duration": 50.0, "output_every": 4}
+    record["model"]["axial"] = "rigid"
+    record["seabed"] |= {"grid": {"file": str(_flat_grid(tmp_path / "shelf.nc", 50.0))}}
+    scene = scene_of(record, "pay-out into the seabed")
+    run = co.simulate(scene, winch=smooth_pay_out(60.0, 40.0, scene.winch.drum_radius))
+    assert run.physics.slack.least_bond_tension > 0  # the rope pulls: only the seabed fails
+    assert not run.success and run.status.startswith("the end goes ")
+    depth = float(run.status.split("the end goes ")[1].split(" m")[0])
+    assert depth == pytest.approx(-50.0 - run.end[:, 2].min(), abs=1e-3) and depth > 25.0
+    first = float(run.status.split("under it from t = ")[1].split(" s")[0])
+    assert first == pytest.approx(run.time[np.argmax(run.end[:, 2] < -50.0 - 1e-3)])
