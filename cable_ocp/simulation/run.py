@@ -235,7 +235,10 @@ def simulate(
 ) -> Trajectory:
     """Simulate a scene by RK4 from its static equilibrium.
 
-    See :func:`checked_simulation`, which also returns the run's largest bond residual.
+    See :func:`checked_simulation`, which also returns the run's largest bond residual. The
+    run's physics (a rope that pushes, an end under an absolute seabed) is checked after it:
+    ``trajectory.success``, ``status`` and ``summary()`` say where and when
+    (:mod:`cable_ocp.simulation.slack`); a run that fails it is returned, not raised.
     """
     return checked_simulation(scene, winch, model, initial_state, quiet, compiled)[0]
 
