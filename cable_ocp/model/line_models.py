@@ -16,7 +16,6 @@ The kernels take the parameters ``p`` of their own structure, whose segment leng
 
 from __future__ import annotations
 
-import dataclasses
 from collections.abc import Callable
 from dataclasses import dataclass, field, replace
 from functools import lru_cache, partial
@@ -24,6 +23,7 @@ from functools import lru_cache, partial
 import casadi as ca
 
 from cable_ocp.model import structured
+from cable_ocp.model.axial_structured import ElasticKernels
 from cable_ocp.model.cable import CableModel, ModelSpec
 from cable_ocp.model.compile import CompileReport, compiled_from
 from cable_ocp.model.parameters import parameter_names, structure_of
@@ -49,21 +49,28 @@ ACCUMULATED = ("forward", "backward")
 
 
 @dataclass(frozen=True)
-class BlockedKernels(structured.Kernels):
+class BlockedKernels:
     """Kernels whose loops over n columns call compiled loops over :data:`BLOCKS` columns.
 
-    ``blocks[name][size]`` is kernel ``name`` mapped (or accumulated) over ``size`` columns.
+    ``kernels`` are a structure's own (:class:`~cable_ocp.model.structured.Kernels`, or an
+    elastic rope's :class:`~cable_ocp.model.axial_structured.ElasticKernels`), whose Functions
+    and parameters this answers for; ``blocks[name][size]`` is kernel ``name`` mapped (or
+    accumulated) over ``size`` columns.
     """
 
+    kernels: structured.Kernels | ElasticKernels
     blocks: dict = field(default_factory=dict)
+
+    def __getattr__(self, name: str):
+        return getattr(self.kernels, name)
 
     def map(self, name: str, count: int) -> Callable:
         """Kernel ``name`` over ``count`` columns, in blocks (see the class)."""
-        return partial(_blocked, self.blocks[name], getattr(self, name), count, False)
+        return partial(_blocked, self.blocks[name], getattr(self.kernels, name), count, False)
 
     def mapaccum(self, name: str, count: int) -> Callable:
         """Kernel ``name`` accumulated over ``count`` columns, in blocks."""
-        return partial(_blocked, self.blocks[name], getattr(self, name), count, True)
+        return partial(_blocked, self.blocks[name], getattr(self.kernels, name), count, True)
 
 
 def _cover(count: int) -> list[int]:
@@ -156,8 +163,7 @@ def compiled_kernels(
                 loops[name][size] = getattr(kernels, name) if size == 1 else next(built)
     else:
         report = None
-    fields = {f.name: getattr(kernels, f.name) for f in dataclasses.fields(kernels)}
-    return BlockedKernels(**fields, blocks=loops), report
+    return BlockedKernels(kernels, blocks=loops), report
 
 
 def kernel_parameters(names: list[str], elements: int):
@@ -211,11 +217,12 @@ class LineModels:
         parametric = ParametricModel(structure_of(spec))
         parameters, delta = kernel_parameters(parameter_names(spec), elements)
         p = ca.MX.sym("p", parametric.p.numel())
-        kernels = replace(
-            self.kernels,
+        own = replace(
+            self.kernels.kernels,
             segment_length=ca.Function("segment_length", [p], [delta(p)]),
             parameters=parameters,
         )
+        kernels = replace(self.kernels, kernels=own)
         graph = structured.structured_graph(parametric, kernels)
         parametric.memo(("structured", "graph"), lambda: graph)
         functions = {key: build(parametric) for key, (_, build) in structured.LIBRARY.items()}

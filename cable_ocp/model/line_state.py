@@ -17,6 +17,12 @@ the new element turns at the rate that carries its upper end with the top point.
 length and mass are exact; its momentum changes by the lower chain's mass times that velocity
 offset and by what a straight rod cannot carry of the kinked pair's motion (both reported by
 :func:`momentum`).
+
+**An elastic rope** (:mod:`cable_ocp.model.axial`) carries its strain ``s`` and rate across both:
+the strain is uniform and the rest length of the line is unchanged, so is its elastic energy.
+Every length above is then a rest length times ``1 + s``, and the stretching rate ``s'`` moves
+each point along its element in proportion to its rest distance. The state's size says which
+rope it is (:func:`_blocks`).
 """
 
 from __future__ import annotations
@@ -44,9 +50,29 @@ def axis_rate(psi: float, theta: float, psi_rate: float, theta_rate: float) -> n
     return d_psi * psi_rate + d_theta * theta_rate
 
 
-def _blocks(state: np.ndarray, elements: int) -> tuple[np.ndarray, np.ndarray]:
+def _blocks(state: np.ndarray, elements: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Coordinates and rates per element (n+1, 5), and the strain with its rate (0 or 2,)."""
     size = DOFS * (elements + 1)
-    return state[:size].reshape(-1, DOFS).copy(), state[size:].reshape(-1, DOFS).copy()
+    axial = (len(state) - 2 * size) // 2
+    if axial not in (0, 1) or len(state) != 2 * (size + axial):
+        raise ValueError(
+            f"a state of {len(state)} entries is not one of n = {elements} elements of 5 DOF "
+            f"({2 * size}, or {2 * size + 2} with the strain)"
+        )
+    q = state[:size].reshape(-1, DOFS).copy()
+    qd = state[size + axial : 2 * size + axial].reshape(-1, DOFS).copy()
+    strain = np.array([state[size], state[-1]])[: 2 * axial]
+    return q, qd, strain
+
+
+def _joined(q: np.ndarray, qd: np.ndarray, strain: np.ndarray) -> np.ndarray:
+    """The state of :func:`_blocks`' parts."""
+    return np.concatenate([q.ravel(), strain[:1], qd.ravel(), strain[1:]])
+
+
+def _stretch(strain: np.ndarray) -> tuple[float, float]:
+    """``1 + s`` and ``s'`` (1/s) of the parts' strain (1 and 0 for a rigid rope)."""
+    return (1.0 + strain[0], strain[1]) if strain.size else (1.0, 0.0)
 
 
 def split(state: np.ndarray, elements: int, element_length: float) -> np.ndarray:
@@ -54,18 +80,20 @@ def split(state: np.ndarray, elements: int, element_length: float) -> np.ndarray
 
     Parameters
     ----------
-    state : array (2 * 5 (n + 1),)
+    state : array (2 * 5 (n + 1),), or (2 * (5 (n + 1) + 1),) with the strain
     elements : int
         ``n`` before the split.
     element_length : float, m
         ``Delta``, the element split off below the top.
     """
-    q, qd = _blocks(state, elements)
+    q, qd, strain = _blocks(state, elements)
+    stretch, strain_rate = _stretch(strain)
     top, rate = q[-1].copy(), qd[-1].copy()
     e = axis(top[3], top[4])
-    top[:3] = q[-1, :3] + element_length * e
-    rate[:3] = qd[-1, :3] + element_length * axis_rate(*q[-1, 3:5], *qd[-1, 3:5])
-    return np.concatenate([np.vstack([q, top]).ravel(), np.vstack([qd, rate]).ravel()])
+    top[:3] = q[-1, :3] + stretch * element_length * e
+    turning = axis_rate(*q[-1, 3:5], *qd[-1, 3:5])
+    rate[:3] = qd[-1, :3] + element_length * (stretch * turning + strain_rate * e)
+    return _joined(np.vstack([q, top]), np.vstack([qd, rate]), strain)
 
 
 def merge(
@@ -81,7 +109,7 @@ def merge(
 
     Parameters
     ----------
-    state : array (2 * 5 (n + 1),)
+    state : array (2 * 5 (n + 1),), or (2 * (5 (n + 1) + 1),) with the strain
     elements : int
         ``n`` before the merge (>= 3).
     element_length : float, m
@@ -93,9 +121,11 @@ def merge(
     top_length_rate : float, m/s
         ``l_n'``, the drum's pay-out rate (the same before and after).
     """
-    q, qd = _blocks(state, elements)
+    q, qd, strain = _blocks(state, elements)
+    stretch, strain_rate = _stretch(strain)
     below = q[-2, :3]  # A_{n-1}, the lower joint of the merged element
-    length = element_length + top_length
+    rest = element_length + top_length
+    length = stretch * rest
     chord = top_point - below
     e = chord / np.linalg.norm(chord)
     offset = top_point - length * e - below  # s along the chord: the straight rod's excess
@@ -103,14 +133,14 @@ def merge(
     psi = np.arctan2(e[2], e[0])
     psi += 2 * np.pi * np.round((q[-2, 3] - psi) / (2 * np.pi))  # the branch of the old angle
     theta = np.arcsin(np.clip(e[1], -1.0, 1.0))
-    relative = top_velocity - qd[-2, :3] - top_length_rate * e
+    relative = top_velocity - qd[-2, :3] - (stretch * top_length_rate + strain_rate * rest) * e
     slip = float(relative @ e)  # the chord's axial rate mismatch
     qd[:-1, :3] += slip * e
     turning = (relative - slip * e) / length
     d_psi, d_theta = axis_derivatives(psi, theta)
     q[-2, 3:5] = psi, theta
     qd[-2, 3:5] = turning @ d_psi / np.cos(theta) ** 2, turning @ d_theta
-    return np.concatenate([q[:-1].ravel(), qd[:-1].ravel()])
+    return _joined(q[:-1], qd[:-1], strain)
 
 
 def momentum(
@@ -121,7 +151,7 @@ def momentum(
     Each rigid element's centre moves at ``A_i' + l_i e_i' / 2``.
     """
     elements = len(lengths) - 1
-    q, qd = _blocks(state, elements)
+    q, qd, _ = _blocks(state, elements)
     total = np.zeros(3)
     for i, length in enumerate(lengths):
         centre = qd[i, :3] + 0.5 * length * axis_rate(*q[i, 3:5], *qd[i, 3:5])

@@ -19,8 +19,8 @@ The rigid rope's error is the larger of ``|A - 1|`` over both, ``A`` the root-me
 times it, for the tension). ``auto`` chooses the elastic rope where that error exceeds
 :data:`RIGID_ERROR`; the rest keep the paper's rigid rope, whose figures stay as they were.
 
-A line paid out by elements (``[winch.line]``) has no elastic model yet: ``auto`` keeps it rigid
-and its note says by how much the rigid rope errs; ``elastic`` is refused there.
+A line paid out by elements (``[winch.line]``) is judged at the longest line it reaches: its
+strain and ``EA / L`` follow the line out (:mod:`cable_ocp.model.line_state`).
 """
 
 from __future__ import annotations
@@ -56,9 +56,6 @@ class AxialChoice:
         The shortest period that excites the line (None: nothing does).
     rigid_error : float
         The rigid rope's estimated error in the payload's heave or the dynamic tension.
-    needed : bool
-        Whether the rule asks for the elastic rope (a line paid out by elements keeps the rigid
-        one all the same).
     """
 
     elastic: bool
@@ -67,7 +64,6 @@ class AxialChoice:
     line_length: float
     excitation_period: float | None
     rigid_error: float
-    needed: bool
 
     @property
     def note(self) -> str:
@@ -79,16 +75,10 @@ class AxialChoice:
             else f"excited down to {self.excitation_period:.3g} s, the rigid rope errs by "
             f"{100 * self.rigid_error:.2g} % (limit {100 * RIGID_ERROR:g} %)"
         )
-        note = (
+        return (
             f"axial: {rope} rope (model.axial = {self.mode!r}); first axial period "
             f"T0 = {self.period:.3g} s on {self.line_length:.4g} m of line; {where}"
         )
-        if self.needed and not self.elastic:
-            note += (
-                ". The elastic rope is not built for a line paid out by elements yet: this run's "
-                "heave and tension range are optimistic by about that much"
-            )
-        return note
 
 
 def longest_line(scene) -> float:
@@ -162,18 +152,11 @@ def axial_choice(scene) -> AxialChoice:
     error = max((rigid_error(period, damping, w, s) for w, s in excitations), default=0.0)
     shortest = min((2 * math.pi / w.max() for w, _ in excitations), default=None)
     mode = scene.model.axial
-    needed = mode == "elastic" or (mode == "auto" and error > RIGID_ERROR)
-    paid_out = scene.winch.line is not None
-    if mode == "elastic" and paid_out:
-        raise SceneError(
-            "model.axial",
-            " = 'elastic': not available with [winch.line] (a line paid out by elements) yet; "
-            "use 'auto' or 'rigid'",
-        )
-    if needed and scene.model.torsion:
+    elastic = mode == "elastic" or (mode == "auto" and error > RIGID_ERROR)
+    if elastic and scene.model.torsion:
         raise SceneError(
             "model.axial",
             f" = {mode!r}: the elastic rope (T0 = {period:.3g} s) needs 5-DOF elements: set "
             "model.torsion = false, or model.axial = 'rigid'",
         )
-    return AxialChoice(needed and not paid_out, mode, period, length, shortest, error, needed)
+    return AxialChoice(elastic, mode, period, length, shortest, error)
