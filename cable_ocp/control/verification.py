@@ -207,6 +207,8 @@ def verify_profile(
                 f"h = {trial.numerics.step:g} s"
             )
         lowest, when, broken = lowest_clearance(scene.seabed, trajectory)
+        if broken is None and trajectory.physics.failures:  # a rope that pushes, an end underground
+            broken = f"the verified run is not physical: {trajectory.physics.status}"
         return Verification(
             None if broken else trajectory,
             broken,

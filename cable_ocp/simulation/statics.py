@@ -24,6 +24,7 @@ from cable_ocp.model.current import current_values, has_current
 from cable_ocp.model.hydro import HydroCoefficients
 from cable_ocp.model.kinematics import axis_direction
 from cable_ocp.model.layout import INPUTS
+from cable_ocp.simulation.slack import signed_tensions
 
 RESIDUAL_TOLERANCE = 1e-10  # rad/s^2, largest angular acceleration left at the equilibrium
 NEWTON_ITERATIONS = 50  # of the compiled Newton's method
@@ -246,7 +247,7 @@ def equilibrium(
     state = np.array(state_of(solution)).ravel()
     model.check_regular(state)
     outputs = _joints_and_forces(model, state, u, compiled)
-    tensions = _signed_tensions(outputs["joints"], outputs["bond_forces"])
+    tensions = signed_tensions(outputs["joints"], outputs["bond_forces"])
     found = Equilibrium(state, u, outputs["joints"], tensions, float(left))
     check_physical(model, found)
     return found
@@ -329,14 +330,7 @@ def bond_tensions(model: CableModel, state: np.ndarray, u: np.ndarray) -> np.nda
     the norm).
     """
     outputs = model.output_values(state, u)
-    return _signed_tensions(outputs["joints"], outputs["bond_forces"])
-
-
-def _signed_tensions(joints: np.ndarray, forces: np.ndarray) -> np.ndarray:
-    """Bond forces (3, n+1) along the element axes from the joints (3, n+2), as tensions."""
-    axes = np.diff(joints, axis=1)
-    axes /= np.linalg.norm(axes, axis=0)
-    return -np.sum(forces * axes, axis=0)
+    return signed_tensions(outputs["joints"], outputs["bond_forces"])
 
 
 def check_physical(model: CableModel, found: Equilibrium) -> None:
