@@ -164,3 +164,26 @@ def test_cable_ocp_replay_never_writes_over_its_source(heaving_optimum, tmp_path
     assert code == 2
     assert "is the folder replay reads" in capsys.readouterr().err
     assert {p.name: p.read_bytes() for p in folder.iterdir()} == before
+
+
+def test_cable_ocp_replay_runs_the_compiled_model_as_simulate_does(
+    heaving_optimum, tmp_path, capsys, monkeypatch
+):
+    """A replay on a finer model ran the interpreted one (issue 45 item 9: n = 150 took 32 s
+    against 15 s compiled); --interpreted asks for it."""
+    from cable_ocp.simulation import run
+
+    _, result, _ = heaving_optimum
+    result.save(tmp_path / "optimum")
+    seen = []
+
+    def recorded(scene, winch=None, quiet=True, compiled=False, **kwargs):
+        seen.append(compiled)
+        raise KeyboardInterrupt  # enough: the call was made
+
+    monkeypatch.setattr(run, "simulate", recorded)
+    command = ["replay", str(tmp_path / "optimum"), "--quiet"]
+    assert cli.main([*command, "--out", str(tmp_path / "a")]) == 130
+    assert cli.main([*command, "--interpreted", "--out", str(tmp_path / "b")]) == 130
+    assert seen == [True, False]
+    capsys.readouterr()

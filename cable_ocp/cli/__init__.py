@@ -97,7 +97,7 @@ def _replay(args) -> int:
         )
     scene = result.scene.updated(parse_overrides(args.set)) if args.set else result.scene
     with stage(f"replay {scene.name}", scene.numerics.duration, quiet=args.quiet):
-        trajectory = simulate(scene, winch=result, quiet=args.quiet)
+        trajectory = simulate(scene, winch=result, quiet=args.quiet, compiled=not args.interpreted)
     _write_run(trajectory, scene, Path(args.out), args.animate, {"saved_omega": result.omega})
     return 0
 
@@ -592,6 +592,7 @@ def _payout_study(args) -> int:
 
 
 ANIMATE_HELP = "also write animation.gif: the cable, the end's path and the seabed over time"
+INTERPRETED_HELP = "the interpreted model (default: compiled to C, the library cached on disk)"
 
 
 def build_parser() -> argparse.ArgumentParser:
@@ -619,8 +620,7 @@ def build_parser() -> argparse.ArgumentParser:
     sim.add_argument("--set", action="append", default=[], metavar="KEY=VALUE",
                      help="override a scene field, e.g. --set model.elements=30")  # fmt: skip
     sim.add_argument("--quiet", action="store_true", help="no progress bar")
-    interpreted = "the interpreted model (default: compiled to C, the library cached on disk)"
-    sim.add_argument("--interpreted", action="store_true", help=interpreted)
+    sim.add_argument("--interpreted", action="store_true", help=INTERPRETED_HELP)
     sim.add_argument("--animate", action="store_true", help=ANIMATE_HELP)
     sim.set_defaults(run=_simulate)
 
@@ -634,6 +634,7 @@ def build_parser() -> argparse.ArgumentParser:
     rep.add_argument("--set", action="append", default=[], metavar="KEY=VALUE",
                      help="change the saved scene, e.g. --set model.elements=60")  # fmt: skip
     rep.add_argument("--quiet", action="store_true", help="no progress bar")
+    rep.add_argument("--interpreted", action="store_true", help=INTERPRETED_HELP)
     rep.add_argument("--animate", action="store_true", help=ANIMATE_HELP)
     rep.set_defaults(run=_replay)
 
