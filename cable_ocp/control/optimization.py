@@ -309,10 +309,11 @@ class OcpResult:
 class RetimedOptimum:
     """An optimum replayed on a scene of another duration, as the user chose (``retime``).
 
-    Anything that takes an ``optimize`` result as its winch takes it (``winch_profile``).
+    Anything that takes an ``optimize`` result as its winch takes it (``winch_profile``); a
+    closed loop's applied winch is retimed the same way (``MpcResult.retimed``).
     """
 
-    result: OcpResult
+    result: OcpResult  # or an MpcResult: its duration and winch_profile(scene, retime)
     retime: str
 
     def winch_profile(self, scene):

@@ -13,6 +13,7 @@ from cable_ocp.drive.drive import Drive
 from cable_ocp.model import structured
 from cable_ocp.model.cable import CableModel
 from cable_ocp.model.layout import INPUTS
+from cable_ocp.scene.given import scene_given
 from cable_ocp.simulation.budget import check_simulation_memory
 from cable_ocp.simulation.integrate import evaluate_into, integrate
 from cable_ocp.simulation.landing_reference import reference_error
@@ -45,8 +46,9 @@ def winch_function(scene, winch: WinchSpec) -> winch_angles.WinchAngleFunction:
     winch : None, array, callable or a result
         None: locked. An array of ``scene.winch.knots`` values: the cubic spline through them
         (rad, ``phi(0) = 0``). A callable ``t -> (phi, phi', phi'')``: used as it is. A result
-        of ``optimize`` (anything with a ``winch_profile(scene)`` method): its optimised profile
-        on this scene, the heave feedforward included where it rode on one (a replay).
+        of ``optimize`` or ``mpc`` (anything with a ``winch_profile(scene)`` method), or one
+        retimed (``result.retimed("hold")``): its winch on this scene, the heave feedforward or
+        feedback included where it rode on one (a replay).
     """
     if winch is None:
         return winch_angles.locked
@@ -88,6 +90,12 @@ def check_top_length(scene, drive: Drive, times: np.ndarray) -> None:
 
 def _check_top_length(scene, drive: Drive, times: np.ndarray) -> None:
     length = drive.inputs(times)[INPUTS.top_length]
+    if not np.isfinite(length).all():
+        k = int(np.argmin(np.isfinite(length)))
+        raise ValueError(
+            f"the winch gives the angle {length[k]} at t = {times[k]:.6g} s: the winch function "
+            "must return finite angles (rad) over the whole run"
+        )
     low, high = scene.winch.top_length_min, scene.winch.top_length_max
     tolerance = scene.winch.drum_radius * BOUND_TOLERANCE
     if high is None:
@@ -255,8 +263,9 @@ def checked_simulation(
 
     Parameters
     ----------
-    scene : Scene
-    winch : None, array, callable or an ``optimize`` result
+    scene : Scene, str or path-like
+        A scene, a scene file's path or a bundled scene's name.
+    winch : None, array, callable or a result
         See :func:`winch_function`; locked by default.
     model : CableModel, optional
         A model built for the scene (built here if not given); it may have another number of
@@ -286,6 +295,7 @@ def checked_simulation(
         A :class:`~cable_ocp.simulation.integrate.SimulationError`: the end starts off the
         bathymetry grid or under the seabed (before integrating), or leaves the grid.
     """
+    scene = scene_given(scene, "simulate")
     if scene.winch.line is not None:
         return _line_simulation(scene, winch, model, initial_state, quiet, compiled)
     numerics = scene.numerics

@@ -29,6 +29,7 @@ from cable_ocp.control.ocp import compile_ahead
 from cable_ocp.control.optimization import refuse_line_scene
 from cable_ocp.control.verification import lowest_clearance
 from cable_ocp.drive.bounds import angle_bounds
+from cable_ocp.scene.given import scene_given
 from cable_ocp.simulation.integrate import SimulationError
 from cable_ocp.simulation.progress import Progress
 from cable_ocp.simulation.seabed import (
@@ -111,8 +112,9 @@ def mpc(scene, settings: MpcSettings | None = None, quiet: bool = False, **field
 
     Parameters
     ----------
-    scene : Scene
-        The plant (its own model, step and top motion, heave included).
+    scene : Scene, str or path-like
+        The plant (its own model, step and top motion, heave included); a scene file's path or a
+        bundled scene's name is loaded.
     settings : MpcSettings, optional
         How the controller is built and run (defaults: a 20 s horizon re-solved every 1 s by one
         Gauss-Newton step on a 2-element model; the sample, horizon, plan intervals and the
@@ -145,6 +147,7 @@ def mpc(scene, settings: MpcSettings | None = None, quiet: bool = False, **field
     if settings is not None and fields:
         raise ValueError(f"mpc: pass settings or its fields ({', '.join(fields)}), not both")
     started = time.perf_counter()
+    scene = scene_given(scene, "mpc")
     parts = loop_parts(scene, settings or MpcSettings(**fields))
     settings, plant, estimator = parts.settings, parts.plant, parts.estimator
     controller, command = parts.controller, parts.command

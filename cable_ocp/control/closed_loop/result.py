@@ -14,6 +14,13 @@ import numpy as np
 import xarray as xr
 
 from cable_ocp import result_files
+from cable_ocp.control.optimization import RetimedOptimum
+from cable_ocp.drive.winch import (
+    check_retime,
+    played_then_resting,
+    replayed_duration,
+    tabulated_angle,
+)
 from cable_ocp.result_files import dataset, format_1, netcdf
 from cable_ocp.result_files.units import units_of
 from cable_ocp.scene.records import check_run
@@ -139,6 +146,43 @@ class MpcResult:
     def time(self) -> np.ndarray:
         """The plant's steps (k,), s."""
         return self.trajectory.time
+
+    @property
+    def duration(self) -> float:
+        """The closed loop's horizon (s): its plant's last step."""
+        return float(self.trajectory.time[-1])
+
+    def winch_profile(self, scene=None, retime: str | None = None):
+        """The drum's angle that the plant applied, as ``t -> (phi, phi', phi'')``, to replay.
+
+        The plant's drum at its steps (the plan, the heave feedback and the drum's limits), through
+        a C2 spline (:func:`~cable_ocp.drive.winch.tabulated_angle`): ``co.simulate(scene,
+        winch=result)`` drives the winch open loop as the closed loop did.
+
+        Parameters
+        ----------
+        scene : Scene, optional
+            The scene to drive (default: :attr:`scene`).
+        retime : {None, "hold", "stretch"}
+            As :meth:`cable_ocp.control.optimization.OcpResult.winch_profile`: another duration
+            is refused unless retimed (:meth:`retimed`).
+        """
+        scene = scene if scene is not None else self.scene
+        if scene.top.heave_compensated:
+            raise ValueError(
+                "top.heave.compensation = true: the closed loop's drum angle already holds its "
+                "heave feedback; replay it on a scene without the compensation"
+            )
+        duration = scene.numerics.duration
+        own = replayed_duration(self.duration, duration, retime, "result.retimed({})")
+        run = self.trajectory
+        profile = tabulated_angle(run.time * own / self.duration, run.winch_angle)
+        return played_then_resting(profile, own) if own < duration else profile
+
+    def retimed(self, retime: str) -> RetimedOptimum:
+        """The applied winch to replay on a scene of another duration as ``retime`` says."""
+        check_retime(retime)
+        return RetimedOptimum(self, retime)
 
     def winch_angle(self, t) -> np.ndarray:
         """The drum's angle (rad) applied at the times ``t`` (s), as ``OcpResult.winch_angle``.
