@@ -69,3 +69,19 @@ def test_what_is_not_a_result_is_named(tmp_path):
     xr.Dataset(attrs={"cable_ocp_result": "HoldResult"}).to_netcdf(tmp_path / "hold.nc")
     with pytest.raises(ValueError, match=r"holds a HoldResult, which load_result does not read"):
         co.load_result(tmp_path / "hold.nc")
+
+
+def test_a_files_groups_read_at_once_are_those_read_one_by_one(tmp_path, line_run):
+    """netcdf.read_groups opens the file once for all its groups (0.5 s an open for a line run of
+    100 segments), with read's checks; a group the file lacks is named."""
+    from cable_ocp.result_files import netcdf
+
+    path = line_run.save(tmp_path / "line")
+    names = [None, "segment_0", "segment_1"]
+    together = netcdf.read_groups(path, "LineTrajectory", names)
+    for name, dataset in zip(names, together, strict=True):
+        assert dataset.equals(netcdf.read(path, "LineTrajectory", name)), name
+    with pytest.raises(ValueError, match=r"line\.nc: not a readable netCDF file .*segment_7"):
+        netcdf.read_groups(path, "LineTrajectory", ["segment_7"])
+    with pytest.raises(ValueError, match=r"line\.nc: holds a LineTrajectory, not a Trajectory"):
+        netcdf.read_groups(path, "Trajectory", ["segment_0"])
