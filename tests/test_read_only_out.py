@@ -59,11 +59,18 @@ def test_a_sweep_into_a_read_only_file_system_is_exit_2(read_only_mount, capsys,
 
 
 @pytest.mark.parametrize("command", [["simulate", MODELS / "hanging.toml"], ["bench"]])
-def test_a_mount_point_as_out_is_refused_before_any_work(read_only_mount, capsys, no_work, command):
-    code, err = _main([*command, "--out", read_only_mount], capsys)
+@pytest.mark.parametrize("linked", [False, True])
+def test_a_mount_point_as_out_is_refused_before_any_work(
+    read_only_mount, capsys, no_work, command, linked
+):
+    out = read_only_mount
+    if linked:  # a symbolic link to it, which the results folder would resolve to
+        out = read_only_mount.parent / "link"
+        out.symlink_to(read_only_mount)
+    code, err = _main([*command, "--out", out], capsys)
     assert code == 2, err
     assert "is a mount point, which cannot be replaced as a whole" in err
-    assert sorted(p.name for p in read_only_mount.parent.iterdir()) == ["mnt"]
+    assert sorted(p.name for p in read_only_mount.parent.iterdir()) == ["link", "mnt"][1 - linked :]
 
 
 def test_a_read_only_folder_is_refused_by_the_sweep_before_its_lock(tmp_path, capsys, no_work,

@@ -101,7 +101,10 @@ def check_replaceable(target: str | os.PathLike) -> None:
     ValueError
         Naming the folder, before any work.
     """
-    path = Path(target).expanduser()
+    try:
+        path = Path(target).expanduser().resolve()  # a link to a mount point is one too
+    except (OSError, RuntimeError):  # a loop: check_target names it
+        return
     if path.is_dir() and os.path.ismount(path):
         raise ValueError(
             f"results folder {str(target)!r}: is a mount point, which cannot be replaced as a "
