@@ -58,6 +58,8 @@ def test_a_landing_folder_and_a_result_under_any_name_load(tmp_path, line_run):
 def test_what_is_not_a_result_is_named(tmp_path):
     with pytest.raises(ValueError, match=r"no cable_ocp result there \(expected a folder"):
         co.load_result(tmp_path)
+    with pytest.raises(ValueError, match=r"nothing: no such file or folder"):
+        co.load_result(tmp_path / "nothing")
     (tmp_path / "notes.nc").write_text("not netCDF")
     with pytest.raises(ValueError, match=r"notes\.nc: not a readable netCDF file"):
         co.load_result(tmp_path / "notes.nc")

@@ -54,6 +54,8 @@ def load_result(path: str | Path) -> Result:
     path = Path(path)
     if not path.exists() and not path.suffix and path.with_suffix(".nc").is_file():
         path = path.with_suffix(".nc")  # as Trajectory.save was given it: run/trajectory
+    if not path.exists():
+        raise ValueError(f"{path}: no such file or folder")
     if path.is_dir():
         found = [name for name in FOLDER_FILES if (path / name).is_file()]
         if not found and (path / "result.json").is_file():
