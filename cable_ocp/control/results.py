@@ -62,6 +62,10 @@ def load_result(path: str | Path) -> Result:
             return OcpResult.load(path)
         if not found and (path / "mpc.json").is_file():
             return MpcResult.load(path)
+        if not found and (path / "sweep.nc").is_file():  # the sweep layer is above this one
+            raise ValueError(
+                f"{path}: a sweep's folder; read it with cable_ocp.sweep.open_sweep({str(path)!r})"
+            )
         if not found:
             raise ValueError(
                 f"{path}: no cable_ocp result there (expected a folder holding one of "
