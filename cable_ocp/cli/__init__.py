@@ -7,7 +7,9 @@ Commands: simulate, replay, optimize, compare, mpc, lower, sweep, validate, stud
 Every expected failure is one line ``cable-ocp COMMAND: error: ...`` on stderr and a non-zero exit
 code: 2 for bad input (arguments, scene and sweep files, a results folder that must not be
 written, one inside a read-only folder included), 1 for a failing file system, 3 when the
-optimiser fails (or a sweep case, or a sweep's Dask engine), 130 when interrupted. Bad input is
+optimiser fails (or a sweep case, or a sweep's Dask engine) or a run is not physical (a rope
+that pushes, an end under the seabed; its results are written all the same), 130 when
+interrupted. Bad input is
 refused before any simulation.
 """
 
@@ -71,8 +73,7 @@ def _simulate(args) -> int:
     # model runs after the same warning as the API's.
     with stage(f"simulate {scene.name}", scene.numerics.duration, quiet=args.quiet):
         trajectory = simulate(scene, winch=knots, quiet=args.quiet, compiled=not args.interpreted)
-    _write_run(trajectory, scene, Path(args.out), args.animate)
-    return 0
+    return _write_run("simulate", trajectory, scene, Path(args.out), args.animate)
 
 
 def _replay(args) -> int:
@@ -98,17 +99,24 @@ def _replay(args) -> int:
     scene = result.scene.updated(parse_overrides(args.set)) if args.set else result.scene
     with stage(f"replay {scene.name}", scene.numerics.duration, quiet=args.quiet):
         trajectory = simulate(scene, winch=result, quiet=args.quiet, compiled=not args.interpreted)
-    _write_run(trajectory, scene, Path(args.out), args.animate, {"saved_omega": result.omega})
-    return 0
+    return _write_run(
+        "replay", trajectory, scene, Path(args.out), args.animate, {"saved_omega": result.omega}
+    )
 
 
-# Units of the figures in a run's summary.json (the results' own are in their summary()).
-RUN_UNITS = {"omega": "m", "saved_omega": "m", "end_rise": "m", "final_end_position": "m",
-             "max_top_tension": "N", "locked_omega": "m"}  # fmt: skip
+# Units of the figures a command adds to a run's summary.json (the run's own: its summary()).
+RUN_UNITS = {"saved_omega": "m", "locked_omega": "m"}
 
 
-def _write_run(trajectory, scene, out: Path, animate: bool, extra: dict | None = None) -> None:
-    """A run's trajectory, figures and summary.json in ``out``; the summary printed."""
+def _write_run(
+    command: str, trajectory, scene, out: Path, animate: bool, extra: dict | None = None
+) -> int:
+    """A run's trajectory, figures and summary.json in ``out``; the summary printed.
+
+    Returns the exit code: 3 when the run fails its physics check (a rope that pushes, an end
+    under the seabed: :attr:`~cable_ocp.simulation.trajectory.Trajectory.physics`), written all
+    the same so that it can be looked at; else 0.
+    """
     from cable_ocp import plots
 
     seabed = scene.seabed
@@ -124,18 +132,19 @@ def _write_run(trajectory, scene, out: Path, animate: bool, extra: dict | None =
                           path=folder / "winch_angle.png")  # fmt: skip
         if scene.winch.line is not None:  # a line paid out by elements: n over time
             plots.line_run(trajectory, path=folder / "line_run.png")
-        summary = {
-            "scene": scene.name,
-            "omega": trajectory.omega,
-            "end_rise": float(trajectory.end[:, 2].max() - trajectory.end[0, 2]),
-            "final_end_position": trajectory.end[-1].tolist(),
-            "max_top_tension": float(trajectory.top_tension.max()),
-            **(extra or {}),
-        }
-        summary["units"] = {name: RUN_UNITS[name] for name in summary if name in RUN_UNITS}
+        figures = trajectory.summary()
+        units = {**figures.pop("units"), **{name: RUN_UNITS[name] for name in extra or {}}}
+        summary = {**figures, "scene": scene.name, **(extra or {}), "units": units}
         (folder / "summary.json").write_text(json_text(summary))
     print(json_text(summary))
     print(f"results and figures written to {out.resolve()}")
+    if not trajectory.success:
+        print(
+            f"cable-ocp {command}: error: the run is not physical: {trajectory.status}",
+            file=sys.stderr,
+        )
+        return 3
+    return 0
 
 
 def _given(args, names: tuple[str, ...]) -> dict:
@@ -483,7 +492,14 @@ def _validate(args) -> int:
 
 
 def _bench(args) -> int:
-    from cable_ocp.studies import bench, bench_lowering, bench_payout, bench_simulate, robustness
+    from cable_ocp.studies import (
+        bench,
+        bench_elastic,
+        bench_lowering,
+        bench_payout,
+        bench_simulate,
+        robustness,
+    )
     from cable_ocp.studies.moordyn_compare import moordyn_report
 
     if args.hessian:
@@ -494,6 +510,7 @@ def _bench(args) -> int:
         "simulate": bench_simulate.report,
         "moordyn": moordyn_report,
         "payout": bench_payout.report,
+        "elastic": bench_elastic.report,
         "ocp": bench.ocp_report,
         "ocp-speed": bench.ocp_speed_report,
         "mpc": lambda models, quick: _bench_mpc(models, quick, args.out),
@@ -710,12 +727,13 @@ def build_parser() -> argparse.ArgumentParser:
         description="Speed of the toolkit against its baselines, each part comparing within "
         "one run: rk4 (the simulation loop, interpreted against compiled), simulate (the "
         "command end to end), moordyn (MoorDyn at the same accuracy), payout (a line paid out "
-        "by elements against fixed n), ocp (IPOPT against Nelder-Mead), ocp-speed (the default "
-        "optimize, cold and warm), mpc (the closed loop's solve times). The default parts run "
-        "for tens of minutes on 2 cores (MoorDyn and the optimisers dominate); --quick runs "
-        "short versions; --only picks parts. robustness (random scenes) and lowering (random "
-        "landings: 10 cases took 5 min on 2 cores) run only when named. Nothing is written "
-        "without --out.",
+        "by elements against fixed n), elastic (the elastic rope beside the rigid one and "
+        "MoorDyn on a 2000 m deep lift, about a minute), ocp (IPOPT against Nelder-Mead), ocp-"
+        "speed (the default optimize, cold and warm), mpc (the closed loop's solve times). The "
+        "default parts run for tens of minutes on 2 cores (MoorDyn and the optimisers "
+        "dominate); --quick runs short versions; --only picks parts. robustness (random scenes)"
+        " and lowering (random landings: 10 cases took 5 min on 2 cores) run only when named. "
+        "Nothing is written without --out.",
     )
     bench.add_argument(
         "--quick", action="store_true", help="scene steps only, short MoorDyn runs, small OCP"
@@ -723,8 +741,8 @@ def build_parser() -> argparse.ArgumentParser:
     bench.add_argument(
         "--only",
         nargs="+",
-        choices=["rk4", "simulate", "moordyn", "payout", "ocp", "ocp-speed", "mpc", "robustness",
-                 "lowering"],
+        choices=["rk4", "simulate", "moordyn", "payout", "elastic", "ocp", "ocp-speed", "mpc",
+                 "robustness", "lowering"],
         help="run only these parts (robustness and lowering run only when named)",
     )  # fmt: skip
     bench.add_argument(
