@@ -278,3 +278,24 @@ def test_deploy_lands_from_its_hover_optimised_by_both_solvers_and_by_the_closed
     assert looped.report.hold_deviation < lowering.hold_band
     assert looped.compensation_ratio > 90.0
     print(looped.status, f"real-time factor {looped.result.real_time_factor:.0f}")
+
+
+def test_the_fitted_step_keeps_the_landing_on_a_step():
+    """The control nodes' step fit also ends a step at lowering.land_time (the lowering bench's
+    case 4 of seed 0 raised when a fitted step of 82/1680 s missed its landing at 22 s)."""
+    from cable_ocp.control.defaults import on_nodes
+    from cable_ocp.scene.schema import whole_steps
+
+    scene = co.load_scene(
+        MODELS / "deep_lift.toml",
+        {"numerics.duration": 82.0, "numerics.step": 0.05, "numerics.output_every": 10,
+         "seabed.clearance": 10.0,
+         "lowering": {"land_time": 22.0, "height": 5.0, "tension_min": 6e4,
+                      "tension_max": 9e5}},
+    )  # fmt: skip
+    fitted, note = on_nodes(scene, 16)
+    step = fitted.numerics.step
+    assert step <= 0.05 and "control nodes" in note
+    assert whole_steps(82.0, step) is not None and whole_steps(22.0, step) is not None
+    steps = whole_steps(82.0, step)
+    assert steps % 16 == 0 and steps % 10 == 0  # the nodes and the samples on step ends too

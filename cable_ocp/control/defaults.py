@@ -32,6 +32,7 @@ from dataclasses import dataclass
 from cable_ocp.drive import winch
 from cable_ocp.drive.drive import Drive
 from cable_ocp.model.cable import CableModel
+from cable_ocp.scene.schema import whole_steps
 from cable_ocp.simulation.integrate import step_count
 from cable_ocp.simulation.stability import STABLE_SHARE, limit_along_run
 from cable_ocp.simulation.statics import starting_state
@@ -51,6 +52,8 @@ REDUCED_ELEMENT_LENGTH = 150.0
 # s: the reduced model's step is never coarser than this, the step that served the paper's rope
 # (its limit along the run is 1.02 s at n = 3), whatever a stiff-free scene would allow.
 STEP_CAP = 0.5
+# The fitted step's search: at most this many times the first count of steps per interval.
+FIT_SEARCH = 64
 
 
 @dataclass(frozen=True)
@@ -120,15 +123,31 @@ def on_nodes(scene, intervals: int):
     width = numerics.duration / intervals
     per_interval = math.ceil(width / numerics.step * (1 - 1e-12))
     # The run's samples (numerics.output_every steps apart) must divide its steps too: a
-    # 79 s landing took 1584 steps, which 10 does not divide.
-    while (intervals * per_interval) % numerics.output_every:
+    # 79 s landing took 1584 steps, which 10 does not divide; and a landing's land_time must end
+    # a step (a landing of 82 s landing at 22 s was refused at h = 82/1680 s).
+    first = per_interval
+    while (intervals * per_interval) % numerics.output_every or not _lands_on_a_step(
+        scene, width / per_interval
+    ):
         per_interval += 1
+        if per_interval > FIT_SEARCH * first:
+            raise ValueError(
+                f"no RK4 step up to numerics.step = {numerics.step:g} s puts the {intervals} "
+                f"control nodes and lowering.land_time = {scene.lowering.land_time:g} s on step "
+                f"ends: make land_time a multiple of {width:.6g} s"
+            )
     step = width / per_interval
     note = (
         f"the full model's runs at h = {step:.6g} s instead of the scene's {numerics.step:g} s, "
         f"so that the {intervals} control nodes ({width:.4g} s apart) fall on step ends"
     )
     return scene.updated({"numerics.step": step}), note
+
+
+def _lands_on_a_step(scene, step: float) -> bool:
+    """Whether a landing scene's ``lowering.land_time`` is a whole number of ``step`` (s)."""
+    lowering = scene.lowering
+    return lowering is None or whole_steps(lowering.land_time, step) is not None
 
 
 def run_limit(scene, elements: int, duration: float, compiled: bool = True) -> tuple[float, float]:
