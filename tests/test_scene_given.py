@@ -29,3 +29,12 @@ def test_optimize_and_land_read_a_path_or_a_name(tmp_path):
         co.optimize("deploy", quiet=True)
     with pytest.raises(ValueError, match=r"scene 'paper_flat' has no \[lowering\] table"):
         co.land(Path("paper_flat.toml"))
+
+
+def test_load_scene_takes_a_bundled_name_and_suggests_close_ones():
+    """co.load_scene("deploy") loads the bundled scene the command line accepts (issue 45 item 10);
+    a mistyped name names the closest bundled ones."""
+    assert co.load_scene("deploy").name == "deploy"
+    assert co.load_scene("deep_lift.toml").name == "deep_lift"
+    with pytest.raises(SceneError, match=r"did you mean small_tow\?"):
+        co.load_scene("smal_tow")

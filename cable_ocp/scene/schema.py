@@ -27,6 +27,7 @@ except ModuleNotFoundError:  # Python 3.10
     import tomli as tomllib
 
 from cable_ocp.scene.bathymetry import GridError, read_grid
+from cable_ocp.scene.bundled import closest_names, scene_names, scene_path
 from cable_ocp.scene.line_mesh import FEWEST_ELEMENTS, LineMesh
 
 __all__ = [
@@ -1153,7 +1154,7 @@ def load_scene(path: str | os.PathLike, overrides: Mapping[str, Any] | None = No
         found, a folder, not UTF-8), is not valid TOML, is empty or lacks one of the tables every
         scene file needs (:data:`REQUIRED_TABLES`: ``[model]``, ``[top]``, ``[numerics]``).
     """
-    path = Path(path)
+    path = _scene_file(path)
     data = _read_toml(path)
     if not data:
         raise SceneError(str(path), f": empty scene file; {_NEEDS}")
@@ -1162,6 +1163,28 @@ def load_scene(path: str | os.PathLike, overrides: Mapping[str, Any] | None = No
             raise SceneError(table, f": missing table [{table}] in {path}; {_NEEDS}")
     data = {"name": path.stem, **_apply_overrides(data, overrides)}
     return _build(Scene, data, "", path.parent, source=str(path.resolve()))
+
+
+def _scene_file(path: str | os.PathLike) -> Path:
+    """The file of a scene given as a path, or as a bundled scene's bare name (``"deploy"``).
+
+    An existing file wins; a bare name that is no file is a bundled scene of that name, or a
+    SceneError naming the closest bundled names when some are close (else the missing file).
+    """
+    given = Path(path)
+    if given.exists() or given.parent != Path(".") or given.suffix not in ("", ".toml"):
+        return given
+    name = given.name.removesuffix(".toml")
+    if name in scene_names():
+        return scene_path(name)
+    close = closest_names(name)
+    if not close:
+        return given  # reported as a missing file
+    raise SceneError(
+        str(given),
+        f": neither a scene file nor a bundled scene (did you mean {' or '.join(close)}?); "
+        "cable-ocp scenes lists them",
+    )
 
 
 _NEEDS = "a scene file needs at least the tables " + ", ".join(f"[{t}]" for t in REQUIRED_TABLES)

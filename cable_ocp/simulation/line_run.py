@@ -104,8 +104,13 @@ def check_line(scene, drive: Drive, output_every: int) -> None:
         ):
             if outside.any():
                 k = int(np.argmax(outside))
+                moved = (
+                    f"pays out {pay_out[k]:.6g} m"
+                    if pay_out[k] >= 0
+                    else f"hauls in {-pay_out[k]:.6g} m"
+                )
                 raise ValueError(
-                    f"the winch pays out {pay_out[k]:.6g} m at t = {times[k]:.6g} s, beyond "
+                    f"the winch {moved} at t = {times[k]:.6g} s, beyond "
                     f"winch.line.{name} = {getattr(line, name)!r} m"
                 )
         steps = np.arange(first, first + times.size)
