@@ -204,17 +204,19 @@ class LineTrajectory:
                 old = netcdf.KIND not in root.attrs and root.attrs.get("cable_ocp_kind") == KIND
             attrs = root.attrs if old else netcdf.read(path, KIND).attrs
             count, length = int(attrs["segments"]), float(attrs["element_length"])
-            segments = []
-            for k in range(count):
-                segments.append(Trajectory.from_xarray(_segment(path, f"segment_{k}", old)))
+            names = [f"segment_{k}" for k in range(count)]
+            if old:
+                datasets = [_old_segment(path, name) for name in names]
+            else:  # one open of the file for every segment (100 segments: 33 s -> a few)
+                datasets = netcdf.read_groups(path, KIND, names)
+            segments = [Trajectory.from_xarray(dataset) for dataset in datasets]
         except (OSError, KeyError, ValueError, TypeError) as error:
-            raise ValueError(f"{path}: not a readable line trajectory ({error})") from None
+            where = "" if str(path) in str(error) else f"{path}: "
+            raise ValueError(f"{where}not a readable line trajectory ({error})") from None
         return cls(segments, length)
 
 
-def _segment(path: Path, group: str, old: bool) -> xr.Dataset:
-    """The Dataset of a segment's group (of a file written before the result format: as is)."""
-    if not old:
-        return netcdf.read(path, KIND, group=group)
+def _old_segment(path: Path, group: str) -> xr.Dataset:
+    """The Dataset of a segment's group of a file written before the result format, as is."""
     with xr.open_dataset(path, group=group) as dataset:
         return dataset.load()
