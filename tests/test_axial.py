@@ -225,3 +225,15 @@ def test_an_elastic_line_paid_out_stretches_as_its_weight_says(validation):
                f"{worst:.1e} m; {stretch[-1]:.3f} m", "< 2 % of the stretch")  # fmt: skip
     assert len(run.segments) >= 4
     assert worst < 0.02 * stretch[-1]
+
+
+def test_an_elastic_run_saves_and_loads_its_strain(tmp_path):
+    """The strain and its rate are variables of the run's file; the states come back exactly."""
+    scene = co.load_scene(MODELS / "deep_lift.toml", {"numerics.duration": 4.0})
+    run = co.simulate(scene, compiled=True)
+    data = run.to_xarray()
+    assert data["axial_strain"].attrs["units"] == "1"
+    assert data["axial_strain"].values[0] == pytest.approx(6.7681 / 2000.0, rel=1e-3)
+    loaded = type(run).load(run.save(tmp_path / "deep"))
+    assert np.array_equal(loaded.states, run.states)
+    assert loaded.state_names == run.state_names and run.state_names[-1] == "d_strain"

@@ -7,8 +7,9 @@ component), its ``euler_angle`` and ``euler_angle_rate`` over (time, element, an
 ``top_acceleration``, ``top_length`` (and its rate and acceleration) and ``end_force``. The joints
 ``A_0`` (the end E) .. ``A_{n+1}`` (the top) are ``joint_position`` over (time, joint,
 component); bond tensions are ``tension`` over (time, element), element i's bond at its upper end
-``A_{i+1}``. Every variable has CF ``units`` and ``long_name``; :func:`from_dataset` puts the
-vectors back together exactly.
+``A_{i+1}``. An elastic rope's axial strain and its rate (:mod:`cable_ocp.model.axial`) are
+``axial_strain`` and ``axial_strain_rate`` over time. Every variable has CF ``units`` and
+``long_name``; :func:`from_dataset` puts the vectors back together exactly.
 """
 
 from __future__ import annotations
@@ -47,10 +48,19 @@ STATE_VARIABLES = {  # (derivative?, coordinates, units, long name)
 SPLIT = ("states", "inputs", "joints", "tensions", "state_names")
 
 
-def state_names(elements: int, dofs: int) -> list[str]:
-    """Names of the state entries, ``x_0 .. theta_n`` then ``d_x_0 ..`` (CONVENTIONS.md §3)."""
+STRAIN_VARIABLES = {  # an elastic rope's: (units, long name)
+    "axial_strain": (DIMENSIONLESS, "uniform axial strain of the line (elastic rope)"),
+    "axial_strain_rate": ("s-1", "rate of the line's axial strain"),
+}
+
+
+def state_names(elements: int, dofs: int, axial: int = 0) -> list[str]:
+    """Names of the state entries, ``x_0 .. theta_n`` then ``d_x_0 ..`` (CONVENTIONS.md §3).
+
+    ``axial`` (1 for an elastic rope) adds ``strain`` after the coordinates (and ``d_strain``).
+    """
     coords = [*COMPONENT, *ANGLES][:dofs]
-    names = [f"{c}_{i}" for i in range(elements) for c in coords]
+    names = [f"{c}_{i}" for i in range(elements) for c in coords] + ["strain"] * axial
     return names + [f"d_{name}" for name in names]
 
 
@@ -65,12 +75,15 @@ def to_xarray(trajectory) -> xr.Dataset:
     time, states = trajectory.time, trajectory.states
     elements = trajectory.tensions.shape[1]
     dofs = states.shape[1] // (2 * elements)
-    if trajectory.state_names != state_names(elements, dofs):
+    axial = (states.shape[1] - 2 * elements * dofs) // 2
+    if trajectory.state_names != state_names(elements, dofs, axial):
         raise ValueError(
             f"state_names {trajectory.state_names[:3]}...: not the layout of {elements} elements "
             f"with {dofs} DOF (x_0, y_0, ..., d_x_0, ...), so the states cannot be labelled"
         )
-    blocks = states.reshape(time.size, 2, elements, dofs)
+    half = states.shape[1] // 2
+    rigid = np.concatenate([states[:, : half - axial], states[:, half : 2 * half - axial]], 1)
+    blocks = rigid.reshape(time.size, 2, elements, dofs)
     angles = ANGLES[: dofs - 3]
     variables = {}
     for name, (rate, coordinate, units, long_name) in STATE_VARIABLES.items():
@@ -80,6 +93,9 @@ def to_xarray(trajectory) -> xr.Dataset:
     for name, (index, units, long_name) in INPUT_VARIABLES.items():
         dims = ("time", "component") if isinstance(index, slice) else ("time",)
         variables[name] = (dims, trajectory.inputs[:, index], units, long_name)
+    for k, (name, (units, long_name)) in enumerate(STRAIN_VARIABLES.items()):
+        if axial:
+            variables[name] = (("time",), states[:, (k + 1) * half - 1], units, long_name)
     joints = trajectory.joints.transpose(0, 2, 1)
     joint_name = "position of joint A_j (A_0 the end E, A_{n+1} the top)"
     variables["joint_position"] = (("time", "joint", "component"), joints, "m", joint_name)
@@ -160,11 +176,16 @@ def from_dataset(dataset: xr.Dataset, cls: type | None = None) -> dict:
     for name, (index, _, _) in INPUT_VARIABLES.items():
         inputs[:, index] = dataset[name].values
     joints = dataset["joint_position"].transpose("time", "joint", "component").values
+    states = blocks.reshape(time.size, 2, -1)
+    axial = int("axial_strain" in dataset.variables)
+    if axial:
+        strain = [dataset[name].values.reshape(time.size, 1) for name in STRAIN_VARIABLES]
+        states = np.concatenate([states[:, 0], strain[0], states[:, 1], strain[1]], 1)
     return {
         **values,
-        "states": blocks.reshape(time.size, -1),
+        "states": states.reshape(time.size, -1),
         "inputs": inputs,
         "joints": joints.transpose(0, 2, 1),
         "tensions": dataset["tension"].transpose("time", "element").values,
-        "state_names": state_names(elements, dofs),
+        "state_names": state_names(elements, dofs, axial),
     }
