@@ -12,6 +12,7 @@ import xarray as xr
 from cable_ocp import result_files
 from cable_ocp.model.layout import INPUT_SIZE, INPUTS
 from cable_ocp.result_files import format_1
+from cable_ocp.scene.axial_choice import axial_choice
 from cable_ocp.scene.records import check_run
 from cable_ocp.scene.schema import scene_of
 from cable_ocp.simulation import trajectory_dataset
@@ -251,6 +252,7 @@ def run_summary(run) -> dict:
     end = run.end
     figures = {
         "scene": run.scene_name,
+        "rope": _rope(run),
         "omega": run.omega,
         "end_rise": float(end[:, 2].max() - end[0, 2]),
         "final_end_position": end[-1].tolist(),
@@ -258,6 +260,14 @@ def run_summary(run) -> dict:
     }
     units = {"omega": "m", "end_rise": "m", "final_end_position": "m", **physics["units"]}
     return {**figures, "units": units}
+
+
+def _rope(run) -> str:
+    """What the run's rope was along its axis, and why (empty for a run without its scene)."""
+    try:
+        return axial_choice(run.scene).note
+    except ValueError:  # a file written before runs kept their scene
+        return ""
 
 
 def _check_shapes(arrays: dict[str, np.ndarray]) -> None:
