@@ -34,7 +34,7 @@ from cable_ocp.model.axial_element import elastic_element_functions
 from cable_ocp.model.joints import baumgarte
 from cable_ocp.model.kinematics import POSITION
 from cable_ocp.model.kkt import thomas_solve
-from cable_ocp.model.layout import INPUTS
+from cable_ocp.model.layout import INPUTS, top_inputs
 
 
 def elastic_graph(model) -> SimpleNamespace:
@@ -52,10 +52,7 @@ def elastic_graph(model) -> SimpleNamespace:
     q, qd = model.coordinates(model.x)
     strain, strain_rate = model.strain(model.x)
     u = model.u
-    top, top_velocity = u[INPUTS.top], u[INPUTS.top_velocity]
-    top_acceleration = u[INPUTS.top_acceleration]
-    top_length, top_length_rate = u[INPUTS.top_length], u[INPUTS.top_length_rate]
-    top_length_acc = u[INPUTS.top_length_acceleration]
+    top, top_velocity, top_acceleration, top_length, top_length_rate, top_length_acc = top_inputs(u)
     rest = model.element_lengths(top_length)
     local = [ca.vertcat(qi, strain) for qi in q]
     local_rates = [ca.vertcat(qdi, strain_rate) for qdi in qd]

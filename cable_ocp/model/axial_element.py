@@ -27,7 +27,7 @@ import casadi as ca
 from cable_ocp.model.current import current_at
 from cable_ocp.model.hydro import drag_force_density, gauss_points
 from cable_ocp.model.kinematics import POSITION, axis_direction
-from cable_ocp.model.rfe import ElementProperties
+from cable_ocp.model.rfe import ElementProperties, added_mass_per_length
 
 STRAIN = 5  # index of the strain in an elastic element's local coordinates
 
@@ -36,12 +36,7 @@ def elastic_kinetic_energy(
     q: ca.SX, qd: ca.SX, rest_length: ca.SX, props: ElementProperties
 ) -> ca.SX:
     """Kinetic energy (J) of a stretching 5-DOF element with its added mass (module docstring)."""
-    hydro = props.hydro
-    normal_added, axial_added = 0.0, 0.0
-    if hydro is not None and hydro.has_added_mass:
-        water_per_length = hydro.water_density * hydro.area
-        normal_added = water_per_length * hydro.added_mass_normal
-        axial_added = water_per_length * hydro.added_mass_axial
+    normal_added, axial_added = added_mass_per_length(props)
     stretch = 1 + q[STRAIN]
     length = stretch * rest_length
     mu = props.mass_per_length / stretch

@@ -17,10 +17,15 @@ from dataclasses import dataclass
 import casadi as ca
 
 from cable_ocp.model.axial_element import elastic_element_functions
-from cable_ocp.model.joints import baumgarte, bending_energies, top_bond_kernel
+from cable_ocp.model.joints import (
+    KernelLoops,
+    baumgarte,
+    bending_energies,
+    top_bond_kernel,
+)
 from cable_ocp.model.kinematics import axis_direction
 from cable_ocp.model.kkt import cholesky_solve, inverse_3x3
-from cable_ocp.model.layout import INPUT_SIZE, INPUTS
+from cable_ocp.model.layout import INPUT_SIZE, INPUTS, top_inputs
 
 DOFS = 5  # an elastic rope's elements are 5-DOF
 COLUMNS = 2  # right-hand sides: the chain's forces (A), a unit strain acceleration (B)
@@ -140,7 +145,7 @@ def _accelerations() -> ca.Function:
 
 
 @dataclass(frozen=True)
-class ElasticKernels:
+class ElasticKernels(KernelLoops):
     """The small Functions of the elastic loops, and what they take as ``p``.
 
     As :class:`cable_ocp.model.structured.Kernels`, with the strain's kernels: ``axial`` gives
@@ -159,14 +164,6 @@ class ElasticKernels:
     segment_length: ca.Function
     axial: ca.Function
     parameters: Callable[[ca.MX], ca.MX] = lambda p: p
-
-    def map(self, name: str, count: int) -> Callable:
-        """Kernel ``name`` over ``count`` columns (CasADi's ``map``)."""
-        return getattr(self, name).map(count)
-
-    def mapaccum(self, name: str, count: int) -> Callable:
-        """Kernel ``name`` accumulated over ``count`` columns (CasADi's ``mapaccum``)."""
-        return getattr(self, name).mapaccum(count)
 
 
 def elastic_kernels_of(model) -> ElasticKernels:
@@ -210,10 +207,7 @@ def elastic_structured_graph(model, kernels: ElasticKernels) -> tuple[ca.MX, ...
     q = ca.reshape(x[:size], DOFS, count)
     strain, strain_rate = x[size], x[2 * size + 1]
     qd = ca.reshape(x[size + 1 : 2 * size + 1], DOFS, count)
-    top, top_velocity = u[INPUTS.top], u[INPUTS.top_velocity]
-    top_acceleration = u[INPUTS.top_acceleration]
-    top_length, top_length_rate = u[INPUTS.top_length], u[INPUTS.top_length_rate]
-    top_length_acc = u[INPUTS.top_length_acceleration]
+    top, top_velocity, top_acceleration, top_length, top_length_rate, top_length_acc = top_inputs(u)
     delta = kernels.segment_length(p)
     axial_stiffness, damping_ratio = kernels.axial(p)
     p_kernel = kernels.parameters(p)

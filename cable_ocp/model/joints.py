@@ -44,3 +44,20 @@ def top_bond_kernel(model) -> ca.Function:
         [quadratic, rate, residual, model.p],
         [baumgarte(quadratic, rate, residual, model.spec)],
     )
+
+
+class KernelLoops:
+    """``map`` and ``mapaccum`` of the kernels of the structured loops, by name.
+
+    Mixed into the kernel sets of the rigid and the elastic rope
+    (:class:`cable_ocp.model.structured.Kernels`,
+    :class:`cable_ocp.model.axial_structured.ElasticKernels`).
+    """
+
+    def map(self, name: str, count: int):
+        """Kernel ``name`` over ``count`` columns (CasADi's ``map``)."""
+        return getattr(self, name).map(count)
+
+    def mapaccum(self, name: str, count: int):
+        """Kernel ``name`` accumulated over ``count`` columns (CasADi's ``mapaccum``)."""
+        return getattr(self, name).mapaccum(count)

@@ -53,3 +53,19 @@ class InputLayout:
 
 
 INPUTS = InputLayout()
+
+
+def top_inputs(u) -> tuple:
+    """The top's position, velocity and acceleration and the winch's length with its two rates.
+
+    ``(top, top_velocity, top_acceleration, top_length, top_length_rate,
+    top_length_acceleration)`` of an input vector ``u`` (SX or array), by :data:`INPUTS`.
+    """
+    return (
+        u[INPUTS.top],
+        u[INPUTS.top_velocity],
+        u[INPUTS.top_acceleration],
+        u[INPUTS.top_length],
+        u[INPUTS.top_length_rate],
+        u[INPUTS.top_length_acceleration],
+    )

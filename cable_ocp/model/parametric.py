@@ -24,7 +24,7 @@ from cable_ocp.model.hydro import smooth_norm
 from cable_ocp.model.joints import baumgarte, bending_energies
 from cable_ocp.model.kinematics import POSITION, relative_twist
 from cable_ocp.model.kkt import thomas_solve
-from cable_ocp.model.layout import INPUT_SIZE, INPUTS, OUTPUT_NAMES
+from cable_ocp.model.layout import INPUT_SIZE, INPUTS, OUTPUT_NAMES, top_inputs
 from cable_ocp.model.parameters import is_on, symbolic_spec
 from cable_ocp.model.rfe import element_functions, element_rotation
 
@@ -212,10 +212,9 @@ class ParametricModel(ModelLayout):
         element, element_energy = element_functions(spec.element, p)
         q, qd = self.coordinates(self.x)
         u = self.u
-        top, top_velocity = u[INPUTS.top], u[INPUTS.top_velocity]
-        top_acceleration = u[INPUTS.top_acceleration]
-        top_length, top_length_rate = u[INPUTS.top_length], u[INPUTS.top_length_rate]
-        top_length_acc = u[INPUTS.top_length_acceleration]
+        top, top_velocity, top_acceleration, top_length, top_length_rate, top_length_acc = (
+            top_inputs(u)
+        )
         end_force = u[INPUTS.end_force]
         lengths = self.element_lengths(top_length)
 

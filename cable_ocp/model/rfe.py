@@ -118,12 +118,7 @@ def closed_form_kinetic_energy(
     """
     if props.torsion:
         raise ValueError("the closed-form kinetic energy is for 5-DOF elements (torsion off)")
-    hydro = props.hydro
-    normal_added, axial_added = 0.0, 0.0
-    if hydro is not None and hydro.has_added_mass:
-        water_per_length = hydro.water_density * hydro.area
-        normal_added = water_per_length * hydro.added_mass_normal
-        axial_added = water_per_length * hydro.added_mass_axial
+    normal_added, axial_added = added_mass_per_length(props)
     mu = props.mass_per_length
     normal_mass = mu + normal_added
     section = mu * length * props.diameter**2 / 16
@@ -140,6 +135,18 @@ def closed_form_kinetic_energy(
         + 0.5 * (length**3 * normal_mass / 3 + section) * ca.dot(axis_rate, axis_rate)
         + section * (qd[3] * ca.sin(q[4])) ** 2
     )
+
+
+def added_mass_per_length(props: ElementProperties) -> tuple[float, float]:
+    """Added mass per unit length across and along the axis, ``rho_w A C_a`` and ``C_at`` (kg/m).
+
+    Both 0 in air or with the added mass switched off.
+    """
+    hydro = props.hydro
+    if hydro is None or not hydro.has_added_mass:
+        return 0.0, 0.0
+    water_per_length = hydro.water_density * hydro.area
+    return water_per_length * hydro.added_mass_normal, water_per_length * hydro.added_mass_axial
 
 
 def element_functions(

@@ -29,10 +29,15 @@ from cable_ocp.model.axial_structured import (
 )
 from cable_ocp.model.cable import CableModel
 from cable_ocp.model.compile import CompileReport, compile_in_background, compiled_from
-from cable_ocp.model.joints import baumgarte, bending_energies, top_bond_kernel
+from cable_ocp.model.joints import (
+    KernelLoops,
+    baumgarte,
+    bending_energies,
+    top_bond_kernel,
+)
 from cable_ocp.model.kinematics import POSITION
 from cable_ocp.model.kkt import cholesky_solve, inverse_3x3
-from cable_ocp.model.layout import INPUT_SIZE, INPUTS
+from cable_ocp.model.layout import INPUT_SIZE, INPUTS, top_inputs
 from cable_ocp.model.parametric import ModelLayout, ParametricModel
 from cable_ocp.model.rfe import element_functions
 from cable_ocp.model.rk4 import parametric_rk4_step
@@ -334,7 +339,7 @@ def _graph_function(
 
 
 @dataclass(frozen=True)
-class Kernels:
+class Kernels(KernelLoops):
     """The small Functions the structured loops call, and what they take as ``p``.
 
     ``parameters`` maps the graph's ``p`` (MX) to the ``p`` the kernels take: the identity for
@@ -354,14 +359,6 @@ class Kernels:
     inverse: ca.Function
     segment_length: ca.Function
     parameters: Callable[[ca.MX], ca.MX] = lambda p: p
-
-    def map(self, name: str, count: int) -> Callable:
-        """Kernel ``name`` over ``count`` columns (CasADi's ``map``)."""
-        return getattr(self, name).map(count)
-
-    def mapaccum(self, name: str, count: int) -> Callable:
-        """Kernel ``name`` accumulated over ``count`` columns (CasADi's ``mapaccum``)."""
-        return getattr(self, name).mapaccum(count)
 
 
 def kernels_of(model: ParametricModel) -> Kernels | ElasticKernels:
@@ -399,10 +396,7 @@ def structured_graph(model: ModelLayout, kernels: Kernels | ElasticKernels) -> t
     p = ca.MX.sym("p", model.p.numel())
     q = ca.reshape(x[:size], dofs, count)
     qd = ca.reshape(x[size:], dofs, count)
-    top, top_velocity = u[INPUTS.top], u[INPUTS.top_velocity]
-    top_acceleration = u[INPUTS.top_acceleration]
-    top_length, top_length_rate = u[INPUTS.top_length], u[INPUTS.top_length_rate]
-    top_length_acc = u[INPUTS.top_length_acceleration]
+    top, top_velocity, top_acceleration, top_length, top_length_rate, top_length_acc = top_inputs(u)
     delta = kernels.segment_length(p)
     p_kernel = kernels.parameters(p)
 
