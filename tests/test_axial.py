@@ -237,3 +237,22 @@ def test_an_elastic_run_saves_and_loads_its_strain(tmp_path):
     loaded = type(run).load(run.save(tmp_path / "deep"))
     assert np.array_equal(loaded.states, run.states)
     assert loaded.state_names == run.state_names and run.state_names[-1] == "d_strain"
+
+
+def test_compiled_statics_of_an_elastic_rope_in_a_current_converge():
+    """The robustness bench's seed-0 case 10 (66 mm synthetic rope, 547 m, a sheared current):
+    the compiled Newton stalled on the strain (0.03 rad/s^2 left); its equilibrium is the exact
+    Newton's, and the rigid rope's end 8 cm higher by the line's stretch."""
+    from cable_ocp.studies.scene_space import PLACED, space_cases
+
+    case = space_cases(50, 0)[10]
+    given = {k: v for k, v in case.items() if k != PLACED}
+    scene = co.load_scene(MODELS / "paper_hill.toml", {**given, "seabed.hills": []})
+    model = CableModel.from_scene(scene)
+    assert model.axial == 1
+    compiled = equilibrium(model, Drive.from_scene(scene), compiled=True)
+    exact = equilibrium(model, Drive.from_scene(scene))
+    assert np.allclose(compiled.end, exact.end, atol=1e-9)
+    rigid = equilibrium(CableModel.from_scene(scene.updated({"model.axial": "rigid"})),
+                        Drive.from_scene(scene))  # fmt: skip
+    assert 0.05 < rigid.end[2] - exact.end[2] < 0.12
