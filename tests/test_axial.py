@@ -18,6 +18,7 @@ from cable_ocp.drive.drive import Drive
 from cable_ocp.model.cable import CableModel, spec_from_scene
 from cable_ocp.model.parameters import parameter_names
 from cable_ocp.scene.axial_choice import RIGID_ERROR, axial_choice, axial_period
+from cable_ocp.scene.schema import SceneError
 from cable_ocp.simulation.statics import equilibrium
 from cable_ocp.studies.validation import catenary_check
 
@@ -256,3 +257,19 @@ def test_compiled_statics_of_an_elastic_rope_in_a_current_converge():
     rigid = equilibrium(CableModel.from_scene(scene.updated({"model.axial": "rigid"})),
                         Drive.from_scene(scene))  # fmt: skip
     assert 0.05 < rigid.end[2] - exact.end[2] < 0.12
+
+
+@pytest.mark.parametrize(
+    ("overrides", "field"),
+    [
+        ({"cable.axial_stiffness": 1e5}, "cable.axial_stiffness"),
+        ({"cable.fill_factor": 0.1, "end.payload.mass": 4e5}, "cable.fill_factor"),
+    ],
+)
+def test_a_rope_that_would_hang_stretched_beyond_any_rope_is_refused(overrides, field):
+    """Issue 45's fault injection: EA = 1e5 N left the end 10.5 km down, 'success'."""
+    scene = co.load_scene(MODELS / "deep_lift.toml", overrides)
+    with pytest.raises(SceneError, match=rf"{field}: EA = .* by .* % .*at most 10 %"):
+        CableModel.from_scene(scene)
+    rigid = scene.updated({"model.axial": "rigid"})  # the rigid rope has no use for EA
+    assert CableModel.from_scene(rigid).axial == 0
