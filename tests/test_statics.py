@@ -383,7 +383,7 @@ def test_compressed_root_is_refused(models_dir, compiled):
 def test_end_above_the_top_is_refused(models_dir, monkeypatch):
     """With the tension check fooled, a heavy cable whose end stands above the top still fails."""
     _, model, drive, _ = in_current(models_dir, (0.0, 5.0, 0.0))
-    monkeypatch.setattr(statics, "_signed_tensions", lambda joints, forces: np.ones(11))
+    monkeypatch.setattr(statics, "signed_tensions", lambda joints, forces: np.ones(11))
     with pytest.raises(EquilibriumError, match=r"free end is 136 m above the top .* not physical"):
         equilibrium(model, drive, guess=hanging_straight_down(model))
 
