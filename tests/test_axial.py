@@ -273,3 +273,25 @@ def test_a_rope_that_would_hang_stretched_beyond_any_rope_is_refused(overrides, 
         CableModel.from_scene(scene)
     rigid = scene.updated({"model.axial": "rigid"})  # the rigid rope has no use for EA
     assert CableModel.from_scene(rigid).axial == 0
+
+
+def test_structured_loops_equal_the_flat_elastic_right_hand_side(validation):
+    """The compiled path's loops (model/axial_structured.py) against the flat SX equations."""
+    from cable_ocp.model import structured
+
+    scene = co.load_scene(MODELS / "deep_lift.toml", {"model.elements": 6})
+    model = CableModel.from_scene(scene)
+    found = equilibrium(model, Drive.from_scene(scene))
+    state, inputs = found.state.copy(), found.inputs.copy()
+    half = model.state_size // 2
+    state[half:] = 0.05 * np.random.default_rng(7).standard_normal(half)
+    inputs[9:12] = [found.inputs[9], 0.3, 0.7]  # the winch paying out and accelerating
+    inputs[6:9] = [0.1, 0.2, 0.5]  # the top accelerating
+    flat = np.array(model.rhs(state, inputs)).ravel()
+    loops = structured.structured_rhs(model.parametric)(state, inputs, model.parameters)
+    error = np.max(np.abs(np.array(loops).ravel() - flat)) / np.max(np.abs(flat))
+    validation("deep_lift, n = 6, elastic, moving state, winch and top accelerating",
+               "second formulation", "the flat SX right-hand side (model/axial.py)",
+               "largest difference in x' relative to its largest entry", f"{error:.1e}",
+               "<= 1e-12")  # fmt: skip
+    assert error <= 1e-12
