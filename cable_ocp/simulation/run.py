@@ -96,7 +96,6 @@ def _check_top_length(scene, drive: Drive, times: np.ndarray) -> None:
             f"the winch gives the angle {length[k]} at t = {times[k]:.6g} s: the winch function "
             "must return finite angles (rad) over the whole run"
         )
-    _check_drum_range(scene, drive, times)
     low, high = scene.winch.top_length_min, scene.winch.top_length_max
     tolerance = scene.winch.drum_radius * BOUND_TOLERANCE
     if high is None:
@@ -109,24 +108,6 @@ def _check_top_length(scene, drive: Drive, times: np.ndarray) -> None:
             f"the winch sets the top-element length to {length[k]:.4g} m at t = {times[k]:.6g} s, "
             f"outside [winch.top_length_min, winch.top_length_max] = [{low}, {high}] m by more "
             f"than the tolerance {tolerance:.3g} m"
-        )
-
-
-def _check_drum_range(scene, drive: Drive, times: np.ndarray) -> None:
-    """Refuse a winch that turns the drum beyond ``[winch.angle_min, winch.angle_max]``.
-
-    The drum's range is the winch's reach (heave compensation included): a run beyond it is not
-    one this winch can make. ``BOUND_TOLERANCE`` (rad) counts as within.
-    """
-    angle = drive.winch_angle(times)[0]
-    low, high = scene.winch.angle_min, scene.winch.angle_max
-    outside = (angle < low - BOUND_TOLERANCE) | (angle > high + BOUND_TOLERANCE)
-    if outside.any():
-        k = int(np.argmax(outside))
-        raise ValueError(
-            f"the winch turns the drum to {angle[k]:.6g} rad at t = {times[k]:.6g} s, beyond "
-            f"[winch.angle_min, winch.angle_max] = [{low}, {high}] rad (the drum's range): a "
-            "winch within them, or a scene whose range is the winch's"
         )
 
 
