@@ -31,7 +31,7 @@ from types import SimpleNamespace
 import casadi as ca
 
 from cable_ocp.model.axial_element import elastic_element_functions
-from cable_ocp.model.joints import baumgarte
+from cable_ocp.model.joints import baumgarte, chain_outputs
 from cable_ocp.model.kinematics import POSITION
 from cable_ocp.model.kkt import thomas_solve
 from cable_ocp.model.layout import INPUTS, top_inputs
@@ -123,17 +123,7 @@ def elastic_graph(model) -> SimpleNamespace:
         ca.jacobian(ca.vertcat(*residual), coordinates),
         ca.vertcat(*bond_rhs),
     ]
-    joints = ca.horzcat(*[qi[POSITION] for qi in q], upper_points[-1])
-    joint_velocities = ca.horzcat(*[qdi[POSITION] for qdi in qd], upper_rates[-1])
-    outputs = [
-        joints,
-        joint_velocities,
-        ca.vertcat(*residual),
-        ca.vertcat(*rate),
-        ca.horzcat(*bond_forces),
-        ca.vertcat(*[ca.norm_2(f) for f in bond_forces]),
-        qdd,
-    ]
+    outputs = chain_outputs(q, qd, upper_points, upper_rates, residual, rate, bond_forces, qdd)
     energy = potential + 0.5 * stiffness * strain**2
     energy += sum(element_energy(*args, p) for args in zip(local, local_rates, rest, strict=True))
     return SimpleNamespace(

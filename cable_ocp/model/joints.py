@@ -61,3 +61,20 @@ class KernelLoops:
     def mapaccum(self, name: str, count: int):
         """Kernel ``name`` accumulated over ``count`` columns (CasADi's ``mapaccum``)."""
         return getattr(self, name).mapaccum(count)
+
+
+def chain_outputs(q, qd, upper_points, upper_rates, residual, rate, bond_forces, qdd) -> list:
+    """The flat model's outputs in the order of :data:`~cable_ocp.model.layout.OUTPUT_NAMES`.
+
+    Joints ``A_0 .. A_{n+1}`` and their velocities (the top from the top element's upper point),
+    the bond residuals and rates, the bond forces, their norms (the tensions) and ``q''``.
+    """
+    return [
+        ca.horzcat(*[qi[:3] for qi in q], upper_points[-1]),
+        ca.horzcat(*[qdi[:3] for qdi in qd], upper_rates[-1]),
+        ca.vertcat(*residual),
+        ca.vertcat(*rate),
+        ca.horzcat(*bond_forces),
+        ca.vertcat(*[ca.norm_2(f) for f in bond_forces]),
+        qdd,
+    ]

@@ -21,7 +21,7 @@ import casadi as ca
 from cable_ocp.model.axial import elastic_graph
 from cable_ocp.model.current import current_at
 from cable_ocp.model.hydro import smooth_norm
-from cable_ocp.model.joints import baumgarte, bending_energies
+from cable_ocp.model.joints import baumgarte, bending_energies, chain_outputs
 from cable_ocp.model.kinematics import POSITION, relative_twist
 from cable_ocp.model.kkt import thomas_solve
 from cable_ocp.model.layout import INPUT_SIZE, INPUTS, OUTPUT_NAMES, top_inputs
@@ -262,18 +262,7 @@ class ParametricModel(ModelLayout):
             ca.jacobian(ca.vertcat(*residual), q_all),
             ca.vertcat(*bond_rhs),
         ]
-        joints = ca.horzcat(*[qi[POSITION] for qi in q], upper_points[-1])
-        joint_velocities = ca.horzcat(*[qdi[POSITION] for qdi in qd], upper_rates[-1])
-        tensions = ca.vertcat(*[ca.norm_2(f) for f in bond_forces])
-        outputs = [
-            joints,
-            joint_velocities,
-            ca.vertcat(*residual),
-            ca.vertcat(*rate),
-            ca.horzcat(*bond_forces),
-            tensions,
-            qdd,
-        ]
+        outputs = chain_outputs(q, qd, upper_points, upper_rates, residual, rate, bond_forces, qdd)
         return SimpleNamespace(
             xdot=ca.vertcat(qd_all, qdd),
             kkt_parts=kkt_parts,

@@ -11,7 +11,6 @@ Saved as one netCDF file: the whole-run views at its root, each segment in a gro
 from __future__ import annotations
 
 from dataclasses import dataclass
-from functools import cached_property
 from pathlib import Path
 
 import numpy as np
@@ -19,7 +18,7 @@ import xarray as xr
 
 from cable_ocp.model.layout import INPUTS
 from cable_ocp.result_files import netcdf
-from cable_ocp.simulation.slack import PhysicsCheck, check_physics
+from cable_ocp.simulation.slack import PhysicsChecked
 from cable_ocp.simulation.trajectory import Trajectory, run_summary
 
 KIND = "LineTrajectory"
@@ -31,7 +30,7 @@ def _joined(name: str, doc: str) -> property:
 
 
 @dataclass(frozen=True, eq=False)
-class LineTrajectory:
+class LineTrajectory(PhysicsChecked):
     """A run of a line on the drum (``[winch.line]``), segment by segment.
 
     Attributes
@@ -126,21 +125,6 @@ class LineTrajectory:
     def scene(self):
         """The scene that ran."""
         return self.segments[0].scene
-
-    @cached_property
-    def physics(self) -> PhysicsCheck:
-        """The run's slack, compression and seabed (:func:`.slack.check_physics`)."""
-        return check_physics(self)
-
-    @property
-    def success(self) -> bool:
-        """Whether the run passed its physics check (:attr:`physics`)."""
-        return self.physics.success
-
-    @property
-    def status(self) -> str:
-        """The physics check's one line: why the run fails, or that it passed."""
-        return self.physics.status
 
     def summary(self) -> dict:
         """As :meth:`Trajectory.summary`, with the line out's range (m)."""

@@ -22,6 +22,7 @@ part), DNV-RP-H103's ``F_static`` of the hoisting system at that line out. Three
 from __future__ import annotations
 
 from dataclasses import dataclass, replace
+from functools import cached_property
 
 import numpy as np
 
@@ -340,3 +341,29 @@ def check_physics(run) -> PhysicsCheck:
     report = slack_report(run.time, tensions, run_static(run, spec_from_scene(scene)))
     failure, notes = seabed_findings(scene.seabed, run.time, run.end)
     return PhysicsCheck(report if kept else replace(report, signed=False), failure, tuple(notes))
+
+
+class PhysicsChecked:
+    """A run's physics check as its properties: ``physics``, ``success`` and ``status``.
+
+    Mixed into both trajectory kinds (a fixed-n :class:`~cable_ocp.simulation.trajectory.Trajectory`
+    and a :class:`~cable_ocp.simulation.line_trajectory.LineTrajectory`).
+    """
+
+    @cached_property
+    def physics(self) -> PhysicsCheck:
+        """The run's slack, compression and seabed (:func:`check_physics`).
+
+        Raises ValueError if the run holds no scene.
+        """
+        return check_physics(self)
+
+    @property
+    def success(self) -> bool:
+        """Whether the run passed its physics check (:attr:`physics`)."""
+        return self.physics.success
+
+    @property
+    def status(self) -> str:
+        """The physics check's one line: why the run fails, or that it passed."""
+        return self.physics.status

@@ -3,7 +3,6 @@
 from __future__ import annotations
 
 from dataclasses import dataclass, field, fields
-from functools import cached_property
 from pathlib import Path
 
 import numpy as np
@@ -16,7 +15,7 @@ from cable_ocp.scene.axial_choice import axial_choice
 from cable_ocp.scene.records import check_run
 from cable_ocp.scene.schema import scene_of
 from cable_ocp.simulation import trajectory_dataset
-from cable_ocp.simulation.slack import PhysicsCheck, check_physics
+from cable_ocp.simulation.slack import PhysicsChecked
 
 ARRAY_FIELDS = (
     "time", "states", "inputs", "joints", "tensions", "winch_angle", "clearance_error",
@@ -26,7 +25,7 @@ SIGNED_NAME = "bond force along the axis of element i at its upper end A_{i+1} (
 
 
 @dataclass(frozen=True, eq=False)
-class Trajectory:
+class Trajectory(PhysicsChecked):
     """A simulated run, sampled at its output times.
 
     Attributes
@@ -115,24 +114,6 @@ class Trajectory:
     def padded(self, values) -> np.ndarray:
         """``values(self)``, as :meth:`LineTrajectory.padded` gives a line run's per-bond views."""
         return values(self)
-
-    @cached_property
-    def physics(self) -> PhysicsCheck:
-        """The run's slack, compression and seabed (:func:`.slack.check_physics`).
-
-        Raises ValueError if the run holds no scene.
-        """
-        return check_physics(self)
-
-    @property
-    def success(self) -> bool:
-        """Whether the run passed its physics check (:attr:`physics`)."""
-        return self.physics.success
-
-    @property
-    def status(self) -> str:
-        """The physics check's one line: why the run fails, or that it passed."""
-        return self.physics.status
 
     def summary(self) -> dict:
         """The run's figures (json-ready), with ``"units"``.
