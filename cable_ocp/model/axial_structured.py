@@ -11,14 +11,13 @@ strain acceleration (``B``); sums over the elements then give the strain's equat
 
 from __future__ import annotations
 
-from collections.abc import Callable
 from dataclasses import dataclass
 
 import casadi as ca
 
 from cable_ocp.model.axial_element import elastic_element_functions
 from cable_ocp.model.joints import (
-    KernelLoops,
+    Kernels,
     baumgarte,
     bending_energies,
     top_bond_kernel,
@@ -145,25 +144,14 @@ def _accelerations() -> ca.Function:
 
 
 @dataclass(frozen=True)
-class ElasticKernels(KernelLoops):
-    """The small Functions of the elastic loops, and what they take as ``p``.
+class ElasticKernels(Kernels):
+    """The kernels of the elastic loops, with ``axial``: ``p`` -> ``EA`` (N), damping ratio.
 
-    As :class:`cable_ocp.model.structured.Kernels`, with the strain's kernels: ``axial`` gives
-    ``EA`` (N) and the damping ratio from ``p``.
+    Those of :class:`~cable_ocp.model.joints.Kernels`, with two columns where the rigid ones
+    carry one.
     """
 
-    joint: ca.Function
-    element: ca.Function
-    element_end: ca.Function
-    bond: ca.Function
-    top_bond: ca.Function
-    forward: ca.Function
-    backward: ca.Function
-    accelerations: ca.Function
-    inverse: ca.Function
-    segment_length: ca.Function
-    axial: ca.Function
-    parameters: Callable[[ca.MX], ca.MX] = lambda p: p
+    axial: ca.Function | None = None
 
 
 def elastic_kernels_of(model) -> ElasticKernels:

@@ -6,6 +6,9 @@ elements carries the bending spring and its Rayleigh damping (CONVENTIONS.md §4
 
 from __future__ import annotations
 
+from collections.abc import Callable
+from dataclasses import dataclass
+
 import casadi as ca
 
 
@@ -46,19 +49,33 @@ def top_bond_kernel(model) -> ca.Function:
     )
 
 
-class KernelLoops:
-    """``map`` and ``mapaccum`` of the kernels of the structured loops, by name.
+@dataclass(frozen=True)
+class Kernels:
+    """The small Functions the structured loops call, and what they take as ``p``.
 
-    Mixed into the kernel sets of the rigid and the elastic rope
-    (:class:`cable_ocp.model.structured.Kernels`,
-    :class:`cable_ocp.model.axial_structured.ElasticKernels`).
+    ``parameters`` maps the graph's ``p`` (MX) to the ``p`` the kernels take: the identity for
+    the kernels of the model itself (:func:`kernels_of`); one set of kernels built and compiled
+    on another structure of another ``n`` serves every ``n`` when it maps the segment length
+    onto its own (:mod:`cable_ocp.model.payout`).
     """
 
-    def map(self, name: str, count: int):
+    joint: ca.Function
+    element: ca.Function
+    element_end: ca.Function
+    bond: ca.Function
+    top_bond: ca.Function
+    forward: ca.Function
+    backward: ca.Function
+    accelerations: ca.Function
+    inverse: ca.Function
+    segment_length: ca.Function
+    parameters: Callable[[ca.MX], ca.MX] = lambda p: p
+
+    def map(self, name: str, count: int) -> Callable:
         """Kernel ``name`` over ``count`` columns (CasADi's ``map``)."""
         return getattr(self, name).map(count)
 
-    def mapaccum(self, name: str, count: int):
+    def mapaccum(self, name: str, count: int) -> Callable:
         """Kernel ``name`` accumulated over ``count`` columns (CasADi's ``mapaccum``)."""
         return getattr(self, name).mapaccum(count)
 

@@ -23,9 +23,9 @@ from functools import lru_cache, partial
 import casadi as ca
 
 from cable_ocp.model import structured
-from cable_ocp.model.axial_structured import ElasticKernels
 from cable_ocp.model.cable import CableModel, ModelSpec
 from cable_ocp.model.compile import CompileReport, compiled_from
+from cable_ocp.model.joints import Kernels
 from cable_ocp.model.parameters import parameter_names, structure_of
 from cable_ocp.model.parametric import ParametricModel
 
@@ -52,13 +52,13 @@ ACCUMULATED = ("forward", "backward")
 class BlockedKernels:
     """Kernels whose loops over n columns call compiled loops over :data:`BLOCKS` columns.
 
-    ``kernels`` are a structure's own (:class:`~cable_ocp.model.structured.Kernels`, or an
+    ``kernels`` are a structure's own (:class:`~cable_ocp.model.joints.Kernels`, or an
     elastic rope's :class:`~cable_ocp.model.axial_structured.ElasticKernels`), whose Functions
     and parameters this answers for; ``blocks[name][size]`` is kernel ``name`` mapped (or
     accumulated) over ``size`` columns.
     """
 
-    kernels: structured.Kernels | ElasticKernels
+    kernels: Kernels
     blocks: dict = field(default_factory=dict)
 
     def __getattr__(self, name: str):

@@ -17,7 +17,6 @@ library.
 from __future__ import annotations
 
 from collections.abc import Callable
-from dataclasses import dataclass
 from typing import NamedTuple
 
 import casadi as ca
@@ -30,7 +29,7 @@ from cable_ocp.model.axial_structured import (
 from cable_ocp.model.cable import CableModel
 from cable_ocp.model.compile import CompileReport, compile_in_background, compiled_from
 from cable_ocp.model.joints import (
-    KernelLoops,
+    Kernels,
     baumgarte,
     bending_energies,
     top_bond_kernel,
@@ -336,29 +335,6 @@ def _graph_function(
         return ca.Function(name, [x, u, p], list(named.values()), ["x", "u", "p"], list(named))
 
     return model.memo(("structured", key), build)
-
-
-@dataclass(frozen=True)
-class Kernels(KernelLoops):
-    """The small Functions the structured loops call, and what they take as ``p``.
-
-    ``parameters`` maps the graph's ``p`` (MX) to the ``p`` the kernels take: the identity for
-    the kernels of the model itself (:func:`kernels_of`); one set of kernels built and compiled
-    on another structure of another ``n`` serves every ``n`` when it maps the segment length
-    onto its own (:mod:`cable_ocp.model.payout`).
-    """
-
-    joint: ca.Function
-    element: ca.Function
-    element_end: ca.Function
-    bond: ca.Function
-    top_bond: ca.Function
-    forward: ca.Function
-    backward: ca.Function
-    accelerations: ca.Function
-    inverse: ca.Function
-    segment_length: ca.Function
-    parameters: Callable[[ca.MX], ca.MX] = lambda p: p
 
 
 def kernels_of(model: ParametricModel) -> Kernels | ElasticKernels:
