@@ -7,13 +7,14 @@ errata: ``cable_ocp/CONVENTIONS.md``.
 
 The names below are imported on first use (PEP 562): ``import cable_ocp``, which every
 ``cable-ocp`` command does, costs no SciPy, optimiser or matplotlib import until one is needed
-(``cable-ocp simulate`` never loads the optimisers).
+(``cable-ocp simulate`` never loads the optimisers), by :func:`cable_ocp.lazy.lazy_names`.
 """
 
 from __future__ import annotations
 
-from importlib import import_module
 from typing import TYPE_CHECKING
+
+from cable_ocp.lazy import lazy_names
 
 if TYPE_CHECKING:  # what __getattr__ imports, for type checkers and the import graph
     from cable_ocp import plots
@@ -80,55 +81,5 @@ _SOURCES = {
     "simulate": "cable_ocp.simulation.run",
 }
 
-__all__ = [
-    "INPUT_NAMES",
-    "CableModel",
-    "GaussNewtonSettings",
-    "GridSettings",
-    "IpoptSettings",
-    "ModelSettings",
-    "SOLVERS",
-    "TranscriptionSettings",
-    "MpcResult",
-    "MpcSettings",
-    "NelderMeadSettings",
-    "OcpResult",
-    "Drive",
-    "EquilibriumError",
-    "LineTrajectory",
-    "Scene",
-    "SimulationError",
-    "Trajectory",
-    "catenary_check",
-    "catenary_shape",
-    "check_landing",
-    "equilibrium",
-    "hold",
-    "integrate",
-    "land",
-    "landing_scene",
-    "load_result",
-    "load_scene",
-    "mpc",
-    "optimize",
-    "plan_landing",
-    "plots",
-    "reference_solution",
-    "simulate",
-]
-
-
-def __getattr__(name: str):
-    """A public name, imported from its module on first use and kept."""
-    try:
-        source = _SOURCES[name]
-    except KeyError:
-        raise AttributeError(f"module 'cable_ocp' has no attribute {name!r}") from None
-    module = import_module(source)
-    value = module if source == f"{__name__}.{name}" else getattr(module, name)
-    globals()[name] = value
-    return value
-
-
-def __dir__() -> list[str]:
-    return sorted({*globals(), *__all__})
+__all__ = list(_SOURCES)
+__getattr__, __dir__ = lazy_names(globals(), _SOURCES)
