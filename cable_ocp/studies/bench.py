@@ -65,8 +65,11 @@ class StepTiming:
     Attributes
     ----------
     scene : str
+        File name of the scene in ``models/``.
     elements : int
+        Number of elements n of the model.
     step : float, s
+        RK4 step h.
     mode : str
         ``"interpreted"`` or ``"compiled"``.
     build_time : float, s
@@ -129,10 +132,15 @@ def time_simulation(
     Parameters
     ----------
     scene_path : Path
+        Scene file to load.
     elements : int
+        Number of elements n, set on the scene.
     step : float, s
+        RK4 step h, set on the scene.
     compiled : bool
+        Compile the step to C; otherwise CasADi's SX virtual machine runs it.
     repeats : int
+        How many timed runs, of which the best counts.
     """
     scene = load_scene(scene_path, {"model.elements": elements, "numerics.step": step})
     duration = scene.numerics.duration if compiled else INTERPRETED_DURATION[elements]

@@ -28,8 +28,12 @@ class ElasticTiming:
     Attributes
     ----------
     label : str
+        The model and its settings as the table prints them (rope, n, h; or MoorDyn's
+        segments and step).
     figures : HeaveFigures
+        Payload heave and top tension figures of the run.
     milliseconds_per_simulated_second : float, ms/s
+        Wall time of the whole run per simulated second.
     """
 
     label: str

@@ -67,6 +67,7 @@ class LoweringRanges:
     peak_period : (float, float), s
         7-12 s: swell and wind sea of those heights.
     drum_radius : (float, float), m
+        r_D, 0.5-1.5 m: the drum sets the winch's angle, rate and acceleration limits.
     line_speed : (float, float), m/s
         The winch's top line speed: 1.0-2.0 m/s.
     line_acceleration : (float, float), m/s^2

@@ -30,10 +30,13 @@ class StepHalving:
     Attributes
     ----------
     step : float, s
+        The scene's RK4 step h.
     max_difference : float, m
+        ``max_t |r_E(h) - r_E(h/2)|`` over the output grid.
     rise : float, m
         Largest rise of the end above its start (at step h).
     omega : float, m
+        Omega of the run at step h (winch locked).
     """
 
     step: float
@@ -74,12 +77,17 @@ class ElementConvergence:
     Attributes
     ----------
     elements : tuple of int
+        The numbers of elements n compared.
     reference_elements : int
+        n of the reference run.
     max_difference : tuple of float, m
         ``max_t |r_E(n) - r_E(reference)|`` per ``n``.
     omega : tuple of float, m
+        Omega of each run (winch locked), per ``n``.
     reference_omega : float, m
+        Omega of the reference run.
     step : float, s
+        RK4 step h of every run.
     """
 
     elements: tuple[int, ...]
@@ -172,8 +180,11 @@ class EndPositionTable:
     Attributes
     ----------
     times : tuple of float, s
+        Times of the table's columns.
     labels : tuple of str
+        One per setting (step, torsion).
     positions : array (settings, times, 3), m
+        The end's position r_E per setting and time.
     """
 
     times: tuple[float, ...]

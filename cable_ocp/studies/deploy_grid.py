@@ -15,9 +15,8 @@ from __future__ import annotations
 
 import numpy as np
 import xarray as xr
-from scipy.ndimage import gaussian_filter
 
-from cable_ocp.studies.survey_grid import grid_dataset, write_grid
+from cable_ocp.studies.survey_grid import grid_axis, grid_dataset, smoothed_noise, write_grid
 
 SPACING = 10.0  # m
 X_RANGE = (-100.0, 400.0)  # m, down-current
@@ -27,12 +26,12 @@ SEED = 27
 
 
 def deploy_elevation(x: np.ndarray, y: np.ndarray, seed: int = SEED) -> np.ndarray:
-    """Elevation of the synthetic site on the grid ``x`` by ``y`` (m, up; shape (nx, ny)).
+    """Elevation of the deploy site on the grid ``x`` by ``y`` (m, up; shape (nx, ny)).
 
     Parameters
     ----------
     x, y : array, m
-        Strictly increasing axes, :data:`SPACING` apart.
+        Strictly increasing axes, :data:`SPACING` apart, down the current and across it.
     seed : int
         Seed of the small-scale relief.
     """
@@ -40,15 +39,14 @@ def deploy_elevation(x: np.ndarray, y: np.ndarray, seed: int = SEED) -> np.ndarr
     slope = -0.015 * X  # falling down-current
     mounds = 6.0 * np.exp(-(((X - 160.0) / 40.0) ** 2) - ((Y + 40.0) / 30.0) ** 2)
     mounds += 4.0 * np.exp(-(((X - 20.0) / 30.0) ** 2) - ((Y - 70.0) / 40.0) ** 2)
-    relief = gaussian_filter(np.random.default_rng(seed).normal(0.0, 1.0, X.shape), sigma=2.0)
+    relief = smoothed_noise(X.shape, seed)
     relief *= 0.3 / relief.std()
     return BASE + slope + mounds + relief
 
 
 def deploy_grid(seed: int = SEED) -> xr.Dataset:
     """The grid as a Dataset: ``elevation`` (m) over ``x``, ``y`` (m), CF attributes."""
-    x = np.arange(X_RANGE[0], X_RANGE[1] + SPACING / 2, SPACING)
-    y = np.arange(Y_RANGE[0], Y_RANGE[1] + SPACING / 2, SPACING)
+    x, y = grid_axis(X_RANGE, SPACING), grid_axis(Y_RANGE, SPACING)
     return grid_dataset(
         x, y, deploy_elevation(x, y, seed), "synthetic bathymetry of the cable_ocp deploy scene",
         f"cable_ocp.studies.deploy_grid (seed {seed})", ("down-current", "across the current"),

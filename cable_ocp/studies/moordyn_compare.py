@@ -163,6 +163,7 @@ def moordyn_input(
     Parameters
     ----------
     scene : Scene
+        The cable, environment, top point and seabed.
     elements : int
         Number of segments ``N``.
     internal_step : float, s
@@ -278,6 +279,7 @@ def run_moordyn(
     Parameters
     ----------
     scene : Scene
+        The cable, its tow and the sea; its step is not used.
     elements : int
         Number of segments ``N``.
     internal_step : float, s
@@ -327,7 +329,9 @@ def run_cable_ocp(
     Parameters
     ----------
     model : CableModel
+        The project's model of the scene (n = the segments' number).
     drive : Drive
+        The scene's top motion, winch (locked) and end force over time.
     x0 : array (state_size,)
         Initial state (the static equilibrium).
     step : float, s
@@ -407,6 +411,7 @@ def compare(scene: Scene, elements: int, duration: float | None = None) -> Compa
     Parameters
     ----------
     scene : Scene
+        The tow compared, its winch locked.
     elements : int
         ``N`` for both codes.
     duration : float, s, optional

@@ -68,16 +68,21 @@ class DeepCase:
     Attributes
     ----------
     name : str
+        Key of the case in :data:`CASES`, as tables and tests name it.
     length : float, m
         Unstretched line length L.
     diameter : float, m
+        Of the line, d.
     density : float, kg/m^3
         Of the line; its mass per metre is ``density pi d^2 / 4``.
     axial_stiffness : float, N
         ``EA``.
     payload_mass : float, kg
+        Of the payload in air.
     payload_volume : float, m^3
+        Displaced by the payload (its buoyancy).
     payload_drag_area : float, m^2
+        The payload's area across the flow.
     payload_drag : float
         Drag coefficient on ``payload_drag_area``.
     segments : int
@@ -259,6 +264,7 @@ class DeepRun:
     Attributes
     ----------
     time : array (k,), s
+        The sample times, from 0.
     top : array (k,), m
         The top's height, scene frame.
     payload : array (k,), m
@@ -268,7 +274,9 @@ class DeepRun:
     stretch : float, m
         Static stretch of MoorDyn's initial equilibrium.
     segments : int
+        MoorDyn's ``N``.
     internal_step : float, s
+        MoorDyn's internal step ``dtM``.
     wall_time : float, s
         Of the time loop.
     """
@@ -295,9 +303,11 @@ def run_moordyn(scene: Scene, top: TopMotionFunction, duration: float, segments:
     Parameters
     ----------
     scene : Scene
+        The line, its payload and the sea; the top's motion comes from ``top``.
     top : callable
         ``t -> (position, velocity, ...)``, arrays (3, len(t)) in m, m/s (a ``Drive``'s ``top``).
     duration : float, s
+        Simulated time.
     segments : int
         MoorDyn's ``N``.
     step : float, s, optional
@@ -350,7 +360,9 @@ class HeaveFigures:
     Attributes
     ----------
     vessel_heave_std, payload_heave_std : float, m
+        Standard deviations of the top's and of the payload's heights.
     tension_min, tension_max : float, N
+        Least and largest top tension.
     """
 
     vessel_heave_std: float
@@ -380,6 +392,7 @@ def heave_figures(time: np.ndarray, top: np.ndarray, payload: np.ndarray,
     Parameters
     ----------
     time : array (k,), s
+        The sample times.
     top, payload : array (k,), m
         Heights of the top and of the payload.
     tension : array (k,), N
@@ -450,6 +463,7 @@ def decay_period(time: np.ndarray, top: np.ndarray, payload: np.ndarray) -> floa
     Parameters
     ----------
     time : array (k,), s
+        The sample times of a free decay.
     top, payload : array (k,), m
         Heights of the top (:func:`decay_top`) and of the payload, from rest.
     """
@@ -475,19 +489,25 @@ class CaseRow:
     Attributes
     ----------
     case : DeepCase
+        The case the row measures.
     period_analytic, period_exact, period_moordyn : float, s
         ``T0`` of :func:`axial_period`, of :func:`axial_period_exact` and of MoorDyn's free
         decay.
     damping_moordyn : float
         The free decay's damping ratio (:func:`decay_damping_ratio`, drag included).
     static_tension : float, N
+        Top tension of the line hanging at rest, ``W_p + w' L`` (:func:`static_top_tension`).
     stretch_analytic, stretch_moordyn : float, m
+        Static stretch of the line: ``(W_p L + w' L^2 / 2) / EA`` (:func:`static_stretch`), and
+        that of MoorDyn's initial equilibrium.
     heave : HeaveFigures
+        MoorDyn's heave run at ``segments`` and its own step.
     heave_refined, heave_half_step : HeaveFigures
         At twice the segments (and their own step), and at half the step: the convergence.
     ms_per_simulated_second : float, ms/s
         MoorDyn's heave run.
     internal_step : float, s
+        MoorDyn's step ``dtM`` of the heave run.
     """
 
     case: DeepCase

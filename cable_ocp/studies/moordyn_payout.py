@@ -43,9 +43,11 @@ class PayOutComparison:
     Attributes
     ----------
     time : array (k,), s
+        The whole seconds of the run, where both ends are compared.
     moordyn, cable_ocp : array (k, 3), m
         The free end of each.
     paid_out : float, m
+        Line paid out over the run.
     difference : float, m
         Largest end distance over the run.
     moordyn_wall, cable_ocp_wall : float, s

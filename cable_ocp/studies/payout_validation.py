@@ -195,6 +195,7 @@ class Transient:
         run's (interpolated to the same times), over the static top tension; from the last
         output before to the first after.
     changes : int
+        How many times the run changed its number of elements.
     """
 
     new_top_length: float

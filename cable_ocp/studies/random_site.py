@@ -14,7 +14,8 @@ from pathlib import Path
 
 import numpy as np
 import xarray as xr
-from scipy.ndimage import gaussian_filter
+
+from cable_ocp.studies.survey_grid import grid_axis, smoothed_noise, smoothstep
 
 SPACING = 5.0  # m
 X_RANGE = (-100.0, 400.0)  # m, along the tow
@@ -42,15 +43,13 @@ def site_elevation(
         Where the end starts along x: the site is flat up to :data:`FLAT_UNTIL` beyond it.
     """
     X, Y = np.meshgrid(x, y, indexing="ij")
-    tau = np.clip((X - start - FLAT_UNTIL) / ONSET, 0.0, 1.0)
-    onset = tau**3 * (10 - 15 * tau + 6 * tau**2)
+    onset = smoothstep((X - start - FLAT_UNTIL) / ONSET)
     slope = relief["slope"] * np.maximum(X - start - FLAT_UNTIL, 0.0) * onset
     angle = relief["ridge_angle"]
     across = (X - relief["ridge_x"]) * np.cos(angle) + Y * np.sin(angle)
     ridge = relief["ridge_height"] * np.exp(-((across / relief["ridge_width"]) ** 2)) * onset
     waves = relief["waves"] * np.sin(2 * np.pi * (X + 0.4 * Y) / relief["wavelength"]) * onset
-    noise = np.random.default_rng(relief["seed"]).normal(0.0, 1.0, X.shape)
-    rough = gaussian_filter(noise, sigma=2.0)
+    rough = smoothed_noise(X.shape, relief["seed"])
     rough *= relief["roughness"] / rough.std() * onset
     return base + slope + ridge + waves + rough
 
@@ -69,8 +68,7 @@ def write_site(
     area it covers (by default every end path of the paper_hill variants), ``start`` (m) where
     the end starts along x.
     """
-    x = np.arange(x_range[0], x_range[1] + SPACING / 2, SPACING)
-    y = np.arange(y_range[0], y_range[1] + SPACING / 2, SPACING)
+    x, y = grid_axis(x_range, SPACING), grid_axis(y_range, SPACING)
     metres = {"units": "m"}
     grid = xr.Dataset(
         {"elevation": (("x", "y"), site_elevation(x, y, relief, base, start), metres)},

@@ -68,33 +68,47 @@ class Ranges:
     Attributes
     ----------
     surge_speed : (float, float), m/s
+        The tow's speed along x after its ramp.
     sway_speed : (float, float), m/s
+        Amplitude of the vessel's lateral speed.
     clearance : (float, float), m
+        The end's initial height above the seabed, delta.
     hills : (int, int)
         Fewest and most hills.
     hill_height : (float, float), m
+        Each hill's height k.
     hill_width : (float, float), m
+        Each hill's widths along x and y, drawn separately.
     hill_x, hill_y : (float, float), m
         Where the hill centres lie, around the end's path.
     current : float, m/s
         Largest magnitude of each horizontal current component.
     elements : tuple of int
+        The values of n drawn from (each equally likely).
     heave_share : float
         Share of the scenes with a vessel heave.
     heave_amplitude : (float, float), m
+        Of the sinusoidal heave.
     heave_period : (float, float), s
+        Of the sinusoidal heave.
     site_share : float
         Share of the scenes on a random bathymetry grid (:mod:`~cable_ocp.studies.random_site`).
     site_slope : (float, float)
         Rise per metre along the tow.
     ridge_height, ridge_x, ridge_width : (float, float), m
+        The ridge's height, where it crosses y = 0, and its width.
     ridge_angle : (float, float), rad
+        The ridge's angle from the y axis.
     sand_waves, sand_wavelength, roughness : (float, float), m
+        Sand-wave amplitude and wavelength, and the small-scale relief's standard deviation.
     sea_share : float
         Share of the scenes with a JONSWAP sea state (added to any sinusoidal heave).
     significant_height : (float, float), m
+        H_s of the sea state.
     peak_period : (float, float), s
+        T_p of the sea state.
     peak_enhancement : (float, float)
+        The JONSWAP spectrum's peak enhancement factor gamma.
     """
 
     surge_speed: tuple[float, float] = (0.7, 1.4)

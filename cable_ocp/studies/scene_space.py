@@ -72,10 +72,13 @@ class SpaceRanges:
     payload_density : (float, float), kg/m^3
         Of the payload's volume (steel frames with buoyancy: 2500-7800).
     payload_drag_area : (float, float), m^2
+        Its drag coefficient times its area across the flow, 0.2-3 m^2.
     surge_speed : (float, float), m/s
         Tows up to 1.8 m/s (3.5 kn).
     sway_speed : (float, float), m/s
+        Amplitude of the vessel's lateral speed, up to 0.4 m/s.
     ramp_time : (float, float), s
+        Time over which the tow reaches its surge speed, 10-40 s.
     duration : (int, int), s
         Whole seconds, 60-600: multiples of nothing in particular.
     elements : (int, int)
@@ -87,10 +90,13 @@ class SpaceRanges:
     heave_share, sea_share : float
         Shares with a sinusoidal heave and with a JONSWAP sea state (with an RAO table).
     heave_amplitude : (float, float), m
+        Of the sinusoidal heave, 0.3-1 m.
     heave_period : (float, float), s
+        Of the sinusoidal heave, 7-12 s.
     significant_height : (float, float), m
         Hs 1-4 m: workable to marginal sea states for a tow.
     peak_period : (float, float), s
+        T_p of the sea state, 6-12 s.
     drum_radius : (float, float), m
         0.3-1.5 m.
     haul_in, pay_out : (float, float), m
@@ -100,10 +106,15 @@ class SpaceRanges:
     line_speed : (float, float), m/s
         The winch's top line speed ``r_D phi'_max``.
     line_acceleration : (float, float), m/s^2
+        The winch's top line acceleration ``r_D phi''_max``.
     clearance : (float, float), m
+        The end's initial height above the seabed, delta.
     hills : (int, int)
+        How many Gaussian hills are placed along the locked run's path (0-3).
     hill_height : (float, float), m
+        Each hill's height k.
     hill_width : (float, float), m
+        Each hill's widths along x and y, drawn separately.
     grid_share : float
         Share on a random bathymetry grid.
     grid_slope : (float, float)

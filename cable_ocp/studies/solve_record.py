@@ -20,8 +20,11 @@ class SolveRecord:
     omega_model : float, m
         On the optimisation model.
     success : bool
+        The solver converged and its profile passed verification.
     status : str
+        The solver's own status message, or ``"verification failed: <reason>"``.
     iterations, evaluations : int
+        The solver's iterations and objective evaluations (each a simulation for Nelder-Mead).
     wall_time : float, s
         The whole ``optimize`` call, verification included.
     """

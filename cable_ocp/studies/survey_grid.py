@@ -9,6 +9,10 @@ B-spline through it (CONVENTIONS.md §5) is the seabed the scene means.
 Regenerate the file (bit for bit, by its seed)::
 
     python -m cable_ocp.studies.survey_grid models/data/survey_grid.nc
+
+The parts every synthetic grid is made of (its axes, the onset of its features, its seeded relief,
+the Dataset and the script's command line) live here, for :mod:`~cable_ocp.studies.deploy_grid`
+and :mod:`~cable_ocp.studies.random_site` too.
 """
 
 from __future__ import annotations
@@ -28,37 +32,55 @@ BASE = -305.0  # m, the flat seabed under the start
 SEED = 16
 
 
-def _smoothstep(tau: np.ndarray) -> np.ndarray:
+def grid_axis(bounds: tuple[float, float], spacing: float) -> np.ndarray:
+    """A grid's axis from ``bounds[0]`` to ``bounds[1]`` (both included), ``spacing`` apart, m."""
+    return np.arange(bounds[0], bounds[1] + spacing / 2, spacing)
+
+
+def smoothstep(tau: np.ndarray) -> np.ndarray:
+    """Quintic smoothstep ``S(tau) = 10 tau^3 - 15 tau^4 + 6 tau^5``: 0 before 0, 1 after 1."""
     s = np.clip(tau, 0.0, 1.0)
     return s**3 * (10 - 15 * s + 6 * s**2)
 
 
+def smoothed_noise(shape: tuple[int, int], seed: int) -> np.ndarray:
+    """A site's small-scale relief before scaling: seeded unit normal noise smoothed over 2 cells.
+
+    Parameters
+    ----------
+    shape : (int, int)
+        The grid's ``(len(x), len(y))``.
+    seed : int
+        Seed of the noise: the same seed gives the same relief, bit for bit.
+    """
+    return gaussian_filter(np.random.default_rng(seed).normal(0.0, 1.0, shape), sigma=2.0)
+
+
 def survey_elevation(x: np.ndarray, y: np.ndarray, seed: int = SEED) -> np.ndarray:
-    """Elevation of the synthetic site on the grid ``x`` by ``y`` (m, up; shape (nx, ny)).
+    """Elevation of the survey site on the grid ``x`` by ``y`` (m, up; shape (nx, ny)).
 
     Parameters
     ----------
     x, y : array, m
-        Strictly increasing axes, :data:`SPACING` apart.
+        Strictly increasing axes, :data:`SPACING` apart, along and across the tow.
     seed : int
         Seed of the small-scale relief.
     """
     X, Y = np.meshgrid(x, y, indexing="ij")
-    onset = _smoothstep((X - 20.0) / 40.0)  # flat under the start, features from x = 20 m on
+    onset = smoothstep((X - 20.0) / 40.0)  # flat under the start, features from x = 20 m on
     slope = 0.03 * np.maximum(X - 20.0, 0.0) * onset  # 3 m per 100 m along the tow
     across = (X - 105.0) * np.cos(np.radians(25.0)) + (Y - 20.0) * np.sin(np.radians(25.0))
     ridge = 10.0 * np.exp(-((across / 14.0) ** 2)) * np.exp(-(((Y - 20.0) / 90.0) ** 2))
     waves = 0.6 * np.sin(2 * np.pi * (X * 0.9 + Y * 0.44) / 30.0) * onset
     pit = -2.5 * np.exp(-(((X - 150.0) / 12.0) ** 2) - ((Y - 32.0) / 10.0) ** 2)
-    relief = gaussian_filter(np.random.default_rng(seed).normal(0.0, 1.0, X.shape), sigma=2.0)
+    relief = smoothed_noise(X.shape, seed)
     relief *= 0.25 / relief.std() * onset
     return BASE + slope + ridge + waves + pit + relief
 
 
 def survey_grid(seed: int = SEED) -> xr.Dataset:
     """The grid as a Dataset: ``elevation`` (m) over ``x``, ``y`` (m), CF attributes."""
-    x = np.arange(X_RANGE[0], X_RANGE[1] + SPACING / 2, SPACING)
-    y = np.arange(Y_RANGE[0], Y_RANGE[1] + SPACING / 2, SPACING)
+    x, y = grid_axis(X_RANGE, SPACING), grid_axis(Y_RANGE, SPACING)
     return grid_dataset(
         x, y, survey_elevation(x, y, seed), "synthetic bathymetry of the cable_ocp survey scene",
         f"cable_ocp.studies.survey_grid (seed {seed})", ("along the tow", "across the tow"),
@@ -78,7 +100,9 @@ def grid_dataset(
     Parameters
     ----------
     x, y : array, m
+        The grid's axes (:func:`grid_axis`).
     elevation : array (len(x), len(y)), m
+        Seabed elevation, up from the sea surface.
     title, source : str
         The file's CF attributes.
     axes : (str, str)

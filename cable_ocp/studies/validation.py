@@ -26,6 +26,7 @@ class CatenaryCheck:
     Attributes
     ----------
     elements : int
+        Number of elements n of the model.
     max_error_x, max_error_z : float
         ``eps_x^max``, ``eps_z^max`` (eq. 35-36) against the elastic catenary, as fractions.
     max_error_inextensible : float
@@ -60,6 +61,7 @@ def catenary_check(scene, elements: int | None = None) -> CatenaryCheck:
     Parameters
     ----------
     scene : Scene
+        The catenary scene (or one like it: pinned top, end force, no water).
     elements : int, optional
         Number of elements n, 1 to 1000 (None: the scene's ``model.elements``).
 
