@@ -185,3 +185,26 @@ def test_a_line_paid_out_under_the_seabed_grid_fails_with_time_and_depth(tmp_pat
     assert depth == pytest.approx(-50.0 - run.end[:, 2].min(), abs=1e-3) and depth > 25.0
     first = float(run.status.split("under it from t = ")[1].split(" s")[0])
     assert first == pytest.approx(run.time[np.argmax(run.end[:, 2] < -50.0 - 1e-3)])
+
+
+def test_an_end_under_a_relative_seabed_is_a_note_and_the_status_says_so(short_hanging_relative):
+    """The hanging rope 0.5 m over a relative seabed, 1 m paid out: the end goes under it. The
+    run passes (a relative seabed is the scene's drawing), and status and note agree."""
+    scene = short_hanging_relative
+    run = co.simulate(scene, winch=smooth_pay_out(1.0, 3.0, scene.winch.drum_radius), compiled=True)
+    assert run.success, run.status
+    assert any(note.startswith("the end goes ") for note in run.physics.notes)
+    assert "the end under the relative seabed (a note)" in run.status
+    assert "above the seabed" not in run.status
+    # Paid out 0.2 m only, it stays above, and the status says that.
+    above = co.simulate(scene, winch=smooth_pay_out(0.2, 3.0, scene.winch.drum_radius),
+                        compiled=True)  # fmt: skip
+    assert "the end above the seabed" in above.status and not above.physics.end_under_seabed
+
+
+@pytest.fixture(scope="module")
+def short_hanging_relative():
+    """The hanging rope for 4 s, a relative seabed 0.5 m under its end."""
+    return co.load_scene(f"{MODELS}/hanging.toml").updated(
+        {"numerics.duration": 4.0, "seabed.clearance": 0.5}
+    )

@@ -244,7 +244,8 @@ def simulate(
     """Simulate a scene by RK4 from its static equilibrium.
 
     See :func:`checked_simulation`, which also returns the run's largest bond residual. The
-    run's physics (a rope that pushes, an end under an absolute seabed) is checked after it:
+    run's physics (a rope that pushes, an end under an absolute seabed, a drum beyond
+    ``[winch.angle_min, winch.angle_max]``) is checked after it:
     ``trajectory.success``, ``status`` and ``summary()`` say where and when
     (:mod:`cable_ocp.simulation.slack`); a run that fails it is returned, not raised.
     """

@@ -280,7 +280,9 @@ def check_start(seabed, start: np.ndarray) -> None:
         )
 
 
-def seabed_findings(seabed, time: np.ndarray, end: np.ndarray) -> tuple[str | None, list[str]]:
+def seabed_findings(
+    seabed, time: np.ndarray, end: np.ndarray
+) -> tuple[str | None, list[str], bool]:
     """Where a run's end went under the seabed, or under ``seabed.minimum_clearance``.
 
     On an absolute seabed (a grid) the end under the seabed by more than
@@ -300,6 +302,8 @@ def seabed_findings(seabed, time: np.ndarray, end: np.ndarray) -> tuple[str | No
     failure : str or None
         When, where and how deep the end went under an absolute seabed.
     notes : list of str
+    under : bool
+        Whether the end went under the seabed (a failure or, relative, a note).
     """
     height = clearance(seabed, end, clearance_reference(seabed, end[0]))
     k = int(np.argmin(height))
@@ -323,7 +327,7 @@ def seabed_findings(seabed, time: np.ndarray, end: np.ndarray) -> tuple[str | No
             f"the end comes within {height[k]:.4g} m of the seabed {place}, under "
             f"seabed.minimum_clearance = {minimum:g} m"
         )
-    return failure, notes
+    return failure, notes, bool(under.any())
 
 
 def trapezoid_weights(step: float, count: int) -> np.ndarray:

@@ -28,6 +28,7 @@ import numpy as np
 
 from cable_ocp.model.cable import spec_from_scene
 from cable_ocp.model.layout import INPUTS
+from cable_ocp.simulation.drum_range import drum_failure
 from cable_ocp.simulation.seabed import seabed_findings
 
 # DNV-RP-H103 §5 (deepwater lowering): the minimum tension must stay above 10 % of the static.
@@ -266,30 +267,40 @@ def run_static(run, spec) -> np.ndarray:
 
 @dataclass(frozen=True)
 class PhysicsCheck:
-    """Whether a run shows a rope the scene can hold: no bond pushing, the end above the ground.
+    """Whether a run shows what its scene can hold: the rope pulling, the end, the drum.
 
     Attributes
     ----------
     slack : SlackReport
+        The signed tensions against the static ones (:func:`slack_report`).
     seabed_failure : str or None
         Where the end went under an absolute seabed
         (:func:`~cable_ocp.simulation.seabed.seabed_findings`).
     seabed_notes : tuple of str
+        The end under a relative seabed, or nearer than ``seabed.minimum_clearance``.
+    end_under_seabed : bool
+        Whether the end went under the seabed, absolute or relative.
+    drum_failure : str or None
+        Where the drum turned beyond ``[winch.angle_min, winch.angle_max]``
+        (:func:`~cable_ocp.simulation.drum_range.drum_failure`).
     """
 
     slack: SlackReport
     seabed_failure: str | None = None
     seabed_notes: tuple[str, ...] = ()
+    end_under_seabed: bool = False
+    drum_failure: str | None = None
 
     @property
     def success(self) -> bool:
-        """No bond pushed beyond the tolerance and the end stayed above an absolute seabed."""
-        return not self.slack.pushing and self.seabed_failure is None
+        """No bond pushed, the end stayed above an absolute seabed and the drum in its range."""
+        return not self.failures
 
     @property
     def failures(self) -> list[str]:
         """Why the run fails, one line per cause (empty when it succeeds)."""
-        return [text for text in (self.slack.reason, self.seabed_failure) if text]
+        causes = (self.slack.reason, self.seabed_failure, self.drum_failure)
+        return [text for text in causes if text]
 
     @property
     def notes(self) -> list[str]:
@@ -301,9 +312,15 @@ class PhysicsCheck:
         """One line: the failures, else ``physics checked`` with the least bond tension."""
         if self.failures:
             return "; ".join(self.failures)
+        seabed = (
+            "the end under the relative seabed (a note)"
+            if self.end_under_seabed
+            else "the end above the seabed"
+        )
         return (
             f"physics checked: least bond tension {self.slack.least_bond_tension:.4g} N "
-            f"(fails below -{self.slack.compression_tolerance:.3g} N), the end above the seabed"
+            f"(fails below -{self.slack.compression_tolerance:.3g} N), {seabed}, the drum "
+            "within its range"
         )
 
     def summary(self) -> dict:
@@ -325,7 +342,7 @@ class PhysicsCheck:
 
 
 def check_physics(run) -> PhysicsCheck:
-    """The slack and the seabed of a run (a Trajectory or a LineTrajectory) of its own scene.
+    """The slack, the seabed and the drum range of a run (Trajectory or LineTrajectory).
 
     A run that kept no signed tensions (a file written before them) is checked on the norms,
     and its report says that compression is unknown.
@@ -339,8 +356,14 @@ def check_physics(run) -> PhysicsCheck:
     kept = bool(run.joined(lambda s: np.full(s.time.size, s.kept_signs)).all())
     tensions = run.padded(lambda s: s.signed_tensions if kept else s.tensions)
     report = slack_report(run.time, tensions, run_static(run, spec_from_scene(scene)))
-    failure, notes = seabed_findings(scene.seabed, run.time, run.end)
-    return PhysicsCheck(report if kept else replace(report, signed=False), failure, tuple(notes))
+    failure, notes, under = seabed_findings(scene.seabed, run.time, run.end)
+    return PhysicsCheck(
+        report if kept else replace(report, signed=False),
+        seabed_failure=failure,
+        seabed_notes=tuple(notes),
+        end_under_seabed=under,
+        drum_failure=drum_failure(scene.winch, run.time, run.winch_angle),
+    )
 
 
 class PhysicsChecked:
@@ -352,7 +375,7 @@ class PhysicsChecked:
 
     @cached_property
     def physics(self) -> PhysicsCheck:
-        """The run's slack, compression and seabed (:func:`check_physics`).
+        """The run's slack, compression, seabed and drum range (:func:`check_physics`).
 
         Raises ValueError if the run holds no scene.
         """
