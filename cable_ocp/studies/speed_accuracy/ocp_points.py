@@ -20,6 +20,7 @@ class OcpPoint(SolveRecord):
     Attributes
     ----------
     setting : OcpSetting
+        The optimiser setting that ran.
     cpu_time : float, s
         Of the whole ``optimize`` call, verification included.
     """

@@ -78,6 +78,7 @@ class StudyPlan:
     torsion_elements : tuple of int
         ``n`` of the grid with torsion on.
     reference_elements : int
+        ``n`` of the reference run (DOP853), the same for every scene.
     reference_tolerance : float
         ``rtol = atol`` of DOP853.
     reference_check_step : float, s
@@ -87,6 +88,7 @@ class StudyPlan:
     stable_steps : int
         Stable steps per ``n`` without torsion: the largest stable one and its halvings.
     torsion_stable_steps : int
+        The same with torsion on.
     compiled : bool
         Scan the steps with the model compiled to C (and integrate the reference on the compiled
         right-hand side); False: everything interpreted, so that a fresh cache compiles nothing.
@@ -94,6 +96,7 @@ class StudyPlan:
         With ``compiled``, each stable step is also run interpreted up to this many element-steps
         (``(n + 1) x steps``): interpreted runs are about 20 times dearer.
     ocp : tuple of OcpSetting
+        The optimiser settings of the OCP part, each solved once.
     ocp_duration : float or None, s
         Horizon of the OCP scene (None: the scene's).
     ocp_intervals : int

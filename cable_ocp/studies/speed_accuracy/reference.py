@@ -22,13 +22,17 @@ class Reference:
     Attributes
     ----------
     elements : int
+        ``n`` of the reference model.
     time : array (k,), s
+        The output times.
     end : array (k, 3), m
+        The end's position ``r_E`` at those times.
     tolerance : float
         DOP853 ``rtol = atol``.
     cpu_time, wall_time : float, s
         Of the DOP853 integration.
     check_step : float, s
+        The RK4 step of the run that checks the reference.
     check_difference : float, m
         ``max_t |r_E,RK4 - r_E,ref|`` with RK4 at ``check_step`` on the same model: the
         reference's own uncertainty.

@@ -16,10 +16,15 @@ class SpeedAccuracy:
     Attributes
     ----------
     plan : StudyPlan
+        What was measured.
     scenes : tuple of SceneStudy
+        The simulation part, one per scene of the plan.
     ocp : tuple of OcpPoint
+        The OCP part, one per optimiser setting.
     ocp_scene : str
+        Name of the scene the OCP part solves.
     ocp_duration : float, s
+        Its horizon.
     cpu_time, wall_time : float, s
         Of the whole study, compiling included.
     """

@@ -18,8 +18,11 @@ class RunPoint:
     Attributes
     ----------
     elements : int
+        ``n`` of the model.
     step : float, s
+        The RK4 step h.
     torsion : bool
+        Whether the model has torsion (6 DOF per element).
     mode : str
         ``"interpreted"`` or ``"compiled"``.
     stable : bool

@@ -20,11 +20,15 @@ class SceneStudy:
     Attributes
     ----------
     scene_name : str
+        The scene file's name in ``models_dir``, without ``.toml``.
     duration : float, s
+        Simulated time of every run.
     constraint_tolerance : float, m
         Bond residual beyond which a run is stopped as failed.
     reference : Reference
+        The converged end trajectory every point is measured against.
     points : tuple of RunPoint
+        Every measured setting, stable or not.
     """
 
     scene_name: str

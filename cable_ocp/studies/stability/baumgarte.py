@@ -24,6 +24,7 @@ class GainRun:
     Attributes
     ----------
     alpha, beta : float, 1/s
+        The Baumgarte gains of the run.
     time : array (k,), s
         Output times (empty if the run was stopped).
     residual : array (k,), m
@@ -63,12 +64,17 @@ class BaumgarteDrift:
     Attributes
     ----------
     elements : int
+        ``n`` of the model.
     step : float, s
+        RK4 step of every compared run.
     reference_step : float, s
         Step of the reference run (default gains of the scene).
     duration : float, s
+        Simulated time of each run.
     reference_gains : tuple of float, 1/s
+        The scene's own ``(alpha, beta)``, those of the reference run.
     runs : tuple of GainRun
+        One per compared pair of gains.
     """
 
     elements: int

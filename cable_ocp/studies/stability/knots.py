@@ -28,6 +28,7 @@ class KnotRun(SolveRecord):
     Attributes
     ----------
     knots : int
+        The spline's number of knots p.
     method : str
         ``"ipopt"``, ``"ipopt + correction"`` or ``"nelder-mead"``.
     history : tuple of float
@@ -51,7 +52,9 @@ class KnotsComparison:
     Attributes
     ----------
     scene_name : str
+        The scene optimised.
     duration : float, s
+        Its horizon T.
     elements : int
         Elements of the optimisation model (Omega verified on the scene's own).
     step : float, s
@@ -63,6 +66,7 @@ class KnotsComparison:
     refinements : int
         Model-correction solves after the first of the ``"ipopt + correction"`` runs.
     runs : tuple of KnotRun
+        Every optimisation, in the order run (per knots: IPOPT, corrected, Nelder-Mead).
     progress_fraction : float
         "Within this fraction of the final best Omega" marks where Nelder-Mead stopped gaining.
     """

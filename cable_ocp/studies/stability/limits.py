@@ -25,6 +25,7 @@ class StepLimits:
     Attributes
     ----------
     results : tuple of StableStep
+        One per model searched (each ``n``, without and with torsion).
     tolerance : float, m
         Bond residual that stopped a run.
     """

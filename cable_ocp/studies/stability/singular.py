@@ -20,8 +20,11 @@ class SingularCase:
     Attributes
     ----------
     tried : str
+        The scene, its ``n`` and the singular angle it started from.
     rejected : bool
+        Whether the toolkit refused the run (it must).
     message : str
+        Its error, type first, or that the run went ahead.
     """
 
     tried: str

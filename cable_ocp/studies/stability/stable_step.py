@@ -33,6 +33,7 @@ class StableStep:
     elements : int
         ``n``.
     torsion : bool
+        Whether the model has torsion (6 DOF per element).
     step : float, s
         Largest step found stable: its run completes.
     unstable_step : float, s
@@ -53,6 +54,7 @@ class StableStep:
     compiled : bool
         Whether the runs used the model compiled to C.
     wall_time : float, s
+        Of the whole search.
     """
 
     elements: int
@@ -160,12 +162,15 @@ def largest_stable_step(
     scene : Scene
         Usually ``end_force``; it is pushed from ``t = 0`` (:func:`pushed_scene`).
     elements : int
+        ``n`` of the model.
     torsion : bool
+        Whether the model has torsion (6 DOF per element).
     first_step : float, optional, s
         Where the search starts (the scene's step by default).
     duration : float, s
         Shortest run; see :func:`run_length` for ``min_steps``.
     min_steps : int
+        Fewest steps of a run (:func:`run_length`).
     resolution : float
         Largest ratio ``unstable_step / step`` at the end (> 1).
     tolerance : float, m
@@ -183,6 +188,7 @@ def largest_stable_step(
         Integrate with the model compiled to C (for n >= 10 the right-hand side is compiled once
         for all steps; worth it when the runs are long).
     quiet : bool
+        Print nothing.
 
     Returns
     -------

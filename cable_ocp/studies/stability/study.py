@@ -29,18 +29,29 @@ class StabilitySettings:
         ramp (15 s in end_force), since the rising tension raises the frequencies; torsion runs
         are short for cost (the twist modes do not depend on the push).
     min_steps : int
+        Fewest RK4 steps of a stability run.
     resolution : float
+        Largest ratio of the unstable to the stable step at the end of a bisection (> 1).
     tolerance : float, m
+        Bond residual that stops a stability run (a blow-up passes it within a few steps).
     linearised_samples : int
+        States of each stable run at which the linearised step limit is evaluated.
     compile_from : int or None
+        Models of at least this ``n`` are compiled to C (None: none).
     drift_elements : int
+        ``n`` of the drift study's model.
     drift_step, drift_reference_step, drift_duration : float, s
+        Its RK4 step, the reference run's step, and the simulated time.
     gains : tuple of (alpha, beta), 1/s
+        The Baumgarte gains the drift study compares.
     knots : tuple of int
+        The numbers of knots the optimisers are compared at.
     knots_duration : float or None, s
         Horizon of the knots study (None: the scene's).
     optimisation_elements : int
+        ``n`` of the optimisers' reduced model.
     optimisation_step : float, s
+        RK4 step of that model.
     max_evaluations : int
         Nelder-Mead's cap.
     max_iter : int
@@ -115,12 +126,19 @@ class StabilityStudy:
     Attributes
     ----------
     steps : StepLimits
+        The largest stable RK4 steps.
     drift : BaumgarteDrift
+        Bond drift and end error against the Baumgarte gains.
     knots : KnotsComparison
+        IPOPT and Nelder-Mead against the number of knots.
     singular : tuple of SingularCase
+        The Euler-angle singularity, one per sign.
     settings : StabilitySettings
+        The sizes the study ran with.
     part_times : dict of str to float, s
+        Wall time of each part, by name.
     wall_time : float, s
+        Of the whole study.
     """
 
     steps: StepLimits
