@@ -16,7 +16,7 @@ from __future__ import annotations
 import numpy as np
 import xarray as xr
 
-from cable_ocp.studies.survey_grid import grid_axis, grid_dataset, smoothed_noise, write_grid
+from cable_ocp.studies.survey_grid import grid_axis, scene_grid, smoothed_noise, write_grid
 
 SPACING = 10.0  # m
 X_RANGE = (-100.0, 400.0)  # m, down-current
@@ -46,11 +46,9 @@ def deploy_elevation(x: np.ndarray, y: np.ndarray, seed: int = SEED) -> np.ndarr
 
 def deploy_grid(seed: int = SEED) -> xr.Dataset:
     """The grid as a Dataset: ``elevation`` (m) over ``x``, ``y`` (m), CF attributes."""
-    x, y = grid_axis(X_RANGE, SPACING), grid_axis(Y_RANGE, SPACING)
-    return grid_dataset(
-        x, y, deploy_elevation(x, y, seed), "synthetic bathymetry of the cable_ocp deploy scene",
-        f"cable_ocp.studies.deploy_grid (seed {seed})", ("down-current", "across the current"),
-    )  # fmt: skip
+    axes = (grid_axis(X_RANGE, SPACING), grid_axis(Y_RANGE, SPACING))
+    return scene_grid("deploy", axes, deploy_elevation(*axes, seed), seed,
+                      ("down-current", "across the current"))  # fmt: skip
 
 
 def main(argv: list[str] | None = None) -> int:

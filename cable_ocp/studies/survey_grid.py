@@ -80,10 +80,36 @@ def survey_elevation(x: np.ndarray, y: np.ndarray, seed: int = SEED) -> np.ndarr
 
 def survey_grid(seed: int = SEED) -> xr.Dataset:
     """The grid as a Dataset: ``elevation`` (m) over ``x``, ``y`` (m), CF attributes."""
-    x, y = grid_axis(X_RANGE, SPACING), grid_axis(Y_RANGE, SPACING)
+    axes = (grid_axis(X_RANGE, SPACING), grid_axis(Y_RANGE, SPACING))
+    return scene_grid("survey", axes, survey_elevation(*axes, seed), seed,
+                      ("along the tow", "across the tow"))  # fmt: skip
+
+
+def scene_grid(
+    scene: str,
+    axes: tuple[np.ndarray, np.ndarray],
+    elevation: np.ndarray,
+    seed: int,
+    names: tuple[str, str],
+) -> xr.Dataset:
+    """The synthetic grid of a bundled scene, titled and sourced after it (:func:`grid_dataset`).
+
+    Parameters
+    ----------
+    scene : str
+        The bundled scene's name; its script is ``cable_ocp.studies.<scene>_grid``.
+    axes : (array, array), m
+        The grid's ``x`` and ``y`` (:func:`grid_axis`).
+    elevation : array (len(x), len(y)), m
+        Seabed elevation, up from the sea surface.
+    seed : int
+        The seed of its small-scale relief, named in the file's source.
+    names : (str, str)
+        What the x and y axes run along.
+    """
     return grid_dataset(
-        x, y, survey_elevation(x, y, seed), "synthetic bathymetry of the cable_ocp survey scene",
-        f"cable_ocp.studies.survey_grid (seed {seed})", ("along the tow", "across the tow"),
+        *axes, elevation, f"synthetic bathymetry of the cable_ocp {scene} scene",
+        f"cable_ocp.studies.{scene}_grid (seed {seed})", names,
     )  # fmt: skip
 
 

@@ -12,10 +12,9 @@ from cable_ocp.studies.speed_accuracy.timing import timed
 
 @dataclass(frozen=True)
 class OcpPoint(SolveRecord):
-    """One optimiser run on the OCP scene, verified on the scene's own model.
+    """One optimiser run on the OCP scene, its setting beside the run's figures.
 
-    Its figures (Omega, status, counts, wall time) are those of
-    :class:`~cable_ocp.studies.solve_record.SolveRecord`.
+    A :class:`~cable_ocp.studies.solve_record.SolveRecord` verified on the scene's own model.
 
     Attributes
     ----------

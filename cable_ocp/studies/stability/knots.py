@@ -20,10 +20,9 @@ from cable_ocp.studies.stability.markdown import table_cell
 
 @dataclass(frozen=True)
 class KnotRun(SolveRecord):
-    """One optimisation of the knots study.
+    """One optimisation of the knots study: its knots and method beside the run's figures.
 
-    Its figures (Omega, status, counts, wall time) are those of
-    :class:`~cable_ocp.studies.solve_record.SolveRecord`.
+    The figures are a :class:`~cable_ocp.studies.solve_record.SolveRecord`'s.
 
     Attributes
     ----------
@@ -31,8 +30,9 @@ class KnotRun(SolveRecord):
         The spline's number of knots p.
     method : str
         ``"ipopt"``, ``"ipopt + correction"`` or ``"nelder-mead"``.
-    history : tuple of float
-        Nelder-Mead: best Omega after each evaluation (m); IPOPT: Omega^2 per iteration (m^2).
+    history : tuple of float, m
+        The result's ``history``: Nelder-Mead's best Omega after each evaluation, IPOPT's Omega
+        per iteration.
     """
 
     knots: int
