@@ -28,6 +28,7 @@ from cable_ocp.studies.robustness import (
     random_cases,
     run_case,
 )
+from cable_ocp.studies.scene_space import rounded_uniform
 
 HEAVE = {"top.heave": {"amplitude": 0.8, "period": 9.0}}
 
@@ -218,6 +219,15 @@ def test_grids_and_sea_states_come_from_a_second_stream():
         assert rest == {k: v for k, v in base.items() if k != "top.heave"}
         assert heave == base.get("top.heave", {})
     assert random_cases(5, seed=3) == survey[:5]
+
+
+def test_a_random_case_takes_its_draws_in_order_rounded_to_readable_figures():
+    """The robustness and whole-space cases draw through one rounded_uniform (scene_space)."""
+    uniform = rounded_uniform(np.random.default_rng(11), 2)
+    raw = np.random.default_rng(11).uniform(size=3)
+    drawn = [uniform((0.0, 1.0)), uniform((0.0, 1.0), 0), uniform((10.0, 20.0), 4)]
+    assert drawn == [round(float(raw[0]), 2), round(float(raw[1])), round(10 + 10 * raw[2], 4)]
+    assert uniform((5.0, 5.0)) == 5.0
 
 
 def test_a_random_site_puts_the_start_on_its_target_clearance(hill, tmp_path):

@@ -4,18 +4,13 @@ import numpy as np
 import pytest
 
 from cable_ocp.studies.random_site import FLAT_UNTIL, ONSET, site_elevation
-from cable_ocp.studies.survey_grid import grid_axis, scene_grid, smoothed_noise, smoothstep
+from cable_ocp.studies.survey_grid import grid_axis, scene_grid, smoothed_noise
 
 
 def test_a_grid_axis_includes_both_ends_at_its_spacing():
     axis = grid_axis((-30.0, 45.0), 7.5)
     assert axis[0] == -30.0 and axis[-1] == 45.0
     np.testing.assert_allclose(np.diff(axis), 7.5)
-
-
-def test_the_smoothstep_is_flat_outside_its_ramp_and_half_way_at_its_middle():
-    values = smoothstep(np.array([-1.0, 0.0, 0.5, 1.0, 2.0]))
-    np.testing.assert_array_equal(values, [0.0, 0.0, 0.5, 1.0, 1.0])
 
 
 def test_the_seeded_relief_is_the_same_for_a_seed_and_another_for_another():

@@ -15,7 +15,8 @@ from pathlib import Path
 import numpy as np
 import xarray as xr
 
-from cable_ocp.studies.survey_grid import grid_axis, smoothed_noise, smoothstep
+from cable_ocp.drive.vessel import smoothstep
+from cable_ocp.studies.survey_grid import grid_axis, smoothed_noise
 
 SPACING = 5.0  # m
 X_RANGE = (-100.0, 400.0)  # m, along the tow
@@ -43,7 +44,7 @@ def site_elevation(
         Where the end starts along x: the site is flat up to :data:`FLAT_UNTIL` beyond it.
     """
     X, Y = np.meshgrid(x, y, indexing="ij")
-    onset = smoothstep((X - start - FLAT_UNTIL) / ONSET)
+    onset = smoothstep((X - start - FLAT_UNTIL) / ONSET)[0]
     slope = relief["slope"] * np.maximum(X - start - FLAT_UNTIL, 0.0) * onset
     angle = relief["ridge_angle"]
     across = (X - relief["ridge_x"]) * np.cos(angle) + Y * np.sin(angle)

@@ -49,7 +49,7 @@ from cable_ocp.simulation.run import simulate
 from cable_ocp.simulation.seabed import rms_objective, seabed_height
 from cable_ocp.simulation.statics import equilibrium
 from cable_ocp.studies.random_site import write_site
-from cable_ocp.studies.scene_space import PLACED, space_cases, space_scene
+from cable_ocp.studies.scene_space import PLACED, rounded_uniform, space_cases, space_scene
 
 OMEGA_GOAL = 0.01  # m
 GAIN_GOAL = 3.0  # locked Omega over the optimum's
@@ -141,10 +141,7 @@ class Ranges:
 
 def random_overrides(rng: np.random.Generator, ranges: Ranges = Ranges()) -> dict:
     """Scene overrides of ``paper_hill`` for one random case (rounded to readable figures)."""
-
-    def uniform(bounds, digits=2):
-        return round(float(rng.uniform(*bounds)), digits)
-
+    uniform = rounded_uniform(rng, 2)
     hills = [
         {
             "height": uniform(ranges.hill_height, 1),
@@ -180,10 +177,7 @@ def add_survey(overrides: dict, rng: np.random.Generator, ranges: Ranges = Range
 
     Every number is drawn whether used or not, so each case takes as many draws from ``rng``.
     """
-
-    def uniform(bounds, digits=2):
-        return round(float(rng.uniform(*bounds)), digits)
-
+    uniform = rounded_uniform(rng, 2)
     site = {
         "slope": uniform(ranges.site_slope, 4),
         "ridge_height": uniform(ranges.ridge_height, 1),

@@ -24,6 +24,7 @@ the locked run (hills as fractions of the path, the grid's relief).
 from __future__ import annotations
 
 import math
+from collections.abc import Callable
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -158,15 +159,29 @@ class SpaceRanges:
     grid_slope: tuple[float, float] = (0.1, 0.2)
 
 
+def rounded_uniform(rng: np.random.Generator, digits: int) -> Callable[..., float]:
+    """The draws of a random case: ``uniform(bounds, digits=digits)`` from ``rng``, rounded.
+
+    Parameters
+    ----------
+    rng : numpy.random.Generator
+        The stream every draw of the case comes from, in order.
+    digits : int
+        Decimals kept when a draw names none (a scene file's readable figures).
+    """
+
+    def uniform(bounds: tuple[float, float], places: int = digits) -> float:
+        return round(float(rng.uniform(*bounds)), places)
+
+    return uniform
+
+
 def space_case(rng: np.random.Generator, ranges: SpaceRanges = SpaceRanges()) -> dict:
     """Scene overrides of ``paper_hill`` for one whole-space case (see the module docstring).
 
     Every number is drawn whether used or not, so that each case takes as many draws.
     """
-
-    def uniform(bounds, digits=3):
-        return round(float(rng.uniform(*bounds)), digits)
-
+    uniform = rounded_uniform(rng, 3)
     kind = rng.uniform()
     diameter = uniform(ranges.diameter, 3)
     steel, synthetic = uniform(ranges.steel_density, 0), uniform(ranges.synthetic_density, 0)

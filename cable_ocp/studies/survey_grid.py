@@ -10,8 +10,8 @@ Regenerate the file (bit for bit, by its seed)::
 
     python -m cable_ocp.studies.survey_grid models/data/survey_grid.nc
 
-The parts every synthetic grid is made of (its axes, the onset of its features, its seeded relief,
-the Dataset and the script's command line) live here, for :mod:`~cable_ocp.studies.deploy_grid`
+The parts every synthetic grid is made of (its axes, its seeded relief, the Dataset and the
+script's command line) live here, for :mod:`~cable_ocp.studies.deploy_grid`
 and :mod:`~cable_ocp.studies.random_site` too.
 """
 
@@ -25,6 +25,8 @@ import numpy as np
 import xarray as xr
 from scipy.ndimage import gaussian_filter
 
+from cable_ocp.drive.vessel import smoothstep
+
 SPACING = 4.0  # m
 X_RANGE = (-60.0, 300.0)  # m, along the tow
 Y_RANGE = (-80.0, 120.0)  # m, across it
@@ -35,12 +37,6 @@ SEED = 16
 def grid_axis(bounds: tuple[float, float], spacing: float) -> np.ndarray:
     """A grid's axis from ``bounds[0]`` to ``bounds[1]`` (both included), ``spacing`` apart, m."""
     return np.arange(bounds[0], bounds[1] + spacing / 2, spacing)
-
-
-def smoothstep(tau: np.ndarray) -> np.ndarray:
-    """Quintic smoothstep ``S(tau) = 10 tau^3 - 15 tau^4 + 6 tau^5``: 0 before 0, 1 after 1."""
-    s = np.clip(tau, 0.0, 1.0)
-    return s**3 * (10 - 15 * s + 6 * s**2)
 
 
 def smoothed_noise(shape: tuple[int, int], seed: int) -> np.ndarray:
@@ -67,7 +63,7 @@ def survey_elevation(x: np.ndarray, y: np.ndarray, seed: int = SEED) -> np.ndarr
         Seed of the small-scale relief.
     """
     X, Y = np.meshgrid(x, y, indexing="ij")
-    onset = smoothstep((X - 20.0) / 40.0)  # flat under the start, features from x = 20 m on
+    onset = smoothstep((X - 20.0) / 40.0)[0]  # flat under the start, features from x = 20 m on
     slope = 0.03 * np.maximum(X - 20.0, 0.0) * onset  # 3 m per 100 m along the tow
     across = (X - 105.0) * np.cos(np.radians(25.0)) + (Y - 20.0) * np.sin(np.radians(25.0))
     ridge = 10.0 * np.exp(-((across / 14.0) ** 2)) * np.exp(-(((Y - 20.0) / 90.0) ** 2))
