@@ -44,3 +44,33 @@ def test_bench_writes_its_figure_only_into_out(tmp_path, monkeypatch, capsys):
     assert cli.main(["bench", "--only", "mpc", "--out", str(tmp_path / "figures")]) == 0
     assert (tmp_path / "figures" / "mpc_solve_times.png").read_bytes() == b"png"
     assert list(work.iterdir()) == []
+
+
+def test_ocp_speed_report_runs_the_default_solver_cold_then_warm_against_ipopt(
+    models_dir, monkeypatch, capsys
+):
+    """Each solver runs cold then warm on one cache of its own; IPOPT is the baseline."""
+    from cable_ocp.control.solvers import DEFAULT_SOLVER, SOLVERS
+
+    calls = []
+
+    def process(scene_path, solver, quick, cache):
+        calls.append((solver, cache))
+        wall = 2.0 if solver == DEFAULT_SOLVER else 4.0  # the default twice as fast
+        figures = dict.fromkeys(("build", "compile", "solve", "verification"), 0.1)
+        return {**figures, "wall": wall, "process": wall + 1, "iterations": 3, "solves": 1,
+                "omega": 1e-4, "success": True, "bounds_held": True}  # fmt: skip
+
+    monkeypatch.setattr(bench, "_ocp_speed_process", process)
+    rows = bench.ocp_speed_report(models_dir, quick=True)
+    default, ipopt = SOLVERS[DEFAULT_SOLVER].label, SOLVERS["ipopt"].label
+    assert [label for label, _ in rows] == [
+        f"{default}, cold",
+        f"{default}, warm",
+        f"{ipopt} L-BFGS, cold",
+        f"{ipopt} L-BFGS, warm",
+    ]
+    assert [solver for solver, _ in calls] == [DEFAULT_SOLVER] * 2 + ["ipopt"] * 2
+    assert calls[0][1] == calls[1][1] != calls[2][1] == calls[3][1]
+    printed = capsys.readouterr().out
+    assert printed.count("2.0x") == 2 and printed.count("1.0x") == 2
