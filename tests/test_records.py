@@ -21,6 +21,7 @@ from cable_ocp.control.closed_loop.result import MpcResult, SolveLog
 from cable_ocp.control.optimization import OcpResult
 from cable_ocp.result_files import dataset as labelled
 from cable_ocp.scene.records import check_field, control_parameters, record_fields
+from cable_ocp.simulation.seabed import rms_objective
 from cable_ocp.simulation.trajectory import Trajectory
 from cable_ocp.simulation.trajectory_dataset import state_names
 
@@ -30,11 +31,14 @@ DEEP = "[" * 100_000 + "]" * 100_000
 def _trajectory() -> Trajectory:
     k, n = 3, 2
     rng = np.random.default_rng(0)
+    time = np.linspace(0, 1, k)
+    states, inputs = rng.normal(size=(k, 2 * 5 * (n + 1))), rng.normal(size=(k, 15))
+    joints, tensions = rng.normal(size=(k, 3, n + 2)), rng.normal(size=(k, n + 1))
+    error = rng.normal(size=k)  # Omega is eq. 39 on it: Trajectory.load checks it
     return Trajectory(
-        time=np.linspace(0, 1, k), states=rng.normal(size=(k, 2 * 5 * (n + 1))),
-        inputs=rng.normal(size=(k, 15)), joints=rng.normal(size=(k, 3, n + 2)),
-        tensions=rng.normal(size=(k, n + 1)), winch_angle=np.zeros(k),
-        clearance_error=rng.normal(size=k), omega=0.5, scene_name="test",
+        time=time, states=states, inputs=inputs, joints=joints, tensions=tensions,
+        winch_angle=np.zeros(k), clearance_error=error, omega=rms_objective(time, error),
+        scene_name="test",
         state_names=state_names(n + 1, 5),
     )  # fmt: skip
 
