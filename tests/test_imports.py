@@ -35,3 +35,24 @@ def test_core_does_not_import_the_studies():
 def test_drawing_is_written(tmp_path):
     path = imports.draw(tmp_path / "imports.png")
     assert path.stat().st_size > 10_000
+
+
+def test_no_modules_import_each_other_round_a_loop():
+    """No import cycle, counting imports inside functions too (issue 41)."""
+    assert imports.cycles() == []
+
+
+def test_a_cycle_through_a_local_import_is_reported(tmp_path):
+    """A copy of the package where two modules import each other, one inside a function."""
+    root = tmp_path / "cable_ocp"
+    (root / "simulation").mkdir(parents=True)
+    for folder in (root, root / "simulation"):
+        (folder / "__init__.py").write_text('"""Package."""\n')
+    (root / "simulation" / "run.py").write_text(
+        "def simulate():\n    from cable_ocp.simulation.line_run import simulate_line\n"
+    )
+    (root / "simulation" / "line_run.py").write_text("from cable_ocp.simulation import run\n")
+    (root / "simulation" / "outputs.py").write_text("from cable_ocp.simulation import run\n")
+    assert imports.cycles(root) == [
+        "cable_ocp.simulation.line_run -> cable_ocp.simulation.run -> cable_ocp.simulation.line_run"
+    ]

@@ -12,7 +12,10 @@ import pytest
 
 import cable_ocp.simulation.run as simulation
 from cable_ocp.drive import vessel
+from cable_ocp.model import structured
+from cable_ocp.model.cable import CableModel
 from cable_ocp.scene.schema import load_scene
+from cable_ocp.simulation import outputs
 from cable_ocp.simulation.run import simulate
 
 MODELS = Path(__file__).resolve().parent.parent / "models"
@@ -154,17 +157,17 @@ def test_joints_and_tensions_in_blocks_are_those_of_one_call(monkeypatch, compil
     scene = load_scene(Path(__file__).resolve().parent.parent / "models" / "hanging.toml",
                        {"model.elements": 6, "numerics.duration": 2.0})  # fmt: skip
     run = simulate(scene, compiled=compiled)
-    model = simulation.CableModel.from_scene(scene)
-    whole = simulation.run_outputs(model, run.states, run.inputs, compiled)
-    monkeypatch.setattr(simulation, "OUTPUT_BLOCK", 7)
-    blocks = simulation.run_outputs(model, run.states, run.inputs, compiled)
+    model = CableModel.from_scene(scene)
+    whole = outputs.run_outputs(model, run.states, run.inputs, compiled)
+    monkeypatch.setattr(outputs, "OUTPUT_BLOCK", 7)
+    blocks = outputs.run_outputs(model, run.states, run.inputs, compiled)
     assert len(run.states) % 7  # a shorter last block
     for single, blocked in zip(whole, blocks, strict=True):
         np.testing.assert_array_equal(blocked, single)
     # The norms are the model's own tensions output to the last bit, compiled or not.
-    outputs = model.outputs.map(len(run.states))(run.states.T, run.inputs.T)
-    np.testing.assert_allclose(whole[1], np.array(outputs[5]).T, rtol=1e-13)
+    mapped = model.outputs.map(len(run.states))(run.states.T, run.inputs.T)
+    np.testing.assert_allclose(whole[1], np.array(mapped[5]).T, rtol=1e-13)
     if compiled:
-        structured_norms = simulation.structured.compiled_structured(model, "outputs", 1)
+        structured_norms = structured.compiled_structured(model, "outputs", 1)
         first = structured_norms(run.states[0], run.inputs[0])[1]
         np.testing.assert_array_equal(whole[1][0], np.array(first).ravel())

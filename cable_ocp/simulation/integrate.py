@@ -14,6 +14,7 @@ import math
 import threading
 import time
 from collections import OrderedDict
+from collections.abc import Iterator
 from dataclasses import dataclass, replace
 
 import casadi as ca
@@ -41,6 +42,9 @@ CALL_SECONDS = 0.2
 MAX_FOLD = 200
 MAX_MAP = 500
 MAX_CALL_STEPS = 20_000  # RK4 steps of one call: its stage inputs are 360 B a step
+# Times per block of a run's grid (step_times): the inputs of a block are 120 B a time, so a run
+# of 3.6e7 steps is checked in 4 MB blocks, not one 4.3 GB array.
+TIME_BLOCK = 32_768
 PROBE_STEPS = 20  # RK4 steps of the first call, which times a step
 # Largest RK4 step (SX instructions) compiled as one flat Function. A larger 5-DOF model compiles
 # its step around the structured right-hand side (loops over elements: at n = 100 it compiles in
@@ -174,6 +178,21 @@ def step_count(duration: float, step: float) -> int:
             "number of steps"
         )
     return count
+
+
+def step_times(duration: float, step: float) -> Iterator[np.ndarray]:
+    """The times of a run's RK4 grid, ``0, h, ..., T`` (s), in blocks of :data:`TIME_BLOCK`.
+
+    Together they are ``np.linspace(0, duration, count + 1)``, without the array of all of them.
+    """
+    count = int(round(duration / step))
+    spacing = duration / count
+    for first in range(0, count + 1, TIME_BLOCK):
+        stop = min(first + TIME_BLOCK, count + 1)
+        times = np.arange(first, stop) * spacing
+        if stop == count + 1:
+            times[-1] = duration  # as linspace ends
+        yield times
 
 
 def stage_inputs(drive: Drive, times: np.ndarray, step: float) -> np.ndarray:

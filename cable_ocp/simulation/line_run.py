@@ -27,9 +27,9 @@ from cable_ocp.model.layout import INPUTS
 from cable_ocp.model.line_models import line_models
 from cable_ocp.model.line_state import merge, split
 from cable_ocp.simulation.budget import check_simulation_memory
-from cable_ocp.simulation.integrate import integrate, step_count
+from cable_ocp.simulation.integrate import integrate, step_count, step_times
 from cable_ocp.simulation.line_trajectory import LineTrajectory
-from cable_ocp.simulation.run import run_outputs, step_times, winch_function
+from cable_ocp.simulation.outputs import run_outputs
 from cable_ocp.simulation.seabed import (
     check_on_grid,
     check_start,
@@ -39,6 +39,7 @@ from cable_ocp.simulation.seabed import (
 )
 from cable_ocp.simulation.statics import starting_state
 from cable_ocp.simulation.trajectory import Trajectory
+from cable_ocp.simulation.winch_input import winch_function
 
 
 @dataclass(frozen=True)

@@ -2,73 +2,30 @@
 
 from __future__ import annotations
 
-from collections.abc import Callable, Iterator
-
-import casadi as ca
 import numpy as np
 
-from cable_ocp.drive import winch as winch_angles
 from cable_ocp.drive.bounds import BOUND_TOLERANCE
 from cable_ocp.drive.drive import Drive
-from cable_ocp.model import structured
 from cable_ocp.model.cable import CableModel
 from cable_ocp.model.layout import INPUTS
 from cable_ocp.scene.given import scene_given
 from cable_ocp.simulation.budget import check_simulation_memory
-from cable_ocp.simulation.integrate import evaluate_into, integrate
+from cable_ocp.simulation.integrate import TIME_BLOCK, integrate, step_times
 from cable_ocp.simulation.landing_reference import reference_error
+from cable_ocp.simulation.line_run import simulate_line
+from cable_ocp.simulation.outputs import run_outputs
 from cable_ocp.simulation.seabed import (
     check_on_grid,
     check_start,
     clearance_error,
     rms_objective,
 )
-from cable_ocp.simulation.slack import signed_tensions
 from cable_ocp.simulation.statics import starting_state
 from cable_ocp.simulation.trajectory import Trajectory
+from cable_ocp.simulation.winch_input import WinchSpec, winch_function
 
-WinchSpec = None | np.ndarray | Callable
-# States per call of the mapped outputs: CasADi's map takes superlinear time in its count (at
-# n = 100, 0.4 s to map over 4001 states, 0.02 s over 500), the call the same time per state.
-OUTPUT_BLOCK = 500
-# Times per block of the top-length check: the inputs of a block are 120 B a time, so a run of
-# 3.6e7 steps is checked in 4 MB blocks, not one 4.3 GB array.
-TIME_BLOCK = 32_768
 # Largest share of the line out that the graded mesh's top element may carry (check_top_length).
 TOP_SHARE = 1 / 3
-
-
-def winch_function(scene, winch: WinchSpec) -> winch_angles.WinchAngleFunction:
-    """Turn a winch specification into an angle history.
-
-    Parameters
-    ----------
-    winch : None, array, callable or a result
-        None: locked. An array of ``scene.winch.knots`` values: the cubic spline through them
-        (rad, ``phi(0) = 0``). A callable ``t -> (phi, phi', phi'')``: used as it is. A result
-        of ``optimize`` or ``mpc`` (anything with a ``winch_profile(scene)`` method), or one
-        retimed (``result.retimed("hold")``): its winch on this scene, the heave feedforward or
-        feedback included where it rode on one (a replay).
-    """
-    if winch is None:
-        return winch_angles.locked
-    if hasattr(winch, "winch_profile"):
-        return winch.winch_profile(scene)
-    if callable(winch):
-        return winch
-    try:
-        values = np.asarray(winch, dtype=float).ravel()
-    except (TypeError, ValueError):
-        raise ValueError(f"winch: expected {scene.winch.knots} knot angles in rad") from None
-    if values.size != scene.winch.knots:
-        raise ValueError(
-            f"winch: {values.size} knot values given; the scene has winch.knots = "
-            f"{scene.winch.knots}"
-        )
-    if not np.isfinite(values).all():
-        k = int(np.argmin(np.isfinite(values)))
-        raise ValueError(f"winch: knot value {k + 1} is {values[k]}: must be finite (rad)")
-    return winch_angles.spline_angle(scene.numerics.duration, values)
 
 
 def check_top_length(scene, drive: Drive, times: np.ndarray) -> None:
@@ -99,7 +56,7 @@ def _check_top_length(scene, drive: Drive, times: np.ndarray) -> None:
     low, high = scene.winch.top_length_min, scene.winch.top_length_max
     tolerance = scene.winch.drum_radius * BOUND_TOLERANCE
     if high is None:
-        _check_rod(scene, drive, length, times, tolerance)
+        check_rod(length, scene.cable.length + length - drive.top_length, times, tolerance)
         high = np.inf
     outside = (length < low - tolerance) | (length > high + tolerance)
     if outside.any():
@@ -111,14 +68,31 @@ def _check_top_length(scene, drive: Drive, times: np.ndarray) -> None:
         )
 
 
-def _check_rod(scene, drive: Drive, length, times, tolerance) -> None:
+def check_rod(
+    length: np.ndarray, line: np.ndarray, times: np.ndarray, tolerance: float = 0.0
+) -> None:
     """Refuse a graded top element paid out to more than :data:`TOP_SHARE` of the line out.
 
     Without ``winch.top_length_max`` the graded mesh's top element grows by all the drum pays
     out: a rigid rod, not a rope, once it carries a large share of the line (measured: 300 m of
     drum range on ``paper_hill`` gave a 210 m rod, silently).
+
+    Parameters
+    ----------
+    length : array (k,), m
+        The top element's length.
+    line : array (k,), m
+        The line out then.
+    times : array (k,), s
+        When (for the message).
+    tolerance : float, m
+        How far beyond the share still counts as within it.
+
+    Raises
+    ------
+    ValueError
+        At the first time beyond the share, with the length, the line and the remedies.
     """
-    line = scene.cable.length + length - drive.top_length
     over = length > TOP_SHARE * line + tolerance
     if over.any():
         k = int(np.argmax(over))
@@ -129,21 +103,6 @@ def _check_rod(scene, drive: Drive, length, times, tolerance) -> None:
             "Pay out through [winch.line] (elements split off at the drum), or narrow "
             "winch.angle_max / set winch.top_length_max"
         )
-
-
-def step_times(duration: float, step: float) -> Iterator[np.ndarray]:
-    """The times of a run's RK4 grid, ``0, h, ..., T`` (s), in blocks of :data:`TIME_BLOCK`.
-
-    Together they are ``np.linspace(0, duration, count + 1)``, without the array of all of them.
-    """
-    count = int(round(duration / step))
-    spacing = duration / count
-    for first in range(0, count + 1, TIME_BLOCK):
-        stop = min(first + TIME_BLOCK, count + 1)
-        times = np.arange(first, stop) * spacing
-        if stop == count + 1:
-            times[-1] = duration  # as linspace ends
-        yield times
 
 
 def checked_state(state, size: int) -> np.ndarray:
@@ -173,64 +132,6 @@ def joints_and_tensions(
     """
     joints, tensions, _ = run_outputs(model, states, inputs, compiled)
     return joints, tensions
-
-
-def run_outputs(
-    model: CableModel, states: np.ndarray, inputs: np.ndarray, compiled: bool = False
-) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """Joint positions (k, 3, n+2; m), bond tensions and signed tensions (k, n+1; N).
-
-    The tensions are ``|lambda_j|``, the signed ones along the element axes
-    (:func:`~cable_ocp.simulation.slack.signed_tensions`).
-
-    One evaluation of the model's joints and bond forces, :data:`OUTPUT_BLOCK` states at a
-    time. Compiled, a 5-DOF model evaluates them with the structured loops compiled to C
-    (cached): at n = 100 the interpreted outputs cost twice the whole compiled integration.
-    The norms are those of the model's ``tensions`` output, to the last bit.
-    """
-    count, joint_count, bonds = len(states), model.element_count + 1, model.element_count
-    structured_outputs = compiled and structured.supports(model)
-    # Column-major CasADi results, written as their C-ordered transposes.
-    joints = np.empty((count * joint_count, 3))
-    forces = np.empty((count * bonds, 3))
-    tensions = np.empty((count, bonds))
-    for first in range(0, count, OUTPUT_BLOCK):
-        rows = slice(first, min(first + OUTPUT_BLOCK, count))
-        results = [
-            joints[rows.start * joint_count : rows.stop * joint_count],
-            forces[rows.start * bonds : rows.stop * bonds],
-        ]
-        if not structured_outputs:
-            results.append(tensions[rows])
-        evaluate_into(
-            _outputs_function(model, rows.stop - rows.start, structured_outputs),
-            [states[rows], inputs[rows]],
-            results,
-        )
-    joints = joints.reshape(count, joint_count, 3).transpose(0, 2, 1)
-    forces = forces.reshape(count, bonds, 3).transpose(0, 2, 1)
-    if structured_outputs:  # the structured norm: sqrt of the squares summed in order
-        tensions = np.sqrt(np.sum(forces**2, axis=1))
-    return joints, tensions, signed_tensions(joints, forces)
-
-
-def _outputs_function(model: CableModel, count: int, structured_outputs: bool) -> ca.Function:
-    """``count`` states and inputs -> joints and bond forces (and, interpreted, tensions)."""
-    if structured_outputs:
-        return structured.compiled_structured(model, "joints_and_forces", count)
-    return model.memo(("joints_forces_tensions", count), lambda: _model_outputs(model, count))
-
-
-def _model_outputs(model: CableModel, count: int):
-    """``count`` states and inputs -> joints, bond forces and tensions, the model's outputs."""
-    outputs = model.outputs
-    x, u = outputs.mx_in("x"), outputs.mx_in("u")
-    results = outputs(x=x, u=u)
-    names = ["joints", "bond_forces", "tensions"]
-    single = ca.Function(
-        "joints_forces_tensions", [x, u], [results[name] for name in names], ["x", "u"], names
-    )
-    return single.map(count)
 
 
 def simulate(
@@ -369,8 +270,6 @@ def run_trajectory(
 
 def _line_simulation(scene, winch, model, initial_state, quiet, compiled):
     """A scene with ``[winch.line]``: :func:`cable_ocp.simulation.line_run.simulate_line`."""
-    from cable_ocp.simulation.line_run import simulate_line  # it imports this module
-
     if model is not None or initial_state is not None:
         raise ValueError(
             "a scene with [winch.line] builds its models for every n itself: model and "

@@ -1,12 +1,14 @@
 """The package's import graph by layer, checked and drawn (``python -m cable_ocp.studies.imports``).
 
-The package is layered, bottom to top: ``scene`` (files in and out), ``result_files``
-(results kept as netCDF), ``model`` (the rfe equations),
+The package is layered, bottom to top: ``lazy`` (the packages' lazy loader, PEP 562), ``scene``
+(files in and out), ``result_files`` (results kept as netCDF), ``model`` (the rfe equations),
 ``drive`` (vessel, winch, end force), ``simulation`` (statics, RK4 runs), ``control`` (IPOPT,
-Nelder-Mead, MPC), ``sweep`` and ``studies`` (many runs; nothing below imports them), and the faces
-``cli``, ``plots`` and the package's ``__init__``. A module may import from its own layer and the
-layers below it only. :func:`violations` lists the imports that break that rule (a test keeps it
-empty) and :func:`draw` saves the graph with the layers as rows, so that every arrow points down.
+Nelder-Mead, MPC), ``lowering``, ``sweep`` and ``studies`` (many runs; nothing below imports
+them), and the faces ``cli``, ``plots``, ``entry`` (the command's entry point) and the package's
+``__init__``. A module may import from its own layer and the layers below it only.
+:func:`violations` lists the imports that break that rule, :func:`cycles` the modules that
+import each other round a loop, at module level or inside a function (a test keeps both empty),
+and :func:`draw` saves the graph with the layers as rows, so that every arrow points down.
 """
 
 from __future__ import annotations
@@ -19,6 +21,7 @@ from pathlib import Path
 PACKAGE = "cable_ocp"
 # Bottom to top; layers on one row may not import each other.
 LAYERS = (
+    ("lazy",),
     ("scene",),
     ("result_files",),
     ("model",),
@@ -27,7 +30,7 @@ LAYERS = (
     ("control",),
     ("lowering",),
     ("sweep", "studies"),
-    ("cli", "plots", "__init__"),
+    ("cli", "plots", "entry", "__init__"),
 )
 
 
@@ -113,6 +116,67 @@ def violations(root: Path | None = None) -> list[str]:
     return broken
 
 
+def cycles(root: Path | None = None) -> list[str]:
+    """Groups of modules that import each other round a loop, as ``a -> b -> a`` lines.
+
+    Every import counts, at module level or inside a function (a local import that breaks a
+    cycle at import time still ties the two modules together), and so do the names a package's
+    ``__init__`` loads lazily. One line per strongly connected group of the graph (Tarjan's
+    algorithm), showing one loop through it.
+    """
+    graph = {m.name: sorted(m.imports) for m in modules(root)}
+    index: dict[str, int] = {}
+    low: dict[str, int] = {}
+    stack: list[str] = []
+    groups: list[list[str]] = []
+
+    def visit(name: str) -> None:
+        index[name] = low[name] = len(index)
+        stack.append(name)
+        for target in graph[name]:
+            if target not in index:
+                visit(target)
+                low[name] = min(low[name], low[target])
+            elif target in stack:
+                low[name] = min(low[name], index[target])
+        if low[name] == index[name]:
+            group = []
+            while not group or group[-1] != name:
+                group.append(stack.pop())
+            if len(group) > 1 or name in graph[name]:
+                groups.append(sorted(group))
+
+    limit = sys.getrecursionlimit()
+    sys.setrecursionlimit(max(limit, 10 * len(graph)))
+    try:
+        for name in sorted(graph):
+            if name not in index:
+                visit(name)
+    finally:
+        sys.setrecursionlimit(limit)
+    return [" -> ".join(_loop(graph, set(group), group[0])) for group in sorted(groups)]
+
+
+def _loop(graph: dict[str, list[str]], group: set[str], start: str) -> list[str]:
+    """A shortest path from ``start`` back to itself within ``group`` (breadth first)."""
+    came: dict[str, str] = {}
+    frontier = [start]
+    while frontier:
+        following = []
+        for name in frontier:
+            for target in graph[name]:
+                if target == start:
+                    path = [name]
+                    while path[-1] != start:
+                        path.append(came[path[-1]])
+                    return [*reversed(path), start]
+                if target in group and target not in came:
+                    came[target] = name
+                    following.append(target)
+        frontier = following
+    raise ValueError(f"{start} is on no loop")  # a group of Tarjan's always has one
+
+
 def _box(name: str) -> str:
     """What a module is drawn as: a sub-package of a layer (e.g. studies.stability) is one box."""
     parts = name.split(".")
@@ -170,14 +234,17 @@ def draw(path: str | Path, root: Path | None = None) -> Path:
 def main(argv: list[str] | None = None) -> int:
     """``python -m cable_ocp.studies.imports [PICTURE.png]``: check the layers, draw the graph."""
     argv = sys.argv[1:] if argv is None else argv
-    broken = violations()
+    broken, loops = violations(), cycles()
     for line in broken:
         print(f"layer violation: {line}")
+    for line in loops:
+        print(f"import cycle: {line}")
     if argv:
         print(f"wrote {draw(argv[0])}")
     layers = {m.layer for m in modules()}
-    print(f"{len(modules())} modules in {len(layers)} layers; {len(broken)} violations")
-    return 1 if broken else 0
+    print(f"{len(modules())} modules in {len(layers)} layers; {len(broken)} violations, "
+          f"{len(loops)} cycles")  # fmt: skip
+    return 1 if broken or loops else 0
 
 
 if __name__ == "__main__":
