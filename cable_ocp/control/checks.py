@@ -1,36 +1,44 @@
-"""One way to check the fields of a settings class: declared rules, one message per failure.
+"""The settings' fields checked by the one field rule of the scenes, one message per failure.
 
 Every settings class of the optimisers and the closed loop (``ModelSettings``, ``GridSettings``,
 ``TranscriptionSettings``, ``IpoptSettings``, ``GaussNewtonSettings``, ``NelderMeadSettings``,
-``MpcSettings``) lists its numeric, choice and flag fields with a :class:`Rule` and calls
+``MpcSettings``) lists its numeric, choice and flag fields with a :func:`Rule` and calls
 :func:`check_fields` from ``__post_init__``: a value of the wrong type (a bool for an integer,
 a string for a number), NaN, infinity or one out of range is a ``ValueError`` naming the field,
-its value and what it must be, before anything is built.
+its value and what it must be, before anything is built. The rule and its check are the scene
+fields' own (:class:`cable_ocp.scene.rules.FieldRule`); only the wording is the settings'.
 """
 
 from __future__ import annotations
 
 import contextlib
-import math
-import numbers
 import os
 import sys
-from dataclasses import dataclass
+
+from cable_ocp.scene.rules import FieldRule
+
+# A settings rule's kind -> the field rule's.
+KINDS = {"integer": "int", "number": "float", "choice": "choice", "flag": "bool", "table": "table"}
 
 
-@dataclass(frozen=True)
-class Rule:
-    """What one field may hold.
+def Rule(  # noqa: N802 - the settings classes' name for their field rules
+    kind: str,
+    low: float | None = None,
+    high: float | None = None,
+    above: float | None = None,
+    unit: str = "",
+    optional: bool = False,
+    choices: tuple[str, ...] = (),
+) -> FieldRule:
+    """What one settings field may hold, as a :class:`~cable_ocp.scene.rules.FieldRule`.
 
-    Attributes
+    Parameters
     ----------
     kind : str
         ``"integer"``, ``"number"`` (a finite real), ``"choice"``, ``"flag"`` (a bool) or
         ``"table"`` (a dict).
-    low : float or None
-        Smallest value allowed (inclusive), or None.
-    high : float or None
-        Largest value allowed (inclusive), or None.
+    low, high : float or None
+        Smallest and largest value allowed (inclusive), or None.
     above : float or None
         A bound the value must be strictly above, or None.
     unit : str
@@ -40,48 +48,30 @@ class Rule:
     choices : tuple of str
         For ``"choice"``.
     """
+    if kind not in KINDS:
+        raise ValueError(f"Rule kind = {kind!r}: must be one of {', '.join(KINDS)}")
+    return FieldRule(KINDS[kind], unit=unit, gt=above, ge=low, le=high, optional=optional,
+                     choices=tuple(choices))  # fmt: skip
 
-    kind: str
-    low: float | None = None
-    high: float | None = None
-    above: float | None = None
-    unit: str = ""
-    optional: bool = False
-    choices: tuple[str, ...] = ()
 
-    def problem(self, value) -> str | None:
-        """What is wrong with ``value`` (None when it is allowed)."""
-        if value is None:
-            return None if self.optional else "must be set"
-        if self.kind == "choice":
-            return None if value in self.choices else f"must be one of {', '.join(self.choices)}"
-        if self.kind == "flag":
-            return None if isinstance(value, bool) else "must be true or false"
-        if self.kind == "table":
-            return None if isinstance(value, dict) else "must be a table (a dict)"
-        if isinstance(value, bool) or not isinstance(value, numbers.Real):
-            return f"must be {'an integer' if self.kind == 'integer' else 'a number'}"
-        if self.kind == "integer" and not isinstance(value, numbers.Integral):
-            return "must be an integer"
-        if not math.isfinite(value):
-            return "must be finite"
-        if self.high is not None and value > self.high:
-            return f"must be <= {self.high:g}"
-        if self.low is not None and value < self.low:
-            return f"must be >= {self.low:g}"
-        if self.above is not None and not value > self.above:
-            return f"must be > {self.above:g}"
+def problem(rule: FieldRule, value) -> str | None:
+    """What is wrong with ``value`` under ``rule``, in the settings' words (None when allowed)."""
+    fault = rule.fault(value)
+    if fault is None:
         return None
+    if fault.what == "choice":
+        return f"must be one of {', '.join(rule.choices)}"
+    return f"must be {fault.expected}"
 
 
-def check_fields(settings, rules: dict[str, Rule]) -> None:
+def check_fields(settings, rules: dict[str, FieldRule]) -> None:
     """Raise a ValueError naming the first field of ``settings`` that breaks its rule."""
     for name, rule in rules.items():
         value = getattr(settings, name)
-        problem = rule.problem(value)
-        if problem is not None:
+        text = problem(rule, value)
+        if text is not None:
             unit = f" {rule.unit}" if rule.unit and value is not None else ""
-            raise ValueError(f"{type(settings).__name__}.{name} = {value!r}{unit}: {problem}")
+            raise ValueError(f"{type(settings).__name__}.{name} = {value!r}{unit}: {text}")
 
 
 def check_ipopt_options(options: dict) -> None:

@@ -27,13 +27,13 @@ from __future__ import annotations
 
 import math
 
-from cable_ocp.scene.schema import Scene, SceneError
+from cable_ocp.scene.rules import SceneError
 
 # A buoyant end counts as one only above this share of the loads (a neutral payload's rounding).
 NEUTRAL = 1e-9
 
 
-def check_hanging(scene: Scene) -> None:
+def check_hanging(scene) -> None:
     """Raise :class:`SceneError` if the scene's line cannot hang in still water (module rules).
 
     Parameters
@@ -83,7 +83,7 @@ def check_hanging(scene: Scene) -> None:
         )
 
 
-def _loads(scene: Scene, lift: float) -> str:
+def _loads(scene, lift: float) -> str:
     """The fields that make the end's lift, with their values."""
     payload, force = scene.end.payload, scene.end.force
     parts = []
@@ -102,7 +102,7 @@ def _drop(weight: float, length: float, sideways: float, lift: float) -> float:
     return (math.hypot(sideways, weight * length - lift) - math.hypot(sideways, lift)) / weight
 
 
-def _least_mass(scene: Scene, weight: float, sideways: float, lift: float, top: float) -> str:
+def _least_mass(scene, weight: float, sideways: float, lift: float, top: float) -> str:
     """The advice: the payload mass that would put the end at the surface, or why none would."""
     from scipy.optimize import brentq
 
@@ -121,7 +121,7 @@ def _least_mass(scene: Scene, weight: float, sideways: float, lift: float, top: 
     )
 
 
-def _check_light_rope(scene: Scene, buoyancy: float, load: float) -> None:
+def _check_light_rope(scene, buoyancy: float, load: float) -> None:
     """Rule 1: a rope lighter than water (``buoyancy`` kg) needs ``load`` (kg) that outweighs it."""
     if load <= buoyancy:
         water = scene.environment.water_density

@@ -13,7 +13,6 @@ from __future__ import annotations
 import copy
 import errno
 import math
-import numbers
 import os
 import stat
 from collections.abc import Callable, Collection, Mapping, Set
@@ -28,7 +27,9 @@ except ModuleNotFoundError:  # Python 3.10
 
 from cable_ocp.scene.bathymetry import GridError, read_grid
 from cable_ocp.scene.bundled import closest_names, scene_names, scene_path
+from cable_ocp.scene.hanging import check_hanging
 from cable_ocp.scene.line_mesh import FEWEST_ELEMENTS, LineMesh
+from cable_ocp.scene.rules import EXPECTED, Fault, FieldRule, SceneError
 
 __all__ = [
     "Cable",
@@ -82,51 +83,9 @@ def whole_steps(duration: float, step: float) -> int | None:
     return count
 
 
-class SceneError(ValueError):
-    """Invalid scene data; ``path`` is the dotted field path the message starts with."""
-
-    def __init__(self, path: str, detail: str) -> None:
-        self.path, self.detail = path, detail
-        super().__init__(path + detail)
-
-    def relocated(self, old: str, new: str) -> SceneError:
-        """Return the same error with the path prefix ``old`` replaced by ``new``."""
-        if old == new or not self.path.startswith(old):
-            return self
-        return SceneError(new + self.path[len(old) :], self.detail)
-
-
-@dataclass(frozen=True)
-class _Spec:
-    kind: str  # float, int, bool, str, choice, path, vec3, section, tuple
-    doc: str
-    unit: str = ""
-    gt: float | None = None
-    ge: float | None = None
-    le: float | None = None
-    optional: bool = False
-    choices: tuple[str, ...] = ()
-    item: type | None = None  # dataclass of a "section" or of the items of a "tuple"
-    why: str = ""  # the physical reason for the range, said when a value is out of it
-
-    def rule(self) -> str:
-        """Describe the allowed range, e.g. ``> 0 (m)``."""
-        bounds = ((">", self.gt), (">=", self.ge), ("<=", self.le))
-        text = " and ".join(f"{op} {bound:g}" for op, bound in bounds if bound is not None)
-        return text + (f" ({self.unit})" if self.unit else "")
-
-    def accepts(self, x: float) -> bool:
-        """Whether the number ``x`` lies in the allowed range."""
-        return (
-            (self.gt is None or x > self.gt)
-            and (self.ge is None or x >= self.ge)
-            and (self.le is None or x <= self.le)
-        )
-
-
 def _param(default: Any = MISSING, kind: str = "float", doc: str = "", **spec: Any) -> Any:
-    """Declare a scene field: default, kind, meaning and constraints (see ``_Spec``)."""
-    meta = {"spec": _Spec(kind, doc, **spec)}
+    """Declare a scene field: default, kind, meaning and constraints (see ``FieldRule``)."""
+    meta = {"spec": FieldRule(kind, doc, **spec)}
     if kind == "section" and not spec.get("optional"):
         return field(default_factory=spec["item"], metadata=meta)
     return field(default=default, metadata=meta)
@@ -142,38 +101,34 @@ def _describe(value: Any) -> str:
     return f"{type(value).__name__} {_short(value)}"
 
 
-def _number(value: Any, path: str, spec: _Spec, integer: bool = False) -> float | int:
-    """Check one number against ``spec``; booleans are not numbers, floats are not integers."""
-    want = numbers.Integral if integer else numbers.Real
-    if isinstance(value, bool) or not isinstance(value, want):
-        expected = "an integer" if integer else "a number"
-        raise SceneError(path, f": expected {expected}, got {_describe(value)}")
-    try:
-        value = int(value) if integer else float(value)
-    except OverflowError:  # an integer too large for a float
-        raise SceneError(path, f" = {_short(value)} is out of range: must be finite") from None
-    if not integer and not math.isfinite(value):
-        raise SceneError(path, f" = {value!r} is out of range: must be finite")
-    if not spec.accepts(value):
-        why = f": {spec.why}" if spec.why else ""
-        raise SceneError(path, f" = {_short(value)} is out of range: must be {spec.rule()}{why}")
-    return value
+def _number(value: Any, path: str, spec: FieldRule) -> float | int:
+    """Check one number (of an ``int``, ``float`` or ``vec3`` field) against ``spec``."""
+    integer = spec.kind == "int"
+    fault = Fault("missing", "set") if value is None else spec.fault(value)
+    if fault is None:
+        return int(value) if integer else float(value)
+    if fault.what in ("type", "missing"):
+        raise SceneError(path, f": expected {EXPECTED[spec.kind]}, got {_describe(value)}")
+    if fault.what == "finite":
+        raise SceneError(path, f" = {_short(value)} is out of range: must be finite")
+    value = int(value) if integer else float(value)
+    why = f": {spec.why}" if spec.why else ""
+    raise SceneError(path, f" = {_short(value)} is out of range: must be {spec.rule()}{why}")
 
 
-def _check(spec: _Spec, value: Any, path: str) -> Any:
+def _check(spec: FieldRule, value: Any, path: str) -> Any:
     """Validate and normalise one field value (the single checker used by every dataclass)."""
     if value is None and spec.optional:
         return None
     kind = spec.kind
     if kind in ("float", "int"):
-        return _number(value, path, spec, integer=kind == "int")
-    if kind == "bool" and not isinstance(value, bool):
-        raise SceneError(path, f": expected true or false, got {_describe(value)}")
-    if kind in ("str", "choice") and not isinstance(value, str):
-        raise SceneError(path, f": expected a string, got {_describe(value)}")
-    if kind == "choice" and value not in spec.choices:
+        return _number(value, path, spec)
+    fault = spec.fault(value) if kind in ("bool", "str", "choice") else None
+    if fault is not None and fault.what == "choice":
         allowed = ", ".join(repr(c) for c in spec.choices)
         raise SceneError(path, f" = {_short(value)} is not allowed: must be one of {allowed}")
+    if fault is not None:
+        raise SceneError(path, f": expected {fault.expected}, got {_describe(value)}")
     if kind == "path":
         if not isinstance(value, str | os.PathLike) or "\0" in str(value):
             raise SceneError(path, f": expected a file path string, got {_describe(value)}")
@@ -927,8 +882,6 @@ class Scene(_Validated):
         return self.mesh()[1]
 
     def _check_relations(self) -> None:
-        from cable_ocp.scene.hanging import check_hanging  # it reads a Scene
-
         check_hanging(self)
         lowering, numerics = self.lowering, self.numerics
         if lowering is not None and lowering.land_time > numerics.duration:
