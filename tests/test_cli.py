@@ -15,6 +15,7 @@ from pathlib import Path
 import pytest
 
 from cable_ocp import cli
+from cable_ocp.cli.optimiser_options import optimize_options
 from cable_ocp.control import optimization
 from cable_ocp.scene.output import MARKER
 from cable_ocp.scene.schema import SceneError, load_scene
@@ -122,12 +123,12 @@ def test_simulate_writes_a_marked_folder_and_replaces_it(tmp_path, capsys):
 def test_hessian_exact_runs_the_interpreted_model(capsys):
     parser = cli.build_parser()
     args = parser.parse_args(["optimize", HANGING, "--out", "o", "--hessian", "exact"])
-    options = cli._optimize_options(args)
+    options = optimize_options(args)
     assert options["solver"] == "ipopt" and options["settings"].hessian == "exact"
     assert options["transcription"].compiled is False
     assert "--hessian exact runs the interpreted model" in capsys.readouterr().err
     args = parser.parse_args(["optimize", HANGING, "--out", "o"])
-    assert cli._optimize_options(args)["transcription"].compiled is True
+    assert optimize_options(args)["transcription"].compiled is True
 
 
 @pytest.mark.parametrize(
@@ -196,27 +197,6 @@ def test_shooting_option_reaches_the_ipopt_settings(tmp_path, monkeypatch, capsy
     code, _, err = run_cli(args, capsys)
     assert code == 2 and "stopped by the test" in err
     assert calls[0].shooting == shooting
-
-
-@pytest.mark.parametrize(
-    ("error", "code", "line"),
-    [
-        (KeyboardInterrupt(), 130, "cable-ocp simulate: interrupted"),
-        (OSError(28, "No space left on device"),
-         1, "cable-ocp simulate: error: [Errno 28] No space left on device"),
-        (OverflowError("math range\nerror"), 2, "cable-ocp simulate: error: math range error"),
-    ],
-)  # fmt: skip
-def test_interrupt_and_system_errors_have_no_traceback(
-    tmp_path, monkeypatch, capsys, error, code, line
-):
-    def fail(*args, **kwargs):
-        raise error
-
-    monkeypatch.setattr(cli, "load_scene", fail)
-    result, out, err = run_cli(["simulate", HANGING, "--out", tmp_path / "o"], capsys)
-    assert result == code
-    assert err == line + "\n" and out == ""
 
 
 def test_help_exits_0(capsys):
@@ -397,17 +377,17 @@ def test_optimiser_defaults_are_the_registrys(monkeypatch):
 
     parser = cli.build_parser()
     args = parser.parse_args(["optimize", HANGING, "--out", "o"])
-    assert ocp_settings(**cli._optimize_options(args)) == ocp_settings()
+    assert ocp_settings(**optimize_options(args)) == ocp_settings()
     simplex = parser.parse_args(["optimize", HANGING, "--out", "o", "--method", "nelder-mead"])
-    assert ocp_settings(**cli._optimize_options(simplex)) == ocp_settings("nelder-mead")
+    assert ocp_settings(**optimize_options(simplex)) == ocp_settings("nelder-mead")
     given = parser.parse_args(["optimize", HANGING, "--out", "o", "--elements", "5", "--step",
                                "0.25", "--max-iter", "7", "--solver", "ipopt"])  # fmt: skip
-    options = cli._optimize_options(given)
+    options = optimize_options(given)
     assert options["model"] == ModelSettings(5, 0.25)
     assert options["settings"] == SOLVERS["ipopt"].settings(max_iter=7)
     assert options["grid"] == GridSettings() and options["transcription"] == TranscriptionSettings()
     with pytest.raises(ValueError, match="solver = 'sqp': must be one of 'gauss-newton'"):
-        cli._optimize_options(parser.parse_args(["optimize", HANGING, "--out", "o",
+        optimize_options(parser.parse_args(["optimize", HANGING, "--out", "o",
                                                  "--solver", "sqp"]))  # fmt: skip
 
 

@@ -1,6 +1,7 @@
 """Argparse types of the command line, each refusing a value out of its range in one line.
 
-``DefaultsShown`` is the commands' help formatter.
+``DefaultsShown`` is the commands' help formatter; :func:`add_set` adds the ``--set`` option
+that :func:`parse_overrides` reads, :func:`knot_angles` reads ``--knots``.
 """
 
 from __future__ import annotations
@@ -9,12 +10,66 @@ import argparse
 import math
 from collections.abc import Callable
 
+try:
+    import tomllib
+except ModuleNotFoundError:  # Python 3.10
+    import tomli as tomllib
+
 OUT_HELP = (
     "results folder, written atomically: a new or empty folder, or a previous results folder "
     "(marked by .cable_ocp-results), which is replaced"
 )
 
 SCENE_HELP = "the scene: a TOML file, or a bundled scene's name (cable-ocp scenes lists them)"
+ANIMATE_HELP = "also write animation.gif: the cable, the end's path and the seabed over time"
+INTERPRETED_HELP = "the interpreted model (default: compiled to C, the library cached on disk)"
+
+
+def add_set(parser: argparse.ArgumentParser, example: str, what: str = "a scene field") -> None:
+    """Add ``--set KEY=VALUE`` (repeatable): override ``what``, e.g. ``--set example``."""
+    parser.add_argument("--set", action="append", default=[], metavar="KEY=VALUE",
+                        help=f"override {what}, e.g. --set {example} (repeatable)")  # fmt: skip
+
+
+def parse_overrides(pairs: list[str]) -> dict:
+    """``["model.elements=30", "top.motion='tow'"]`` -> ``{"model.elements": 30, ...}``.
+
+    Values are read as TOML, so numbers, booleans, strings and arrays keep their types; a bare
+    word is taken as a string.
+    """
+    overrides = {}
+    for pair in pairs:
+        key, sep, text = pair.partition("=")
+        if not sep:
+            raise ValueError(f"--set {pair!r}: expected KEY=VALUE, e.g. model.elements=30")
+        try:
+            value = tomllib.loads(f"v = {text}")["v"]
+        except (ValueError, RecursionError):  # not TOML: taken as a string
+            value = text
+        overrides[key.strip()] = value
+    return overrides
+
+
+def knot_angles(text: str) -> list[float]:
+    """An argparse type: comma-separated finite knot angles, rad."""
+    if not text.strip():
+        raise argparse.ArgumentTypeError(
+            "empty: give the angles phi_1..phi_p in rad, comma-separated, or leave --knots out "
+            "for a locked winch"
+        )
+    values = []
+    for k, item in enumerate(text.split(","), start=1):
+        try:
+            value = float(item)
+        except ValueError:
+            raise argparse.ArgumentTypeError(
+                f"knot {k} = {item.strip()!r:.40} is not a number; give the angles phi_1..phi_p "
+                "in rad, comma-separated, e.g. 0,0.5,1"
+            ) from None
+        if not math.isfinite(value):
+            raise argparse.ArgumentTypeError(f"knot {k} = {item.strip()!r}: must be finite")
+        values.append(value)
+    return values
 
 
 def integer(low: int, high: int) -> Callable[[str], int]:

@@ -4,10 +4,10 @@ from __future__ import annotations
 
 import argparse
 import math
-import sys
 from pathlib import Path
 
-from cable_ocp.cli.arguments import OUT_HELP, SCENE_HELP, DefaultsShown
+from cable_ocp.cli.arguments import OUT_HELP, SCENE_HELP, DefaultsShown, add_set, parse_overrides
+from cable_ocp.cli.exits import SUCCESS, failed
 from cable_ocp.lowering.landing import HOVER
 from cable_ocp.scene.bundled import scene_argument
 
@@ -40,10 +40,7 @@ def add_lower_command(subparsers) -> None:
     )
     parser.add_argument("scene", type=scene_argument, help=SCENE_HELP)
     parser.add_argument("--out", type=Path, required=True, help=OUT_HELP)
-    parser.add_argument(
-        "--set", action="append", default=[], metavar="KEY=VALUE",
-        help="override a scene field, e.g. --set lowering.land_time=1000",
-    )  # fmt: skip
+    add_set(parser, "lowering.land_time=1000")
     parser.add_argument("--no-hold", action="store_true", help="leave out the closed-loop hold")
     parser.add_argument(
         "--hover", type=float, default=HOVER,
@@ -64,7 +61,6 @@ def add_lower_command(subparsers) -> None:
 def run_lower_command(args: argparse.Namespace) -> int:
     """Run ``cable-ocp lower``; 3 when the landing or the hold fails, 0 otherwise."""
     from cable_ocp import plots, result_files
-    from cable_ocp.cli import parse_overrides
     from cable_ocp.cli.files import results_folder
     from cable_ocp.lowering.hold import hold
     from cable_ocp.lowering.landing import land, landing_scene
@@ -145,11 +141,10 @@ def run_lower_command(args: argparse.Namespace) -> int:
     outcomes = [("landing", plan), ("hold", held)]
     outcomes += [(f"{name.replace('_', '-')} landing from the hover", result)
                  for name, result in hover.items()]  # fmt: skip
-    failed = [name for name, outcome in outcomes if outcome is not None and not outcome.success]
-    if failed:
-        print(f"cable-ocp lower: the {' and the '.join(failed)} failed", file=sys.stderr)
-        return 3
-    return 0
+    failures = [name for name, outcome in outcomes if outcome is not None and not outcome.success]
+    if failures:
+        return failed("lower", f"the {' and the '.join(failures)} failed")
+    return SUCCESS
 
 
 def _hover_fields(name: str, result) -> dict:

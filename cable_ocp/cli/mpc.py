@@ -3,7 +3,6 @@
 from __future__ import annotations
 
 import argparse
-import sys
 from dataclasses import replace
 from pathlib import Path
 
@@ -11,11 +10,14 @@ from cable_ocp.cli.arguments import (
     OUT_HELP,
     SCENE_HELP,
     DefaultsShown,
+    add_set,
     fraction,
     integer,
+    parse_overrides,
     positive,
     weight,
 )
+from cable_ocp.cli.exits import SUCCESS, failed
 from cable_ocp.control.closed_loop.settings import CLOSED_LOOP_SOLVERS, MpcSettings
 from cable_ocp.control.settings import ModelSettings
 from cable_ocp.scene.bundled import scene_argument
@@ -123,13 +125,7 @@ def add_mpc_command(subparsers) -> None:
         action="store_true",
         help="also optimise open loop (without the heave) and simulate that profile as a reference",
     )
-    parser.add_argument(
-        "--set",
-        action="append",
-        default=[],
-        metavar="KEY=VALUE",
-        help="override a scene field, e.g. --set top.heave.amplitude=1",
-    )
+    add_set(parser, "top.heave.amplitude=1")
     parser.add_argument("--quiet", action="store_true", help="no progress bar")
     parser.set_defaults(run=run_mpc_command)
 
@@ -162,7 +158,6 @@ def settings_from(args: argparse.Namespace) -> MpcSettings:
 def run_mpc_command(args: argparse.Namespace) -> int:
     """Run ``cable-ocp mpc``; returns the exit code (3 if a solve, the plant or a check failed)."""
     from cable_ocp import plots
-    from cable_ocp.cli import parse_overrides
     from cable_ocp.cli.files import results_folder
     from cable_ocp.control.closed_loop.loop import mpc
     from cable_ocp.control.closed_loop.references import reference_runs
@@ -195,6 +190,5 @@ def run_mpc_command(args: argparse.Namespace) -> int:
     print(json_text(summary))
     print(f"results and figures written to {Path(args.out).resolve()}")
     if not result.success:
-        print(f"cable-ocp mpc: the closed loop failed: {result.status}", file=sys.stderr)
-        return 3
-    return 0
+        return failed("mpc", f"the closed loop failed: {result.status}")
+    return SUCCESS

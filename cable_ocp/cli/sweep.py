@@ -12,13 +12,11 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 from cable_ocp.cli.arguments import DefaultsShown
+from cable_ocp.cli.exits import INTERRUPTED, SUCCESS, failed
 
 if TYPE_CHECKING:
     from cable_ocp.sweep.runner import SweepReport
 
-# Exit codes: 0 every case ok, 3 some case failed or did not run (as a failed optimize) or the
-# engine was lost, 130 Ctrl-C; bad input (the sweep file, --out, --workers) is 2 as elsewhere.
-FAILED_EXIT, INTERRUPTED_EXIT = 3, 130
 MAX_ROWS = 50  # beyond this many cases the table lists the cases that are not ok only
 
 
@@ -124,17 +122,15 @@ def run_sweep_command(args: argparse.Namespace) -> int:
     print(f"results written to {report.path}")
     if report.engine_lost:
         saved = int((report.dataset["status"] != "not run").sum())
-        print(
-            f"cable-ocp sweep: the Dask engine was lost ({report.engine_lost}); {saved} of "
+        return failed(
+            "sweep",
+            f"the Dask engine was lost ({report.engine_lost}); {saved} of "
             f"{report.dataset.sizes['case']} cases are saved: start the engine again and rerun "
             "the same command to resume",
-            file=sys.stderr,
         )
-        return FAILED_EXIT
     if report.interrupted:
         print("cable-ocp sweep: interrupted; rerun the same command to resume", file=sys.stderr)
-        return INTERRUPTED_EXIT
+        return INTERRUPTED
     if not report.all_ok:
-        print("cable-ocp sweep: some cases failed or did not run (see reason)", file=sys.stderr)
-        return FAILED_EXIT
-    return 0
+        return failed("sweep", "some cases failed or did not run (see reason)")
+    return SUCCESS

@@ -1,0 +1,82 @@
+"""``cable-ocp compare SCENE ... --out DIR``: a shooting solver against Nelder-Mead in one table."""
+
+from __future__ import annotations
+
+import argparse
+from pathlib import Path
+
+from cable_ocp.cli.arguments import OUT_HELP, DefaultsShown, parse_overrides
+from cable_ocp.cli.exits import SUCCESS
+from cable_ocp.cli.files import results_folder
+from cable_ocp.cli.optimiser_options import (
+    add_optimiser_options,
+    check_start,
+    check_step,
+    elapsed,
+    optimize_options,
+)
+from cable_ocp.scene.bundled import scene_argument
+
+
+def add_compare_command(commands) -> None:
+    """Add ``compare`` to the subparsers of ``cable-ocp``."""
+    parser = commands.add_parser(
+        "compare", formatter_class=DefaultsShown,
+        help="a shooting solver against Nelder-Mead in one table",
+    )  # fmt: skip
+    parser.add_argument("scenes", type=scene_argument, nargs="+",
+                        help="scene files (TOML) or bundled scenes' names")  # fmt: skip
+    parser.add_argument("--out", type=Path, required=True, help=OUT_HELP)
+    add_optimiser_options(parser)
+    parser.set_defaults(run=run_compare_command)
+
+
+def run_compare_command(args: argparse.Namespace) -> int:
+    """Run ``cable-ocp compare``: every scene by three solvers, one table in comparison.md."""
+    from dataclasses import replace
+
+    from cable_ocp.control.optimization import optimize
+    from cable_ocp.scene.schema import load_scene
+
+    overrides = parse_overrides(args.set)
+    scenes = [load_scene(path, overrides) for path in args.scenes]  # all checked before solving
+    for scene in scenes:
+        check_step(scene, args.step)
+        check_start(scene)
+    if args.solver == "nelder-mead":
+        raise ValueError(
+            "--solver nelder-mead: compare runs Nelder-Mead anyway, beside a shooting solver; "
+            "give --solver gauss-newton or ipopt"
+        )
+    shooting = optimize_options(args, beside="nelder-mead")
+    simplex = optimize_options(args, "nelder-mead", beside=shooting["solver"])
+    spline = {**shooting, "grid": replace(shooting["grid"], control="spline")}
+    name = shooting["solver"]
+    output = {"quiet": args.quiet, "verbose": args.verbose}
+    rows = []
+    for scene in scenes:
+        runs = [
+            (f"{name}, hermite", optimize(scene, **shooting, **output)),
+            (f"{name}, spline", optimize(scene, **spline, **output)),
+            ("nelder-mead, spline", optimize(scene, **simplex, **output)),
+        ]
+        rows += [(scene.name, label, r) for label, r in runs]
+    lines = [
+        "| scene | solver | control | Omega verified [m] | success | iterations | evaluations "
+        "| wall [s] | build [s] |",
+        "|---|---|---|---:|---|---:|---:|---:|---:|",
+    ]
+    for name, label, r in rows:
+        lines.append(
+            f"| {name} | {label} | {r.control} | {r.omega:.2e} | {r.success} | {r.iterations} "
+            f"| {r.evaluations} | {r.wall_time:.1f} | {r.build_time:.1f} |"
+        )
+    lines.append(
+        f"\nwall: optimize()'s own time (build included); the whole command took "
+        f"{elapsed(args):.1f} s"
+    )
+    table = "\n".join(lines)
+    with results_folder(args.out) as folder:
+        (folder / "comparison.md").write_text(table + "\n")
+    print(table)
+    return SUCCESS

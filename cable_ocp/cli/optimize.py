@@ -1,0 +1,124 @@
+"""``cable-ocp optimize SCENE --out DIR``: the optimal winch, verified, beside a locked winch."""
+
+from __future__ import annotations
+
+import argparse
+import math
+from pathlib import Path
+
+from cable_ocp.cli.arguments import (
+    ANIMATE_HELP,
+    OUT_HELP,
+    SCENE_HELP,
+    DefaultsShown,
+    integer,
+    parse_overrides,
+)
+from cable_ocp.cli.exits import SUCCESS, failed, one_line
+from cable_ocp.cli.files import results_folder
+from cable_ocp.cli.optimiser_options import (
+    add_optimiser_options,
+    check_start,
+    check_step,
+    elapsed,
+    optimize_options,
+)
+from cable_ocp.cli.run_folder import EXTRA_UNITS
+from cable_ocp.scene.bundled import scene_argument
+
+
+def add_optimize_command(commands) -> None:
+    """Add ``optimize`` to the subparsers of ``cable-ocp``."""
+    parser = commands.add_parser(
+        "optimize", formatter_class=DefaultsShown, help="optimise the winch angle of a scene"
+    )
+    parser.add_argument("scene", type=scene_argument, help=SCENE_HELP)
+    parser.add_argument("--method", choices=["shooting", "nelder-mead", "ipopt"],
+                        default="shooting",
+                        help="shooting: direct shooting on the winch parameters, solved by "
+                        "--solver (Gauss-Newton SQP or IPOPT), refined by model correction "
+                        "(ipopt: its old name); nelder-mead: the paper's simplex on winch.knots "
+                        "(as --solver nelder-mead)")  # fmt: skip
+    parser.add_argument("--out", type=Path, required=True, help=OUT_HELP)
+    parser.add_argument("--refinements", type=integer(0, 100), default=3,
+                        help="model-correction solves")  # fmt: skip
+    add_optimiser_options(parser)
+    parser.add_argument("--animate", action="store_true", help=ANIMATE_HELP)
+    parser.set_defaults(run=run_optimize_command)
+
+
+def _locked_reference(scene):
+    """The locked winch's run for comparison, or None and why it failed.
+
+    Only the verified profile must stay sound: a locked run that blows up or leaves the
+    bathymetry grid is reported beside the result, never in its place.
+    """
+    from cable_ocp.simulation.integrate import SimulationError
+    from cable_ocp.simulation.run import simulate
+
+    try:
+        return simulate(scene, quiet=True), ""
+    except SimulationError as error:
+        return None, f"the locked reference run failed ({one_line(error)})"
+
+
+def run_optimize_command(args: argparse.Namespace) -> int:
+    """Run ``cable-ocp optimize``; 3 when the optimiser fails, 0 otherwise."""
+    from cable_ocp import plots
+    from cable_ocp.cli.exports import winch_csv
+    from cable_ocp.control.optimization import optimize
+    from cable_ocp.scene.output import json_text
+    from cable_ocp.scene.schema import load_scene
+
+    scene = load_scene(args.scene, parse_overrides(args.set))
+    check_step(scene, args.step)
+    check_start(scene)
+    output = {"quiet": args.quiet, "verbose": args.verbose}
+    options = optimize_options(args)
+    if options["solver"] != "nelder-mead":
+        output["refinements"] = args.refinements
+    result = optimize(scene, **options, **output)
+    locked, locked_failure = _locked_reference(scene)
+    seabed, bounds = scene.seabed, (scene.winch.angle_min, scene.winch.angle_max)
+    runs = [("locked winch", locked), (f"optimised ({result.solver})", result.trajectory)]
+    runs = [(label, run) for label, run in runs if run is not None]
+    summary = {"scene": scene.name, **result.summary(),
+               "locked_omega": locked.omega if locked is not None else float("nan")}  # fmt: skip
+    summary["units"] = {**summary["units"], "locked_omega": EXTRA_UNITS["locked_omega"]}
+    with results_folder(args.out) as folder:
+        result.save(folder)
+        (folder / "summary.json").write_text(json_text(summary))
+        if result.trajectory is not None:
+            (folder / "winch.csv").write_text(winch_csv(result.trajectory, scene))
+        if runs:
+            labels, pair = [label for label, _ in runs], [run for _, run in runs]
+            plots.end_trajectory(pair, labels, path=folder / "end_trajectory.png")
+            plots.clearance(pair, seabed.clearance, labels, folder / "clearance.png",
+                            seabed.minimum_clearance)  # fmt: skip
+            plots.winch_angle(pair, labels, bounds, path=folder / "winch_angle.png")
+            plots.cable_shapes(pair[-1], seabed=seabed, path=folder / "cable_shapes.png")
+            if args.animate:
+                plots.animate(pair[-1], folder / "animation.gif", seabed.clearance)
+    n = scene.model.elements
+    omega = (
+        f"Omega = {result.omega:.3g} m verified on n = {n}"
+        if math.isfinite(result.omega)
+        else f"Omega not verified on n = {n}"
+    )
+    locked_omega = "no locked run" if locked is None else f"locked: {locked.omega:.3f} m"
+    print(
+        f"{result.solver}: success = {result.success} ({result.status}); {omega} "
+        f"({locked_omega}); iterations {result.iterations}, evaluations "
+        f"{result.evaluations}; optimize() took {result.wall_time:.1f} s (build "
+        f"{result.build_time:.1f} s, solver {result.solve_time:.1f} s of which functions "
+        f"{result.function_time:.1f} s), the whole command {elapsed(args):.1f} s (with the "
+        "imports, the locked winch's run and the figures)"
+    )
+    if result.notes:
+        print(f"note: {result.notes}")
+    if locked_failure:
+        print(f"note: {locked_failure}; the comparison with the locked winch is left out")
+    print(f"results and figures written to {Path(args.out).resolve()}")
+    if not result.success:
+        return failed("optimize", f"the optimiser failed: {result.status}")
+    return SUCCESS

@@ -1,0 +1,62 @@
+"""``cable-ocp simulate SCENE --out DIR``: one run of a scene, its figures and summary."""
+
+from __future__ import annotations
+
+import argparse
+from pathlib import Path
+
+from cable_ocp.cli.arguments import (
+    ANIMATE_HELP,
+    INTERPRETED_HELP,
+    OUT_HELP,
+    SCENE_HELP,
+    DefaultsShown,
+    add_set,
+    knot_angles,
+    parse_overrides,
+)
+from cable_ocp.cli.run_folder import write_run
+from cable_ocp.scene.bundled import scene_argument
+
+KNOTS_HELP = (
+    "winch knot angles phi_1..phi_p in rad, comma-separated, p = winch.knots (write "
+    "--knots=-1,0.5 when the first is negative): phi(0) = 0 is put before them, knot i sits at "
+    "t = i T / p (T = numerics.duration), and the cubic spline through them starts at rest "
+    "(zero rate; free at the end); phi > 0 pays out; default: the winch locked"
+)
+
+
+def add_simulate_command(commands) -> None:
+    """Add ``simulate`` to the subparsers of ``cable-ocp``."""
+    parser = commands.add_parser(
+        "simulate", formatter_class=DefaultsShown,
+        help="simulate a scene and write results and figures",
+    )  # fmt: skip
+    parser.add_argument("scene", type=scene_argument, help=SCENE_HELP)
+    parser.add_argument("--out", type=Path, required=True, help=OUT_HELP)
+    parser.add_argument("--knots", type=knot_angles, help=KNOTS_HELP)
+    add_set(parser, "model.elements=30")
+    parser.add_argument("--quiet", action="store_true", help="no progress bar")
+    parser.add_argument("--interpreted", action="store_true", help=INTERPRETED_HELP)
+    parser.add_argument("--animate", action="store_true", help=ANIMATE_HELP)
+    parser.set_defaults(run=run_simulate_command)
+
+
+def run_simulate_command(args: argparse.Namespace) -> int:
+    """Run ``cable-ocp simulate``; 3 when the run is not physical, 0 otherwise."""
+    from cable_ocp.scene.schema import load_scene
+    from cable_ocp.simulation.progress import stage
+    from cable_ocp.simulation.run import simulate
+
+    scene = load_scene(args.scene, parse_overrides(args.set))
+    knots = args.knots
+    if knots is not None and len(knots) != scene.winch.knots:
+        raise ValueError(
+            f"--knots: {len(knots)} angles given; the scene has winch.knots = "
+            f"{scene.winch.knots} (one angle phi_1..phi_p per knot, rad)"
+        )
+    # Compiled unless --interpreted: without a compiler or a writable cache, the interpreted
+    # model runs after the same warning as the API's.
+    with stage(f"simulate {scene.name}", scene.numerics.duration, quiet=args.quiet):
+        trajectory = simulate(scene, winch=knots, quiet=args.quiet, compiled=not args.interpreted)
+    return write_run("simulate", trajectory, scene, Path(args.out), args.animate)
