@@ -19,7 +19,7 @@ import xarray as xr
 from cable_ocp.model.layout import INPUTS
 from cable_ocp.result_files import netcdf
 from cable_ocp.simulation.slack import PhysicsChecked
-from cable_ocp.simulation.trajectory import Trajectory, run_summary
+from cable_ocp.simulation.trajectory import Trajectory, check_recorded, run_summary
 
 KIND = "LineTrajectory"
 
@@ -122,6 +122,11 @@ class LineTrajectory(PhysicsChecked):
         return self.segments[0].omega
 
     @property
+    def scene_record(self) -> dict:
+        """The scene that ran, as ``Trajectory.scene_record`` (every segment holds it)."""
+        return self.segments[0].scene_record
+
+    @property
     def scene(self):
         """The scene that ran."""
         return self.segments[0].scene
@@ -180,7 +185,8 @@ class LineTrajectory(PhysicsChecked):
         Raises
         ------
         ValueError
-            Naming the file, if it is not a line trajectory.
+            Naming the file, if it is not a line trajectory, or its figures or scene do not fit
+            its series (:func:`~cable_ocp.simulation.trajectory.check_recorded`).
         """
         path = Path(path).with_suffix(".nc")
         try:
@@ -193,11 +199,18 @@ class LineTrajectory(PhysicsChecked):
                 datasets = [_old_segment(path, name) for name in names]
             else:  # one open of the file for every segment (100 segments: 33 s -> a few)
                 datasets = netcdf.read_groups(path, KIND, names)
-            segments = [Trajectory.from_xarray(dataset) for dataset in datasets]
+            run = cls([Trajectory.from_xarray(dataset) for dataset in datasets], length)
+            check_recorded(run, run.time, run.clearance_error, None)
+            for k, segment in enumerate(run.segments):
+                if not np.array_equal(segment.omega, run.omega, equal_nan=True):
+                    raise ValueError(
+                        f"segment_{k}: omega = {segment.omega!r} m: expected the run's, "
+                        f"{run.omega!r} m in segment_0"
+                    )
         except (OSError, KeyError, ValueError, TypeError) as error:
             where = "" if str(path) in str(error) else f"{path}: "
             raise ValueError(f"{where}not a readable line trajectory ({error})") from None
-        return cls(segments, length)
+        return run
 
 
 def _old_segment(path: Path, group: str) -> xr.Dataset:

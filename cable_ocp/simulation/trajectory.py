@@ -15,6 +15,7 @@ from cable_ocp.scene.axial_choice import axial_choice
 from cable_ocp.scene.records import check_run
 from cable_ocp.scene.schema import scene_of
 from cable_ocp.simulation import trajectory_dataset
+from cable_ocp.simulation.seabed import rms_objective
 from cable_ocp.simulation.slack import PhysicsChecked
 
 ARRAY_FIELDS = (
@@ -22,6 +23,9 @@ ARRAY_FIELDS = (
 )  # fmt: skip
 WHAT = "trajectory"
 SIGNED_NAME = "bond force along the axis of element i at its upper end A_{i+1} (negative pushes)"
+# Relative tolerance of a stored Omega against eq. 39 recomputed from the stored e(t): the same
+# float64 arithmetic gives it to a few ulps; another quadrature of the same series to ~1e-12.
+OMEGA_RTOL = 1e-9
 
 
 @dataclass(frozen=True, eq=False)
@@ -191,19 +195,24 @@ class Trajectory(PhysicsChecked):
         """Read a trajectory written by :meth:`save` (``path.nc``).
 
         Results of cable_ocp 0.1 (``path.npz`` and ``path.json``, result format 1) are read
-        when there is no ``path.nc``.
+        when there is no ``path.nc``, as they are: they kept no scene, and their Omega is
+        0.1's own (:func:`check_recorded` checks netCDF files).
 
         Raises
         ------
         ValueError
-            Naming the file, if it is missing, truncated or garbled, of a newer format, or the
-            arrays do not fit together.
+            Naming the file, if it is missing, truncated or garbled, of a newer format, the
+            arrays do not fit together, or its figures or scene do not fit its series
+            (:func:`check_recorded`: a forged file).
         """
         path = Path(path)
         netcdf = path.with_suffix(".nc")
         if netcdf.exists() or not (path.with_suffix(".npz").exists() or
                                    path.with_suffix(".json").exists()):  # fmt: skip
-            return result_files.load(cls, netcdf, WHAT)
+            run = result_files.load(cls, netcdf, WHAT)
+            with format_1.blame(netcdf, WHAT):
+                check_recorded(run, run.time, run.clearance_error, run.tensions.shape[1] - 1)
+            return run
         arrays_path, meta_path = path.with_suffix(".npz"), path.with_suffix(".json")
         arrays = format_1.read_arrays(arrays_path, WHAT)
         with format_1.blame(arrays_path, WHAT):
@@ -225,6 +234,73 @@ class Trajectory(PhysicsChecked):
             if not same:
                 return False
         return True
+
+
+def check_recorded(run, time: np.ndarray, error: np.ndarray, elements: int | None) -> None:
+    """Check a loaded run's figures and scene against its own series (a forged file is refused).
+
+    - ``time`` (s) starts at 0;
+    - ``run.omega`` is eq. 39 recomputed from ``time`` and ``error`` (``e(t)``, m) to
+      :data:`OMEGA_RTOL` (NaN for a single sample);
+    - a ``run.scene_record`` (none in files written before runs kept their scene) validates by
+      the scene schema, ``time`` ends at its ``numerics.duration``, and where ``elements`` is
+      given (a fixed-``n`` run), the run has its ``model.elements`` and is sampled every
+      ``numerics.output_every`` steps of ``numerics.step``.
+
+    Parameters
+    ----------
+    run : Trajectory or LineTrajectory
+    time : array (k,), s
+    error : array (k,), m
+    elements : int or None
+        ``n`` of the run's model (None for a line run, whose ``n`` changes).
+
+    Raises
+    ------
+    ValueError
+        Naming the variable, its value and what was expected (the caller adds the file).
+    """
+    span = max(abs(float(time[-1])), 1.0)
+    if abs(time[0]) > 1e-9 * span:
+        raise ValueError(f"time starts at {time[0]:.9g} s: expected 0 s")
+    expected = rms_objective(time, error) if time.size > 1 else float("nan")
+    if not (
+        np.isclose(run.omega, expected, rtol=OMEGA_RTOL, atol=0.0)
+        or (np.isnan(run.omega) and np.isnan(expected))
+    ):
+        raise ValueError(
+            f"omega = {run.omega!r} m: expected {expected!r} m, eq. 39 on its time and "
+            "clearance_error"
+        )
+    if not run.scene_record:
+        return
+    try:
+        numerics = run.scene.numerics
+        model = run.scene.model
+    except ValueError as error:
+        raise ValueError(f"scene_record: not a valid scene ({error})") from None
+    if abs(time[-1] - numerics.duration) > 1e-9 * max(numerics.duration, 1.0):
+        raise ValueError(
+            f"time ends at {time[-1]:.9g} s: expected its scene's numerics.duration = "
+            f"{numerics.duration!r} s"
+        )
+    if elements is None:
+        return
+    if elements != model.elements:
+        raise ValueError(
+            f"element: {elements + 1} elements (n = {elements}): expected its scene's "
+            f"model.elements = {model.elements} (n + 1 = {model.elements + 1})"
+        )
+    every = numerics.output_every * numerics.step
+    grid = np.arange(time.size) * every
+    if time.size != round(numerics.duration / every) + 1 or not np.allclose(
+        time, grid, rtol=0.0, atol=1e-9 * max(numerics.duration, 1.0)
+    ):
+        raise ValueError(
+            f"time: {time.size} samples from {time[0]:g} to {time[-1]:g} s: expected every "
+            f"numerics.output_every * numerics.step = {every:g} s over numerics.duration = "
+            f"{numerics.duration!r} s"
+        )
 
 
 def run_summary(run) -> dict:

@@ -145,8 +145,8 @@ def _check_dims(dataset: xr.Dataset) -> None:
         )
 
 
-def from_dataset(dataset: xr.Dataset, cls: type | None = None) -> dict:
-    """The fields of a Trajectory (class ``cls``, by default ``Trajectory``) from its Dataset.
+def from_dataset(dataset: xr.Dataset, cls: type) -> dict:
+    """The fields of a trajectory of class ``cls`` (``Trajectory``) from its Dataset.
 
     The fields stored as they are (``time``, ``omega``, ``scene_name``, ...) are read and
     checked against their types by :func:`cable_ocp.result_files.dataset.from_dataset`; the state,
@@ -157,8 +157,6 @@ def from_dataset(dataset: xr.Dataset, cls: type | None = None) -> dict:
     ValueError, KeyError
         A variable is missing or does not fit.
     """
-    if cls is None:
-        from cable_ocp.simulation.trajectory import Trajectory as cls  # it imports this module
     values = labelled_fields(cls, dataset, skip=SPLIT)
     for name in (*STATE_VARIABLES, *INPUT_VARIABLES, "joint_position", "tension"):
         if name not in dataset.variables:
