@@ -19,12 +19,14 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from cable_ocp.control.closed_loop.result import MpcResult
 from cable_ocp.control.verification import CLEARANCE_TOLERANCE
 from cable_ocp.drive.bounds import BOUND_TOLERANCE
 from cable_ocp.model import structured
 from cable_ocp.model.cable import CableModel, spec_from_scene
 from cable_ocp.model.layout import INPUTS
 from cable_ocp.model.line_models import line_models
+from cable_ocp.scene.schema import Scene
 from cable_ocp.simulation.line_run import pay_out_drive
 from cable_ocp.simulation.line_trajectory import LineTrajectory
 from cable_ocp.simulation.run import winch_function
@@ -145,11 +147,11 @@ def check_landing(run: Trajectory | LineTrajectory, winch=None, scene=None) -> L
     ----------
     run : Trajectory or LineTrajectory
         A run that reaches ``lowering.land_time``.
-    winch : None, callable or result
+    winch : None, array, callable, OcpResult or MpcResult
         The winch profile that drove it, as :func:`cable_ocp.simulate` takes it: the drum's rate
-        and acceleration are checked on it between the run's samples. A closed loop's profile
-        is known only at its samples: pass ``"inputs"`` to check the run's own line rate and
-        acceleration there.
+        and acceleration are checked on it between the run's samples. A closed loop's
+        (:class:`MpcResult`) is known only at its samples: the run's own line rate and
+        acceleration are checked there.
     scene : Scene, optional
         Whose ``[lowering]``, ``[winch]`` limits and minimum clearance the run is held to
         (default: the run's own scene). The model is always the run's own.
@@ -160,9 +162,23 @@ def check_landing(run: Trajectory | LineTrajectory, winch=None, scene=None) -> L
 
     Raises
     ------
+    TypeError
+        ``run`` is not a run, ``winch`` is text, or ``scene`` is not a Scene (before any work).
     ValueError
         The scene has no ``[lowering]``, or the run ends before the landing time.
     """
+    if not isinstance(run, Trajectory | LineTrajectory):
+        raise TypeError(
+            "check_landing: run must be a Trajectory or a LineTrajectory (co.simulate's, or a "
+            f"result's .trajectory); got {type(run).__name__}"
+        )
+    if isinstance(winch, str):
+        raise TypeError(
+            f"check_landing: winch = {winch!r:.40}: must be the profile that drove the run "
+            "(None, knot angles, a callable, or the OcpResult or MpcResult it came from)"
+        )
+    if scene is not None and not isinstance(scene, Scene):
+        raise TypeError(f"check_landing: scene must be a Scene; got {type(scene).__name__}")
     scene = run.scene if scene is None else scene
     lowering = scene.lowering
     if lowering is None:
@@ -212,7 +228,7 @@ def check_landing(run: Trajectory | LineTrajectory, winch=None, scene=None) -> L
         Check("no slack bond", float(tensions[sample, bond]), 0.0, "N",
               bool(tensions[sample, bond] > 0.0), f"at t = {time[sample]:g} s, bond {bond + 1}")
     )  # fmt: skip
-    if isinstance(winch, str) and winch == "inputs":
+    if isinstance(winch, MpcResult):
         checks += drum_checks(scene.winch, time, *sampled_line(run))
     else:
         checks += _drum_checks(scene, winch, time)

@@ -24,13 +24,18 @@ verified run by :func:`~.checks.check_landing`, code independent of the solver.
 from __future__ import annotations
 
 import math
+import numbers
 import time
+from collections.abc import Mapping
 from dataclasses import dataclass
 
 import numpy as np
 
 from cable_ocp.control.closed_loop.loop import mpc
-from cable_ocp.control.optimization import optimize
+from cable_ocp.control.closed_loop.result import MpcResult
+from cable_ocp.control.closed_loop.settings import MpcSettings
+from cable_ocp.control.keywords import refuse_unknown
+from cable_ocp.control.optimization import OPTIMIZE_KEYWORDS, OcpResult, optimize
 from cable_ocp.drive.drive import Drive
 from cable_ocp.drive.vessel import top_motion
 from cable_ocp.lowering.checks import LandingReport, check_landing
@@ -161,32 +166,26 @@ def landing_scene(scene, hover: float = HOVER) -> Scene:
 
     Raises
     ------
+    TypeError
+        A hover that is not a number (before any work).
     ValueError
         A scene without ``[lowering]`` or ``[winch.line]``, a moving vessel, a hover that is not
-        positive or that would make the top element a rigid rod of the line, or no hold.
+        positive or that would make the top element a rigid rod of the line (naming ``hover``
+        and its largest value here, :func:`_check_rod`), or no hold.
     """
+    checked_hover(hover)
     scene = scene_given(scene, "landing_scene")
     hold = held_on_station(scene, "a landing")
-    if not hover > 0:
-        raise ValueError(f"hover = {hover!r} m is out of range: must be > 0")
     lowering, step = scene.lowering, scene.numerics.step
     landing = landing_line(scene)
-    # With no top element at all the hover's pay-out would still be too much of the line.
-    largest = _largest_hover(landing + HOLD_RANGE, 0.0)
-    if hover > largest:
-        raise ValueError(
-            f"hover = {hover!r} m is out of range: must be > 0 and <= about {largest:.4g} m "
-            f"here: the landing pays it out through the top element, which may hold at most "
-            f"{TOP_SHARE:.0%} of the {landing:.4g} m of line that lands the load (more is a "
-            "rigid rod, not a rope)"
-        )
+    line = landing - hover
+    _check_rod(hover, _landing_top(scene, line), line)
     approach = _on_steps(approach_time(scene, hover, hold), step)
     table = {**scene.to_dict()["lowering"], "land_time": approach}
-    line = landing - hover
     landed = trimmed_line(
         scene, lowering.height + hover, line, approach + hold, hover + HOLD_RANGE, table
     )
-    _check_rod(landed, hover)
+    _check_rod(hover, landed.top_element_length, landed.cable.length)
     # The tension limits bound the load's acceleration, not the drum's: a compensated heave
     # moves the drum and leaves the load (and the tension) still. So they lengthen the approach.
     allowed, _ = tension_acceleration(landed, hover)
@@ -199,30 +198,66 @@ def landing_scene(scene, hover: float = HOVER) -> Scene:
     return landed
 
 
-def _check_rod(landed: Scene, hover: float) -> None:
-    """Refuse a hover whose pay-out would make the top element a rigid rod of the line.
+def checked_hover(hover) -> float:
+    """``hover`` (m) as a float, or an error naming it: a real number > 0.
 
-    The landing scene pays the hover out through its graded top element, which may carry at most
-    :data:`~cable_ocp.simulation.run.TOP_SHARE` of the line (the simulation refuses more).
+    Raises
+    ------
+    TypeError
+        Not a real number (a string, a bool, None).
+    ValueError
+        Not finite and positive.
     """
-    reach = landed.winch.angle_max * landed.winch.drum_radius
-    top, line = landed.top_element_length, landed.cable.length
-    if top + reach > TOP_SHARE * (line + reach):
-        largest = _largest_hover(line + reach, top)
+    if isinstance(hover, bool) or not isinstance(hover, numbers.Real):
+        raise TypeError(f"hover = {hover!r:.40}: must be a number of metres > 0, not "
+                        f"{type(hover).__name__}")  # fmt: skip
+    if not (math.isfinite(hover) and hover > 0):
+        raise ValueError(f"hover = {hover!r} m is out of range: must be > 0")
+    return float(hover)
+
+
+def _landing_top(scene: Scene, line: float) -> float:
+    """The landing scene's top element (m) on ``line`` (m) of the scene's line, as built.
+
+    :func:`~.hold.trimmed_line` gives it the line's own ``n``, the drum's haul-in of
+    :data:`~.hold.HOLD_RANGE` and the line's shortest top element
+    (:meth:`~cable_ocp.scene.schema.Scene.mesh`: ``max(L / 2n, l_min + haul-in)``).
+    """
+    mesh = scene.winch.line.mesh
+    return max(line / (2 * mesh.starting_elements(line)), mesh.top_length_min + HOLD_RANGE)
+
+
+def _check_rod(hover: float, top: float, line: float) -> None:
+    """Refuse a hover whose pay-out would make the landing scene's top element a rigid rod.
+
+    The landing pays the hover (and :data:`~.hold.HOLD_RANGE` more) out through its graded top
+    element of ``top`` (m) at the hover, on ``line`` (m) of line there; the simulation refuses a
+    top element of more than :data:`~cable_ocp.simulation.run.TOP_SHARE` of the line
+    (:func:`~cable_ocp.simulation.run.check_rod`). The excess falls one for one with the hover
+    (the line out at the end, ``line + hover + HOLD_RANGE``, does not depend on it), so the
+    largest hover is the hover less the excess: one figure, the same before and after the line
+    is trimmed.
+    """
+    paid = hover + HOLD_RANGE
+    excess = top + paid - TOP_SHARE * (line + paid)
+    if excess <= 0:
+        return
+    largest = hover - excess
+    if largest <= 0:
         raise ValueError(
-            f"hover = {hover!r} m is out of range: its pay-out would make the top element "
-            f"{top + reach:.4g} m of {line + reach:.4g} m of line, more than {TOP_SHARE:.0%} "
-            f"(a rigid rod, not a rope); must be <= about {largest:.3g} m here"
+            f"hover = {hover!r} m is out of range: no hover fits here, the landing scene's top "
+            f"element alone ({top:.4g} m: winch.line.top_length_min and the hold's "
+            f"{HOLD_RANGE:g} m of haul-in) and the hold's pay-out leave more than "
+            f"{TOP_SHARE:.0%} of the {line + paid:.4g} m of line out in it (a rigid rod, not a "
+            "rope): land on a longer line, or "
+            "shorten winch.line.top_length_min or winch.line.element_length"
         )
-
-
-def _largest_hover(line: float, top: float) -> float:
-    """The largest hover (m) whose pay-out keeps the top element within ``TOP_SHARE`` of the line.
-
-    ``line`` (m) is all the line once the hover and :data:`~.hold.HOLD_RANGE` are paid out,
-    ``top`` (m) the top element before.
-    """
-    return max(TOP_SHARE * line - top - HOLD_RANGE, 0.0)
+    raise ValueError(
+        f"hover = {hover!r} m is out of range: must be > 0 and <= about {largest:.4g} m here: "
+        f"the landing pays it out through its top element ({top:.4g} m at the hover), which "
+        f"may hold at most {TOP_SHARE:.0%} of the {line + paid:.4g} m of line out then (more is "
+        "a rigid rod, not a rope)"
+    )
 
 
 def _on_steps(duration: float, step: float) -> float:
@@ -257,7 +292,7 @@ class LandingResult:
 
     scene: Scene
     closed_loop: bool
-    result: object
+    result: OcpResult | MpcResult
     report: LandingReport | None
     compensation_ratio: float
     wall_time: float
@@ -288,9 +323,18 @@ class LandingResult:
         return f"the {what}: {found}; failed: {report.reason}"
 
 
+# land's own keywords, and the keywords of :func:`cable_ocp.optimize` that ``optimize_options``
+# may hold (``solver`` is land's own; ``scene`` and ``quiet`` are land's to give).
+LAND_KEYWORDS = ("scene", "closed_loop", "hover", "quiet", "solver", "optimize_options",
+                 "mpc_settings")  # fmt: skip
+OPTIMIZE_OPTIONS = tuple(k for k in OPTIMIZE_KEYWORDS if k not in ("scene", "quiet", "solver"))
+
+
 def land(
-    scene, closed_loop: bool = False, hover: float = HOVER, quiet: bool = True, **settings
-) -> LandingResult:
+    scene, closed_loop: bool = False, hover: float = HOVER, quiet: bool = True, *,
+    solver: str | None = None, optimize_options: Mapping[str, object] | None = None,
+    mpc_settings: MpcSettings | None = None, **unknown,
+) -> LandingResult:  # fmt: skip
     """Land a ``[lowering]`` scene's load from a hover, by optimisation or by the closed loop.
 
     Parameters
@@ -304,29 +348,46 @@ def land(
         Where the descent stopped, above the target height.
     quiet : bool
         No progress.
-    **settings
-        Keywords of :func:`cable_ocp.optimize` (``solver``, ``settings``) or fields of
-        :class:`~cable_ocp.control.closed_loop.settings.MpcSettings`.
+    solver : str, optional
+        The open loop's solver, as :func:`cable_ocp.optimize` takes it (default: its default).
+    optimize_options : mapping, optional
+        More keywords of :func:`cable_ocp.optimize` for the open loop (``settings``, ``model``,
+        ``grid``, ``transcription``, ``refinements``, ``verbose``).
+    mpc_settings : MpcSettings, optional
+        The closed loop's settings (default: :class:`MpcSettings`'s defaults).
+    **unknown
+        Refused (TypeError naming the allowed keywords).
 
     Returns
     -------
     LandingResult
         Never raises for a landing that fails on a valid scene: ``success`` and ``status`` say
         why (the solver's or the loop's status, or the failed checks).
+
+    Raises
+    ------
+    TypeError
+        An unknown keyword, or an argument of the wrong type, before any work.
+    ValueError
+        Settings of the other loop (``mpc_settings`` for the open loop, ``solver`` or
+        ``optimize_options`` for the closed one), or a scene or hover out of range, before any
+        heavy work.
     """
     started = time.perf_counter()
+    options = _land_arguments(closed_loop, solver, optimize_options, mpc_settings, unknown)
+    checked_hover(hover)
     scene = scene_given(scene, "land")
     landing = scene if scene.winch.line is None else landing_scene(scene, hover)
     if landing.lowering is None:
         raise ValueError(f"scene {landing.name!r} has no [lowering] table: nothing to land")
     if closed_loop:
-        result = mpc(landing, quiet=quiet, **settings)
+        result = mpc(landing, settings=mpc_settings, quiet=quiet)
     else:
-        result = optimize(landing, quiet=quiet, **settings)
+        result = optimize(landing, quiet=quiet, **options)
     run = result.trajectory
     report = ratio = None
     if run is not None and run.time[-1] >= landing.lowering.land_time:
-        report = check_landing(run, "inputs" if closed_loop else result)
+        report = check_landing(run, result)
         after = run.time >= landing.lowering.land_time
         ratio = compensation_ratio(vessel_heights(run)[after], run.end[after, 2])[0]
     return LandingResult(
@@ -337,3 +398,34 @@ def land(
         compensation_ratio=float("nan") if ratio is None else ratio,
         wall_time=time.perf_counter() - started,
     )
+
+
+def _land_arguments(closed_loop, solver, optimize_options, mpc_settings, unknown) -> dict:
+    """:func:`land`'s arguments checked before any work; returns ``optimize``'s keywords."""
+    refuse_unknown("land", unknown, LAND_KEYWORDS)
+    if not isinstance(closed_loop, bool):
+        raise TypeError(f"land: closed_loop = {closed_loop!r:.40} must be True or False")
+    if mpc_settings is not None and not isinstance(mpc_settings, MpcSettings):
+        raise TypeError(
+            f"land: mpc_settings must be an MpcSettings (co.MpcSettings(...)); got "
+            f"{type(mpc_settings).__name__}"
+        )
+    if optimize_options is not None and not isinstance(optimize_options, Mapping):
+        raise TypeError(
+            "land: optimize_options must be a mapping of optimize's keywords "
+            f"({', '.join(OPTIMIZE_OPTIONS)}); got {type(optimize_options).__name__}"
+        )
+    options = dict(optimize_options or {})
+    refuse_unknown("land(optimize_options=...)", {k: v for k, v in options.items()
+                   if k not in OPTIMIZE_OPTIONS}, OPTIMIZE_OPTIONS)  # fmt: skip
+    if closed_loop and (solver is not None or options):
+        raise ValueError(
+            "land(closed_loop=True): solver and optimize_options are the open loop's; the "
+            "closed loop takes mpc_settings (co.MpcSettings(solver=...))"
+        )
+    if not closed_loop and mpc_settings is not None:
+        raise ValueError(
+            "land(closed_loop=False): mpc_settings is the closed loop's; the open loop takes "
+            "solver and optimize_options"
+        )
+    return options if solver is None else {**options, "solver": solver}
