@@ -17,10 +17,12 @@ from scipy.optimize import minimize
 
 from cable_ocp.control import defaults
 from cable_ocp.control.checks import Rule, check_fields
+from cable_ocp.control.linearisation import compile_rhs_jacobian_in_background
 from cable_ocp.control.problem import ProblemSolver, SolverOutcome, WinchProblem
 from cable_ocp.control.settings import ModelSettings, OcpSettings
 from cable_ocp.drive.bounds import violation
 from cable_ocp.drive.controls import KnotSpline
+from cable_ocp.model.cable import CableModel
 from cable_ocp.simulation.integrate import SimulationError
 from cable_ocp.simulation.progress import Progress
 
@@ -92,8 +94,14 @@ def resolved_nelder_mead(scene, settings: OcpSettings, compiled: bool | None = N
     return replace(settings, model=ModelSettings(elements, step)), text
 
 
-def nelder_mead_problem(scene, settings: OcpSettings) -> WinchProblem:
-    """The scene's problem as the paper states it: the winch angle a spline through its knots."""
+def nelder_mead_problem(scene, settings: OcpSettings, jacobian: bool = False) -> WinchProblem:
+    """The scene's problem as the paper states it: the winch angle a spline through its knots.
+
+    ``jacobian``: start compiling the model's Jacobian ahead, for a solver that needs it (the
+    search itself takes no derivatives).
+    """
+    if jacobian and settings.compiled:
+        compile_rhs_jacobian_in_background(CableModel.from_scene(scene, settings.elements))
     control = KnotSpline(scene.numerics.duration, scene.winch.knots)
     return WinchProblem.from_scene(scene, control, settings.elements, settings.step)
 

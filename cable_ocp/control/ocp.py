@@ -97,6 +97,22 @@ class IpoptSettings:
         )
 
 
+def check_ipopt(settings: OcpSettings) -> None:
+    """What IPOPT's settings must agree on with the transcription, and its own options.
+
+    ValueError naming the misfit, before any work: an exact Hessian needs second derivatives,
+    which the compiled step does not carry; options IPOPT does not take.
+    """
+    ipopt = settings.solver_settings
+    if ipopt.hessian == "exact" and settings.compiled:
+        raise ValueError(
+            "IpoptSettings.hessian = 'exact' needs second derivatives, which the compiled step "
+            "does not carry: set TranscriptionSettings(compiled=False) or "
+            "hessian='limited-memory'"
+        )
+    check_ipopt_options(ipopt.ipopt_options)
+
+
 def ipopt_options(
     hessian: str, max_iter: int, tolerance: float, verbose: bool = False, extra: dict | None = None
 ) -> dict:
@@ -195,8 +211,6 @@ def resolved(scene, settings: OcpSettings, compiled: bool | None = None):
         passes through: :func:`cable_ocp.optimize` reports it as a failed result.
     """
     compiled = settings.compiled if compiled is None else compiled
-    if settings.solver == "ipopt":
-        check_ipopt_options(settings.solver_settings.ipopt_options)
     duration = scene.numerics.duration
     notes = []
     elements = settings.elements or defaults.reduced_elements(scene)
@@ -253,16 +267,16 @@ def _check_memory(scene, settings: OcpSettings, elements: int, step: float, inte
     )
 
 
-def shooting_problem(scene, settings: OcpSettings) -> WinchProblem:
+def shooting_problem(scene, settings: OcpSettings, jacobian: bool = False) -> WinchProblem:
     """The scene's winch problem with the control, model and step of resolved settings.
 
     ``settings`` come from :func:`resolved` (every number set); with compiled models, the
     libraries that the solve and its verification load start compiling first
-    (:func:`compile_ahead`).
+    (:func:`compile_ahead`, the model's Jacobian too when the solver needs it: ``jacobian``).
     """
     steps_per_interval(scene.numerics.duration, settings.step, settings.intervals)
     if settings.compiled:
-        compile_ahead(scene, settings.elements, settings.solver == "gauss-newton")
+        compile_ahead(scene, settings.elements, jacobian)
     return WinchProblem.from_scene(
         scene, make_control(scene, settings), settings.elements, settings.step, settings.compiled
     )

@@ -15,17 +15,15 @@ keeps score (CONVENTIONS.md §5, "reduced models for optimisation").
 from __future__ import annotations
 
 import time
-from collections.abc import Callable
 from dataclasses import dataclass, field, fields, replace
-from functools import partial
 from pathlib import Path
 
 import numpy as np
 import xarray as xr
 
 from cable_ocp import result_files
-from cable_ocp.control.nelder_mead import nelder_mead_problem, resolved_nelder_mead
-from cable_ocp.control.ocp import control_of, full_model_scene, resolved, shooting_problem
+from cable_ocp.control.keywords import refuse_unknown
+from cable_ocp.control.ocp import control_of, full_model_scene
 from cable_ocp.control.problem import SolverOutcome, WinchProblem
 from cable_ocp.control.settings import (
     GridSettings,
@@ -33,7 +31,7 @@ from cable_ocp.control.settings import (
     OcpSettings,
     TranscriptionSettings,
 )
-from cable_ocp.control.solvers import SOLVERS, ocp_settings
+from cable_ocp.control.solvers import SHOOTING, SOLVERS, Solver, ocp_settings, transcription_named
 from cable_ocp.control.verification import Verification, correction_step
 from cable_ocp.drive.drive import Drive
 from cable_ocp.drive.winch import (
@@ -276,9 +274,7 @@ class OcpResult:
         from cable_ocp.scene.records import control_parameters
 
         values = dataset.from_dataset(cls, data)
-        values["method"] = OLD_METHODS.get(values["method"], values["method"])
-        if values["method"] not in METHODS:
-            raise ValueError(f"method = {values['method']!r:.40}: not a known method")
+        values["method"] = transcription_named(values["method"]).name
         control_parameters(values["parameters"], values["control"])
         if "history" in data.variables and data["history"].attrs.get("units") == "m2":
             values["history"] = omega_history(values["history"])
@@ -359,16 +355,14 @@ def _from_format_1(cls, folder: Path) -> OcpResult:
     meta = format_1.read_json(path, WHAT)
     with format_1.blame(path, WHAT):
         meta = record_fields(meta, types, _OPTIONAL_FIELDS)
-        meta["method"] = OLD_METHODS.get(meta["method"], meta["method"])
-        if meta["method"] not in METHODS:
-            raise ValueError(f"method = {meta['method']!r:.40}: not {' or '.join(METHODS)}")
+        meta["method"] = transcription_named(meta["method"]).name
         control_size(meta["control"])
     path = folder / "result.npz"
     arrays = format_1.read_arrays(path, WHAT)
     with format_1.blame(path, WHAT):
         parameters = np.asarray(arrays["parameters"], dtype=float)
         control_parameters(parameters, meta["control"])
-    if meta["method"] != "nelder-mead":  # Omega^2 per iteration then
+    if meta["method"] == SHOOTING.name:  # Omega^2 per iteration then
         meta["history"] = omega_history(meta.get("history", []))
     trajectory = None
     if (folder / "trajectory.npz").exists() or (folder / "trajectory.json").exists():
@@ -494,7 +488,7 @@ def solve_verified(
     shown = best_outcome or outcomes[-1]
     history = [v for o in outcomes for v in o.history]
     return OcpResult(
-        method=method_of(settings.solver),
+        method=solver.transcription.name,
         solver=settings.solver,
         parameters=shown.parameters,
         control=f"{settings.control}({problem.control.size})",
@@ -568,46 +562,11 @@ def _verification_fields(
     }
 
 
-@dataclass(frozen=True)
-class Method:
-    """How ``optimize`` states a problem for one transcription and solves it, verified.
-
-    Attributes
-    ----------
-    resolve : callable
-        ``(scene, settings) -> (settings, str)``: every number left unset derived from the scene
-        (:mod:`cable_ocp.control.defaults`), and how.
-    problem : callable
-        ``(scene, settings) -> WinchProblem``: the control, model and step the settings ask for.
-    solve : callable
-        ``(problem, settings, quiet=, verbose=, **kwargs) -> OcpResult``.
-    """
-
-    resolve: Callable[..., tuple]
-    problem: Callable[..., WinchProblem]
-    solve: Callable[..., OcpResult]
-
-
-# The transcriptions (OcpResult.method): direct shooting for Gauss-Newton and IPOPT, the paper's
-# knots for Nelder-Mead. Files and sweeps of before the solvers were named called shooting "ipopt"
-# (OLD_METHODS), whichever solver ran. A reduced model derived from the scene optimises; the
-# scene's own model verifies.
-OLD_METHODS = {"ipopt": "shooting"}
-METHODS = {
-    "shooting": Method(resolved, shooting_problem, solve_verified),
-    # The paper's method as it was measured (VALIDATION.md): no model correction, verified on the
-    # interpreted full model.
-    "nelder-mead": Method(
-        resolved_nelder_mead,
-        nelder_mead_problem,
-        partial(solve_verified, refinements=0, verify_compiled=False),
-    ),
-}
-
-
-def method_of(solver: str) -> str:
-    """The transcription (``OcpResult.method``) that a solver of the registry runs on."""
-    return "nelder-mead" if solver == "nelder-mead" else "shooting"
+# Every keyword optimize() takes (the unknown ones are refused, naming these).
+OPTIMIZE_KEYWORDS = (
+    "scene", "solver", "settings", "model", "grid", "transcription", "quiet", "verbose",
+    "refinements",
+)  # fmt: skip
 
 
 def optimize(
@@ -620,7 +579,8 @@ def optimize(
     transcription: TranscriptionSettings | None = None,
     quiet: bool = False,
     verbose: bool = False,
-    **kwargs,
+    refinements: int | None = None,
+    **unknown,
 ) -> OcpResult:
     """Optimise the winch angle of a scene.
 
@@ -652,8 +612,12 @@ def optimize(
         Print nothing at all.
     verbose : bool
         IPOPT's full log (by default, one progress line per iteration); not with ``quiet``.
-    **kwargs
-        Passed on (``refinements`` for the shooting solvers).
+    refinements : int, optional
+        Model-correction solves after the first (default 3; :func:`solve_verified`), for the
+        solvers whose transcription refines by model correction (the shooting ones).
+    **unknown
+        Refused (TypeError naming the allowed keywords; ``method=`` of an earlier release says
+        that it is ``solver=`` now).
 
     Returns
     -------
@@ -671,31 +635,45 @@ def optimize(
     TypeError
         A ``scene`` that is neither a scene nor a scene file's path or name.
     """
+    refuse_unknown("optimize", unknown, OPTIMIZE_KEYWORDS)
     check_verbosity(quiet, verbose)
     scene = scene_given(scene, "optimize")
     refuse_line_scene(scene, "optimize")
     settings = ocp_settings(solver, settings, model, grid, transcription)
-    method = method_of(settings.solver)
-    chosen = METHODS[method]
+    entry = SOLVERS[settings.solver]
+    chosen = entry.transcription
+    options = _solve_options(entry, refinements)
     started = time.perf_counter()
     model_text = "the optimisation model"
     try:
         settings, derived = chosen.resolve(scene, settings)
-        if method == "shooting":
-            scene, fitted = full_model_scene(scene, settings)
-            derived = "; ".join(text for text in (derived, fitted) if text)
+        scene, fitted = full_model_scene(scene, settings)
+        derived = "; ".join(text for text in (derived, fitted) if text)
         model_text = (
             f"the optimisation model ({settings.elements} elements at h = {settings.step:.4g} s"
             f"{'; ' + derived if derived else ''})"
         )
-        problem = chosen.problem(scene, settings)
-        result = chosen.solve(problem, settings, quiet=quiet, verbose=verbose, **kwargs)
+        problem = chosen.problem(scene, settings, entry.needs_compiled)
+        result = solve_verified(problem, settings, quiet=quiet, verbose=verbose, **options)
     except RuntimeError as error:  # SimulationError, EquilibriumError, CasADi's errors
         elapsed = time.perf_counter() - started
-        return failed_result(method, settings, error, elapsed, model_text)
+        return failed_result(chosen.name, settings, error, elapsed, model_text)
     notes = "; ".join(text for text in (result.notes, derived) if text)
     ran = result.trajectory.scene_record if result.trajectory is not None else scene.to_dict()
     return replace(result, notes=notes, scene_record=ran, settings=settings.record())
+
+
+def _solve_options(entry: Solver, refinements: int | None) -> dict:
+    """:func:`solve_verified`'s options for a solver's transcription (ValueError on a misfit)."""
+    transcription = entry.transcription
+    if transcription.model_correction:
+        return {"refinements": 3 if refinements is None else refinements}
+    if refinements is not None:
+        raise ValueError(
+            f"refinements = {refinements!r}: {entry.label} refines by no model correction; "
+            "leave refinements out"
+        )
+    return {"refinements": 0, "verify_compiled": transcription.verify_compiled}
 
 
 def refuse_line_scene(scene, what: str) -> None:

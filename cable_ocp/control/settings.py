@@ -139,11 +139,13 @@ class OcpSettings:
     transcription: TranscriptionSettings = field(default_factory=TranscriptionSettings)
 
     @property
-    def control(self) -> str:
-        """The winch parametrisation: the grid's, or the solver's own when the grid leaves it."""
-        if self.grid.control is not None:
-            return self.grid.control
-        return "spline" if self.solver == "nelder-mead" else "hermite"
+    def control(self) -> str | None:
+        """The winch parametrisation (``grid.control``).
+
+        :func:`~cable_ocp.control.solvers.ocp_settings` sets it to the solver's default
+        control (the registry's) when the grid leaves it unset.
+        """
+        return self.grid.control
 
     @property
     def elements(self) -> int | None:

@@ -30,11 +30,22 @@ line run any of them alike by its name in :data:`SOLVERS`:
 from __future__ import annotations
 
 from collections.abc import Callable
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
-from cable_ocp.control.gauss_newton import GaussNewton, GaussNewtonSettings
-from cable_ocp.control.nelder_mead import NelderMead, NelderMeadSettings
-from cable_ocp.control.ocp import IpoptSettings, ShootingProblem
+from cable_ocp.control.gauss_newton import DAQP_INFEASIBLE, GaussNewton, GaussNewtonSettings
+from cable_ocp.control.nelder_mead import (
+    NelderMead,
+    NelderMeadSettings,
+    nelder_mead_problem,
+    resolved_nelder_mead,
+)
+from cable_ocp.control.ocp import (
+    IpoptSettings,
+    ShootingProblem,
+    check_ipopt,
+    resolved,
+    shooting_problem,
+)
 from cable_ocp.control.settings import (
     GridSettings,
     ModelSettings,
@@ -45,8 +56,42 @@ from cable_ocp.simulation.progress import IterationLog
 
 
 @dataclass(frozen=True)
+class Transcription:
+    """How ``optimize`` states the winch problem for a solver, and verifies its answer.
+
+    Attributes
+    ----------
+    name : str
+        As results record it (``OcpResult.method``): ``"shooting"`` or ``"nelder-mead"``.
+    resolve : callable
+        ``(scene, settings) -> (settings, str)``: every number left unset derived from the scene
+        (:mod:`cable_ocp.control.defaults`), and how (a phrase).
+    problem : callable
+        ``(scene, settings) -> WinchProblem``: the control, model and step the resolved settings
+        ask for.
+    model_correction : bool
+        A reduced model's answer is refined by model correction (``optimize(refinements=...)``).
+    verify_compiled : bool or None
+        The full model that verifies: None as the transcription is compiled, False the
+        interpreted one (the paper's method as it was measured, VALIDATION.md).
+    """
+
+    name: str
+    resolve: Callable
+    problem: Callable
+    model_correction: bool
+    verify_compiled: bool | None
+
+
+SHOOTING = Transcription("shooting", resolved, shooting_problem, True, None)
+KNOTS = Transcription("nelder-mead", resolved_nelder_mead, nelder_mead_problem, False, False)
+# Files and sweeps of before the solvers were named called shooting "ipopt", whichever ran.
+OLD_TRANSCRIPTIONS = {"ipopt": SHOOTING.name}
+
+
+@dataclass(frozen=True)
 class Solver:
-    """One entry of the registry.
+    """One entry of the registry: a solver and what it can do.
 
     Attributes
     ----------
@@ -58,22 +103,50 @@ class Solver:
         Its settings class; an instance of it is the default.
     build : callable
         ``(problem, settings, quiet, verbose, rate_weight) -> solver`` (rule 1).
+    transcription : Transcription
+        How ``optimize`` states the problem for it and verifies its answer.
+    default_control : str
+        The winch parametrisation when ``GridSettings.control`` is unset: ``"hermite"`` or
+        ``"spline"`` (the scene's knots).
     shootings : tuple of str
         The ``TranscriptionSettings.shooting`` it takes (empty: the paper's knots, no shooting).
-    closed_loop : bool
-        It takes ``fixed``, ``lower`` and ``upper`` (rule 2), so ``mpc`` may run it.
+    needs_compiled : bool
+        It works on the compiled transcription only, with its model's Jacobian compiled too
+        (``TranscriptionSettings.compiled = False`` is refused; the Jacobian compiles ahead).
+    closed_loop_shooting : str or None
+        How the closed loop shoots with it (``"single"`` or ``"multiple"``); None: ``mpc`` may
+        not run it (it takes no ``fixed``, ``lower`` and ``upper``, rule 2).
+    closed_loop_settings : object or None
+        Its settings in the closed loop when none are given.
+    infeasible : str or None
+        The text in a failed solve's ``status`` that says its QP had no feasible point (the
+        closed loop then solves again on the winch's own range); None: it reports none.
     history_unit : str
         The unit of its outcome's ``history``: ``"m2"`` (Omega^2, its objective) or ``"m"``
         (Omega); results report Omega, m.
+    check : callable or None
+        ``(OcpSettings) -> None``: what its own settings must agree on with the transcription,
+        a ValueError naming the misfit, before any work.
     """
 
     name: str
     label: str
     settings: type
     build: Callable
+    transcription: Transcription
+    default_control: str
     shootings: tuple[str, ...]
-    closed_loop: bool
+    needs_compiled: bool
+    closed_loop_shooting: str | None
+    closed_loop_settings: object | None
+    infeasible: str | None
     history_unit: str
+    check: Callable[[OcpSettings], None] | None = None
+
+    @property
+    def closed_loop(self) -> bool:
+        """Whether ``mpc`` may run it."""
+        return self.closed_loop_shooting is not None
 
 
 def _gauss_newton(problem, settings: OcpSettings, quiet, verbose, rate_weight) -> GaussNewton:
@@ -91,14 +164,23 @@ def _nelder_mead(problem, settings: OcpSettings, quiet, verbose, rate_weight) ->
 
 SOLVERS: dict[str, Solver] = {
     entry.name: entry
-    for entry in (  # fmt: skip
+    for entry in (
         Solver(
             "gauss-newton",
             "Gauss-Newton",
             GaussNewtonSettings,
             _gauss_newton,
-            ("single",),
-            closed_loop=True,
+            SHOOTING,
+            default_control="hermite",
+            shootings=("single",),
+            needs_compiled=True,
+            closed_loop_shooting="single",
+            # One Gauss-Newton step per sample from the shifted plan, its sensitivities from the
+            # Jacobian at the step ends (the real-time iteration).
+            closed_loop_settings=GaussNewtonSettings(
+                max_iter=1, real_time=True, stage_jacobians="ends"
+            ),
+            infeasible=DAQP_INFEASIBLE,
             history_unit="m2",
         ),
         Solver(
@@ -106,22 +188,64 @@ SOLVERS: dict[str, Solver] = {
             "IPOPT",
             IpoptSettings,
             _ipopt,
-            ("single", "multiple"),
-            closed_loop=True,
+            SHOOTING,
+            default_control="hermite",
+            shootings=("single", "multiple"),
+            needs_compiled=False,
+            closed_loop_shooting="multiple",
+            # To convergence (its 300 iterations) at a tolerance of 1e-6.
+            closed_loop_settings=IpoptSettings(tolerance=1e-6),
+            infeasible=None,
             history_unit="m2",
+            check=check_ipopt,
         ),
         Solver(
             "nelder-mead",
             "Nelder-Mead",
             NelderMeadSettings,
             _nelder_mead,
-            (),
-            closed_loop=False,
+            KNOTS,
+            default_control="spline",
+            shootings=(),
+            needs_compiled=False,
+            closed_loop_shooting=None,
+            closed_loop_settings=None,
+            infeasible=None,
             history_unit="m",
         ),
     )
 }
 DEFAULT_SOLVER = "gauss-newton"
+
+
+def transcription_named(name: str) -> Transcription:
+    """The transcription a result or sweep names, old names too (ValueError naming the choices)."""
+    known = {entry.transcription.name: entry.transcription for entry in SOLVERS.values()}
+    name = OLD_TRANSCRIPTIONS.get(name, name)
+    if name not in known:
+        raise ValueError(f"method = {name!r:.40}: must be one of {', '.join(map(repr, known))}")
+    return known[name]
+
+
+def solver_for(method: str | None, solver: str | None) -> str | None:
+    """The solver to run when a transcription is named too (a sweep's or the CLI's ``method``).
+
+    ``method`` None: ``solver`` as given. Otherwise a given solver must run on that
+    transcription (ValueError naming the ones that do); none given: :data:`DEFAULT_SOLVER` when
+    it runs on it, else the first solver that does.
+    """
+    if method is None:
+        return solver
+    transcription = transcription_named(method)
+    runs = [name for name, entry in SOLVERS.items() if entry.transcription is transcription]
+    if solver is None:
+        return DEFAULT_SOLVER if DEFAULT_SOLVER in runs else runs[0]
+    if solver not in runs:
+        raise ValueError(
+            f"solver = {solver!r} with method = {method!r}: that method is run by "
+            f"{' or '.join(map(repr, runs))}; give one of them, or leave method out"
+        )
+    return solver
 
 
 def solver_named(name: str, closed_loop: bool = False) -> Solver:
@@ -187,22 +311,23 @@ def ocp_settings(
             if entry.shootings
             else ("no shooting (the knots' spline, one run per evaluation)")
         )
+        shooting = transcription.shooting
+        others = [name for name, other in SOLVERS.items() if shooting in other.shootings]
         raise ValueError(
             f"TranscriptionSettings.shooting = {transcription.shooting!r}: {entry.label} takes "
-            f"{takes}; solver='ipopt' takes both"
+            f"{takes}; solver={' or '.join(map(repr, others))} takes {transcription.shooting!r}"
         )
-    if entry.name == "gauss-newton" and not transcription.compiled:
+    if entry.needs_compiled and not transcription.compiled:
         raise ValueError(
-            "TranscriptionSettings.compiled = False: Gauss-Newton works on the compiled "
+            f"TranscriptionSettings.compiled = False: {entry.label} works on the compiled "
             "single-shooting transcription; set compiled=True, or solver='ipopt'"
         )
-    if entry.name == "ipopt" and settings.hessian == "exact" and transcription.compiled:
-        raise ValueError(
-            "IpoptSettings.hessian = 'exact' needs second derivatives, which the compiled step "
-            "does not carry: set TranscriptionSettings(compiled=False) or "
-            "hessian='limited-memory'"
-        )
-    return OcpSettings(entry.name, settings, model or ModelSettings(), grid, transcription)
+    if grid.control is None:
+        grid = replace(grid, control=entry.default_control)
+    chosen = OcpSettings(entry.name, settings, model or ModelSettings(), grid, transcription)
+    if entry.check is not None:
+        entry.check(chosen)
+    return chosen
 
 
 def ocp_settings_from(options: dict, solver: str | None = None) -> OcpSettings:

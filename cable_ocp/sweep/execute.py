@@ -60,6 +60,7 @@ def run_case(scene: Scene, task: str, method: str, settings: Any) -> dict[str, A
         ``omega_model`` (m), ``iterations``, ``evaluations`` and ``solver_status``.
     """
     from cable_ocp.control.optimization import optimize
+    from cable_ocp.control.solvers import solver_for
     from cable_ocp.simulation.run import simulate
 
     started = time.perf_counter()
@@ -69,7 +70,7 @@ def run_case(scene: Scene, task: str, method: str, settings: Any) -> dict[str, A
             trajectory = simulate(scene, quiet=True)
             record.update(success=True, status="ok")
         else:
-            solver = "nelder-mead" if method == "nelder-mead" and settings is None else None
+            solver = solver_for(method, None) if settings is None else None
             result = optimize(scene, solver, settings, quiet=True)
             trajectory = result.trajectory
             record.update(

@@ -46,10 +46,14 @@ from typing import Any
 
 import numpy as np
 
-from cable_ocp.control.optimization import METHODS as TRANSCRIPTIONS
-from cable_ocp.control.optimization import OLD_METHODS
 from cable_ocp.control.settings import OcpSettings
-from cable_ocp.control.solvers import ocp_settings_from
+from cable_ocp.control.solvers import (
+    SHOOTING,
+    SOLVERS,
+    ocp_settings_from,
+    solver_for,
+    transcription_named,
+)
 from cable_ocp.scene.bundled import models_dir
 from cable_ocp.scene.schema import Scene, SceneError, load_scene
 from cable_ocp.simulation.budget import check_memory, check_simulation_memory, optimisation_memory
@@ -62,7 +66,6 @@ except ModuleNotFoundError:  # Python 3.10
 
 TOP_KEYS = ("scene", "description", "task", "method", "optimizer", "set", "grid", "sample")
 TASKS = ("simulate", "optimize")
-METHODS = tuple(TRANSCRIPTIONS)
 DESIGNS = ("latin-hypercube", "uniform")
 SAMPLE_KEYS = ("n", "seed", "design", "ranges")
 MAX_CASES = 100_000
@@ -210,20 +213,25 @@ def _find_sweep(path: Path) -> Path:
     )
 
 
-def _settings(data: dict, task: str, method: str) -> OcpSettings | None:
-    """The ``[optimizer]`` table as one optimize's settings (each field checked by its class)."""
-    options = _table(data, "optimizer")
+def _settings(data: dict, task: str) -> OcpSettings | None:
+    """The ``[optimizer]`` table as one optimize's settings (each field checked by its class).
+
+    A ``method`` given names the transcription; the solver must run on it (none given: the one
+    that does, :func:`~cable_ocp.control.solvers.solver_for`).
+    """
+    options = dict(_table(data, "optimizer"))
     if task == "simulate":
         if options or "method" in data:
             key = "optimizer" if options else "method"
             raise _fail(key, ": only allowed with task = 'optimize'")
         return None
-    solver = options.get("solver")
-    if method == "nelder-mead" and solver not in (None, "nelder-mead"):
-        raise _fail("optimizer.solver", f" = {solver!r}: method = 'nelder-mead' is its own solver")
+    try:
+        solver = solver_for(data.get("method"), options.pop("solver", None))
+    except ValueError as error:
+        raise _fail("optimizer.solver", f": {error}") from None
     try:
         # Unset fields keep optimize()'s defaults: a reduced model derived from the scene.
-        return ocp_settings_from(options, "nelder-mead" if method == "nelder-mead" else None)
+        return ocp_settings_from(options, solver)
     except ValueError as error:
         raise _fail("optimizer", f": {error}") from None
 
@@ -396,7 +404,7 @@ def _check_memory(scene: Scene, settings: Any, case: int) -> None:
     """Each case's runs must fit in memory: the scene's simulation, and an optimiser's horizon."""
     try:
         check_simulation_memory(scene)
-        if settings is not None and settings.solver != "nelder-mead":
+        if settings is not None and SOLVERS[settings.solver].transcription is SHOOTING:
             step = settings.step or scene.numerics.step
             estimate = optimisation_memory(scene, step, elements=settings.elements)
             check_memory(estimate, f"optimizer.step = {step} s", "give a longer optimizer.step")
@@ -446,10 +454,11 @@ def load_sweep(path: str | Path) -> SweepSpec:
     task = data.get("task", "simulate")
     if task not in TASKS:
         raise _fail("task", f" = {task!r}: must be one of {', '.join(TASKS)}")
-    method = OLD_METHODS.get(data.get("method"), data.get("method", "shooting"))
-    if method not in METHODS:
-        raise _fail("method", f" = {method!r}: must be one of {', '.join(METHODS)}")
-    settings = _settings(data, task, method)
+    try:
+        method = transcription_named(data.get("method", "shooting")).name
+    except ValueError as error:
+        raise _fail("method", f": {error}") from None
+    settings = _settings(data, task)
     fixed = _table(data, "set")
     try:
         base = load_scene(scene_path, _anchored_all(fixed, path.parent))

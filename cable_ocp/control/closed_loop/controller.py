@@ -25,7 +25,6 @@ import numpy as np
 
 from cable_ocp.control.closed_loop.forecast import TopForecast
 from cable_ocp.control.closed_loop.settings import MpcSettings
-from cable_ocp.control.gauss_newton import DAQP_INFEASIBLE
 from cable_ocp.control.ocp import IpoptSettings
 from cable_ocp.control.parameters import ProblemParameters
 from cable_ocp.control.problem import WinchProblem
@@ -111,16 +110,15 @@ class RecedingHorizon:
             scene, settings.horizon, settings.interval, settings.elements, settings.step
         )
         self.model, self.control = problem.model, problem.control
+        self.entry = entry = SOLVERS[settings.solver]
         transcription = OcpSettings(
             settings.solver,
             _warm_started(settings.solver_settings),
             settings.model,
-            GridSettings(intervals=settings.intervals),
-            TranscriptionSettings(shooting="multiple" if settings.solver == "ipopt" else "single"),
+            GridSettings(control=entry.default_control, intervals=settings.intervals),
+            TranscriptionSettings(shooting=entry.closed_loop_shooting),
         )
-        self.solver = SOLVERS[settings.solver].build(
-            problem, transcription, True, False, settings.rate_weight
-        )
+        self.solver = entry.build(problem, transcription, True, False, settings.rate_weight)
         self.build_time, self.compile_time = self.solver.build_time, self.solver.compile_time
         self.stage_times = stage_times(problem.grid[:-1], problem.step)[0]
         self.plan, self.plan_start = np.zeros(self.control.size), 0.0
@@ -150,6 +148,14 @@ class RecedingHorizon:
             # A landing's reference over the horizon; zero on other scenes.
             bias=-reference_error(self.scene, now + self.problem.grid, estimate.start_error),
         )
+
+    def infeasible(self, status: str) -> bool:
+        """Whether a failed solve's status says that its QP had no feasible point.
+
+        The registry says which text (:attr:`~cable_ocp.control.solvers.Solver.infeasible`).
+        """
+        marker = self.entry.infeasible
+        return marker is not None and marker in status
 
     def outside(self, now) -> str:
         """Why the controller cannot solve at ``now`` (s); empty when it can."""
@@ -184,7 +190,7 @@ class RecedingHorizon:
         fixed = {self._start_angle: angle, self._start_rate: rate}
         lower, upper = self.problem.bounds.narrowed(estimate.margin, self.settings.sample)
         outcome = self.solver.solve(values, guess, fixed, lower, upper)
-        if not outcome.success and estimate.margin > 0 and DAQP_INFEASIBLE in outcome.status:
+        if not outcome.success and estimate.margin > 0 and self.infeasible(outcome.status):
             # The room for the heave feedback grew since the plan in force was solved, faster
             # than the winch's rate and acceleration limits let the plan move out of it (seed
             # 2, case 7 of the whole-space benchmark: 35 of 458 solves in Hs 2.1 m): solve on

@@ -25,8 +25,10 @@ from cable_ocp.control.closed_loop.estimator import Estimator
 from cable_ocp.control.closed_loop.plant import Measurement, Plant, plant_run
 from cable_ocp.control.closed_loop.result import MpcResult, SolveLog
 from cable_ocp.control.closed_loop.settings import MpcSettings
+from cable_ocp.control.keywords import refuse_unknown
 from cable_ocp.control.ocp import compile_ahead
 from cable_ocp.control.optimization import refuse_line_scene
+from cable_ocp.control.solvers import SOLVERS
 from cable_ocp.control.verification import lowest_clearance
 from cable_ocp.drive.bounds import angle_bounds
 from cable_ocp.scene.given import scene_given
@@ -96,7 +98,7 @@ def loop_parts(scene, settings: MpcSettings) -> LoopParts:
     """
     refuse_line_scene(scene, "mpc")
     settings, derived = settings.resolved(scene)
-    compile_ahead(scene, settings.elements, settings.solver == "gauss-newton")
+    compile_ahead(scene, settings.elements, SOLVERS[settings.solver].needs_compiled)
     controller = RecedingHorizon(scene, settings)
     plant = Plant(scene, angle_bounds(scene), settings.limiter_band)
     radius = scene.winch.drum_radius
@@ -123,7 +125,8 @@ def mpc(scene, settings: MpcSettings | None = None, quiet: bool = False, **field
     quiet : bool
         Print nothing (otherwise a progress bar on stderr).
     **fields
-        Fields of :class:`MpcSettings` to set instead of passing ``settings`` (``horizon=10.0``).
+        Fields of :class:`MpcSettings` to set instead of passing ``settings`` (``horizon=10.0``);
+        another keyword is refused (TypeError naming the allowed ones).
 
     Returns
     -------
@@ -144,6 +147,9 @@ def mpc(scene, settings: MpcSettings | None = None, quiet: bool = False, **field
         The end starts off the bathymetry grid or under the seabed (before the loop), as for
         ``simulate``.
     """
+    own = MpcSettings.__dataclass_fields__
+    unknown = {name: value for name, value in fields.items() if name not in own}
+    refuse_unknown("mpc", unknown, ("scene", "settings", "quiet", *own))
     if settings is not None and fields:
         raise ValueError(f"mpc: pass settings or its fields ({', '.join(fields)}), not both")
     started = time.perf_counter()

@@ -21,12 +21,9 @@ SAMPLE, INTERVAL, HORIZON = 1.0, defaults.CONTROL_INTERVAL, 20.0
 CONTROLLER_ELEMENTS, CONTROLLER_STEP_CAP = 2, 1.0
 # rad: the plant's soft limiter band when the range allows (``limiter_band`` below).
 LIMITER_BAND = 0.5
-# The closed loop's solver settings when none are given: one Gauss-Newton step per sample from
-# the shifted plan, its sensitivities from the Jacobian at the step ends (the real-time
-# iteration); IPOPT to convergence (its 300 iterations) at a tolerance of 1e-6.
+# The solvers the closed loop may run, and their settings when none are given (the registry's).
 CLOSED_LOOP_SOLVERS = {
-    "gauss-newton": GaussNewtonSettings(max_iter=1, real_time=True, stage_jacobians="ends"),
-    "ipopt": IpoptSettings(tolerance=1e-6),
+    name: entry.closed_loop_settings for name, entry in SOLVERS.items() if entry.closed_loop
 }
 
 
@@ -201,7 +198,7 @@ class MpcSettings:
             )
         solver, solver_settings = solver_of(self.solver, self.solver_settings, closed_loop=True)
         if self.solver_settings is None:
-            solver_settings = CLOSED_LOOP_SOLVERS[solver.name]
+            solver_settings = solver.closed_loop_settings
         chosen = replace(
             self,
             horizon=horizon,
