@@ -263,6 +263,8 @@ def check_recorded(run, time: np.ndarray, error: np.ndarray, elements: int | Non
     span = max(abs(float(time[-1])), 1.0)
     if abs(time[0]) > 1e-9 * span:
         raise ValueError(f"time starts at {time[0]:.9g} s: expected 0 s")
+    if run.scene_record:
+        _check_scene(run, time, elements)
     expected = rms_objective(time, error) if time.size > 1 else float("nan")
     if not (
         np.isclose(run.omega, expected, rtol=OMEGA_RTOL, atol=0.0)
@@ -272,13 +274,15 @@ def check_recorded(run, time: np.ndarray, error: np.ndarray, elements: int | Non
             f"omega = {run.omega!r} m: expected {expected!r} m, eq. 39 on its time and "
             "clearance_error"
         )
-    if not run.scene_record:
-        return
+
+
+def _check_scene(run, time: np.ndarray, elements: int | None) -> None:
+    """The scene checks of :func:`check_recorded`."""
     try:
-        numerics = run.scene.numerics
-        model = run.scene.model
+        scene = run.scene
     except ValueError as error:
         raise ValueError(f"scene_record: not a valid scene ({error})") from None
+    numerics, model = scene.numerics, scene.model
     if abs(time[-1] - numerics.duration) > 1e-9 * max(numerics.duration, 1.0):
         raise ValueError(
             f"time ends at {time[-1]:.9g} s: expected its scene's numerics.duration = "

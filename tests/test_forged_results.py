@@ -1,0 +1,146 @@
+"""Result files edited by hand are refused on load, not reported as if genuine (issue 45, D4).
+
+A run's file is checked against its own series and its scene: the time axis (finite, strictly
+increasing, from 0 to the scene's ``numerics.duration`` on its output grid), the scene record
+(valid by the scene schema, and the scene the arrays were made with), and Omega recomputed by
+eq. 39 from the stored ``e(t)``. Each case edits a genuine file in place with netCDF4 and expects
+one ``ValueError`` naming the file, the variable and what was expected.
+"""
+
+from __future__ import annotations
+
+import json
+import shutil
+
+import netCDF4
+import numpy as np
+import pytest
+from conftest import MODELS
+
+import cable_ocp as co
+from cable_ocp.simulation.line_trajectory import LineTrajectory
+from cable_ocp.simulation.trajectory import Trajectory
+
+
+def _edit(path, change) -> None:
+    with netCDF4.Dataset(path, "a") as dataset:
+        change(dataset)
+
+
+def _series(name, change):
+    """An edit of the variable ``name``: ``change(values)`` returns the new values."""
+
+    def edit(group):
+        variable = group.variables[name]
+        variable[...] = change(np.array(variable[...]))
+
+    return edit
+
+
+def _value(name, value):
+    """An edit of the 0-d variable ``name``."""
+    return lambda group: group.variables[name].assignValue(value)
+
+
+def _scene(key, value, group=""):
+    """An edit of the scene record: the dotted ``key`` set to ``value`` (in ``group``)."""
+
+    def edit(dataset):
+        where = dataset[group] if group else dataset
+        record = json.loads(where.getncattr("scene_record"))
+        section, _, field = key.partition(".")
+        record[section][field] = value
+        where.setncattr("scene_record", json.dumps(record))
+
+    return edit
+
+
+def _swapped(values):
+    values[[3, 4]] = values[[4, 3]]
+    return values
+
+
+@pytest.fixture(scope="module")
+def run_file(tmp_path_factory):
+    """A towed run of 6 s on 5 elements, kept every 0.1 s: its clearance error is not zero."""
+    scene = co.load_scene(
+        MODELS / "paper_flat.toml",
+        {"numerics.duration": 6.0, "model.elements": 5, "numerics.output_every": 2},
+    )
+    run = co.simulate(scene, quiet=True)
+    assert run.omega > 0  # so that an edit of e(t) changes Omega
+    return run.save(tmp_path_factory.mktemp("run") / "run")
+
+
+def test_a_genuine_run_loads(run_file):
+    run = Trajectory.load(run_file)
+    assert run.time[-1] == 6.0 and run.tensions.shape[1] == 6
+
+
+DURATION = r"expected its scene's numerics\.duration"
+GRID = r"expected every numerics\.output_every \* numerics\.step"
+INVALID = r"scene_record: not a valid scene"
+
+
+@pytest.mark.parametrize(
+    ("change", "message"),
+    [
+        (_value("omega", 1e-3), r"omega = 0\.001 m: expected .* m, eq\. 39"),
+        (_series("clearance_error", lambda e: 0.5 * e), r"omega = .* m: expected .* eq\. 39"),
+        (_series("time", _swapped), r"time: not strictly increasing .* at index 4"),
+        (_series("time", lambda t: np.where(t == t[5], np.nan, t)), r"time: not all finite"),
+        (_series("time", lambda t: t + 0.2), r"time starts at 0\.2 s: expected 0 s"),
+        (_series("time", lambda t: 1.5 * t), rf"time ends at 9 s: {DURATION} = 6\.0 s"),
+        (_series("time", lambda t: t**2 / 6.0), rf"time: 61 samples .*: {GRID} = 0\.1 s"),
+        (_scene("numerics.duration", 12.0), rf"time ends at 6 s: {DURATION} = 12\.0 s"),
+        (_scene("numerics.step", 0.1), rf"time: 61 samples .*: {GRID} = 0\.2 s"),
+        (_scene("model.elements", 9), r"6 elements \(n = 5\): expected .* model\.elements = 9"),
+        (_scene("model.elements", -3), rf"{INVALID} \(model\.elements = -3 is out of range"),
+        (_scene("cable.density", "heavy"), rf"{INVALID} \(cable\.density"),
+    ],
+)
+def test_an_edited_run_file_is_refused(tmp_path, run_file, change, message):
+    path = shutil.copy(run_file, tmp_path / "forged.nc")
+    _edit(path, change)
+    with pytest.raises(ValueError, match=r"forged\.nc: not a readable trajectory .*" + message):
+        Trajectory.load(path)
+
+
+@pytest.fixture(scope="module")
+def line_file(tmp_path_factory):
+    """A pay-out of 20 m on 10 m elements: two segments (n = 5, then 6)."""
+    scene = co.load_scene(
+        MODELS / "paper_flat.toml",
+        {"top.motion": "fixed", "cable.length": 50.0, "numerics.duration": 12.0,
+         "numerics.constraint_tolerance": 1e-4, "winch.knots": 4,
+         "winch.line": {"element_length": 10.0, "pay_out_max": 30.0},
+         "end.payload": {"mass": 2000.0, "volume": 0.256}},
+    )  # fmt: skip
+    run = co.simulate(scene, winch=[10.0, 20.0, 30.0, 40.0], quiet=True)
+    assert len(run.segments) == 2
+    return run.save(tmp_path_factory.mktemp("line") / "line")
+
+
+def _in(group, edit):
+    return lambda dataset: edit(dataset[group])
+
+
+@pytest.mark.parametrize(
+    ("change", "message"),
+    [
+        (_in("segment_0", _value("omega", 0.5)), r"omega = 0\.5 m: expected"),
+        (_in("segment_1", _value("omega", 0.5)), r"segment_1: omega = 0\.5 m: expected the run's"),
+        (_in("segment_1", _series("clearance_error", lambda e: e + 1.0)), r"omega = .* eq\. 39"),
+        (_in("segment_1", _series("time", lambda t: t + 5.0)), rf"ends at 17 s: {DURATION} = 12"),
+        (
+            _scene("numerics.duration", 24.0, "segment_0"),
+            r"segment_1: its scene differs from segment_0's \(numerics\.duration: 24\.0 against",
+        ),
+    ],
+)
+def test_an_edited_line_run_file_is_refused(tmp_path, line_file, change, message):
+    path = shutil.copy(line_file, tmp_path / "forged.nc")
+    assert LineTrajectory.load(path).time[-1] == 12.0
+    _edit(path, change)
+    with pytest.raises(ValueError, match=r"forged\.nc: .*" + message):
+        LineTrajectory.load(path)
