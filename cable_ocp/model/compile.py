@@ -10,6 +10,11 @@ code builds deterministically from a structure (:func:`compiled_from`) are keyed
 instead, so that a cache hit builds no expression graph at all; several Functions may share one
 library, and :func:`compile_in_background` runs their compilers while the caller goes on.
 
+A compiler runs in a process group of its own, killed whole (cc1, as, ld) when its caller is
+interrupted or the process exits: a run that ends, by Ctrl-C or otherwise, waits for no compiler
+and leaves none running, and its scratch folders are removed (a library is installed only by a
+compile that finished).
+
 A library is loaded only if its size and SHA-256 match the record written beside it (a truncated
 library makes the loader crash the process with SIGBUS; hashing a 2 MB library takes 1.3 ms,
 against 7 ms to load it); a damaged or unloadable one is rebuilt. A compiler that fails, or a
@@ -18,18 +23,22 @@ cache that cannot be written, leaves the interpreted Function with a warning, no
 
 from __future__ import annotations
 
+import atexit
 import hashlib
 import json
 import os
 import platform
+import queue
 import shutil
+import signal
 import socket
 import subprocess
 import tempfile
+import threading
 import time
 import warnings
 from collections.abc import Callable
-from concurrent.futures import Future, ThreadPoolExecutor
+from concurrent.futures import Future
 from functools import cache
 from pathlib import Path
 
@@ -254,19 +263,68 @@ def _compile_and_install(command: list[str], library: Path, scratch: Path) -> No
     Raises _CompilerFailed when the compiler fails, OSError when the cache cannot be written.
     """
     target = scratch / library.name
-    try:
-        result = subprocess.run(command, capture_output=True, text=True)
-    except OSError as error:
-        raise _CompilerFailed(f"cannot run {command[0]}: {error}") from error
-    if result.returncode != 0 or not target.is_file():
-        output = (result.stderr or result.stdout).strip()[-2000:] or "no output"
-        raise _CompilerFailed(f"{command[0]} exited with status {result.returncode}:\n{output}")
+    returncode, output = _run_compiler(command)
+    if returncode != 0 or not target.is_file():
+        output = output.strip()[-2000:] or "no output"
+        raise _CompilerFailed(f"{command[0]} exited with status {returncode}:\n{output}")
     record = scratch / "fingerprint.json"
     record.write_text(json.dumps(fingerprint(target)))
     # Atomic renames, the record last: a reader never sees a half-written file, and a library
     # whose record is not there yet counts as damaged (rebuilt, never loaded).
     os.replace(target, library)
     os.replace(record, fingerprint_path(library))
+
+
+# Compilers running, each the leader of a process group of its own (_run_compiler); once the
+# process exits (_stop_compilers), no new one starts. Both guarded by _RUNNING_LOCK.
+_RUNNING: set[subprocess.Popen] = set()
+_RUNNING_LOCK = threading.Lock()
+_exiting = False
+
+
+def _run_compiler(command: list[str]) -> tuple[int, str]:
+    """Run a compiler command in a process group of its own; its exit status and output.
+
+    The whole group (the driver with its cc1, as and ld) is killed when the caller is interrupted
+    (KeyboardInterrupt, which is raised again) or the process exits (:func:`_stop_compilers`),
+    so that no compiler outlives its run. Raises _CompilerFailed when the compiler cannot be
+    started or the process is exiting.
+    """
+    with _RUNNING_LOCK:
+        if _exiting:
+            raise _CompilerFailed("not started: the process is exiting")
+        try:
+            process = subprocess.Popen(
+                command,
+                stdout=subprocess.PIPE,
+                stderr=subprocess.PIPE,
+                text=True,
+                start_new_session=True,
+            )
+        except OSError as error:
+            raise _CompilerFailed(f"cannot run {command[0]}: {error}") from error
+        _RUNNING.add(process)
+    with process:
+        try:
+            stdout, stderr = process.communicate()
+        except BaseException:
+            _kill_group(process)
+            raise
+        finally:
+            with _RUNNING_LOCK:
+                _RUNNING.discard(process)
+    return process.returncode, stderr or stdout
+
+
+def _kill_group(process: subprocess.Popen) -> None:
+    """SIGKILL a compiler's process group (the compiler alone where there are none)."""
+    try:
+        if hasattr(os, "killpg"):
+            os.killpg(process.pid, signal.SIGKILL)
+        else:
+            process.kill()
+    except ProcessLookupError:
+        pass  # already ended
 
 
 def compiled(
@@ -447,8 +505,12 @@ def compiled_from(
 
 # Libraries being compiled in the background, by path (compile_in_background).
 _BACKGROUND: dict[Path, Future] = {}
-# The compilers run one per processor, in the order asked (the library needed first, first).
-_COMPILERS = ThreadPoolExecutor(max_workers=os.cpu_count() or 1, thread_name_prefix="compile")
+# Their compiles (future, command, library, scratch), served in the order asked (the library
+# needed first, first) by daemon threads, one per processor: the process's exit waits for none
+# of them (_stop_compilers). A None stops a thread.
+_QUEUE: queue.SimpleQueue = queue.SimpleQueue()
+_WORKERS: list[threading.Thread] = []
+STOP_TIMEOUT = 10.0  # s that the exit waits for a killed compile to remove its scratch folder
 
 
 def compile_in_background(
@@ -464,8 +526,9 @@ def compile_in_background(
     compiler. Otherwise its C is generated here and the compiler runs in a worker thread, one
     per processor, in the order the libraries were asked for (the compiler is a process of its
     own, so the cores work at once); the next :func:`compiled_from` of the library waits for it,
-    and reports and retries a failure. The process does not exit before the workers are done,
-    so an interrupted run leaves no half-written library.
+    and reports and retries a failure. A process that exits kills the compilers still running
+    and drops those not started (:func:`_stop_compilers`): it waits for none, and leaves no
+    half-written library.
     """
     _, library = _source_key(names, description, flat, sources)
     compiler = find_compiler()
@@ -475,17 +538,45 @@ def compile_in_background(
         scratch, command = _generate(build(), compiler, library, derivatives=False)
     except OSError:
         return  # compiled_from reports the unwritable cache
-    _BACKGROUND[library] = _COMPILERS.submit(_compile_quietly, command, library, scratch)
+    future: Future = Future()
+    _BACKGROUND[library] = future
+    _QUEUE.put((future, command, library, scratch))
+    _WORKERS[:] = [worker for worker in _WORKERS if worker.is_alive()]  # none survives a fork
+    if len(_WORKERS) < (os.cpu_count() or 1):
+        worker = threading.Thread(target=_serve, name="compile", daemon=True)
+        _WORKERS.append(worker)
+        worker.start()
 
 
-def _compile_quietly(command: list[str], library: Path, scratch: Path) -> None:
-    """:func:`_compile_and_install`, leaving a failure to :func:`compiled_from` to report."""
-    try:
-        _compile_and_install(command, library, scratch)
-    except (_CompilerFailed, OSError):
-        pass  # compiled_from compiles again and reports why it fails
-    finally:
-        shutil.rmtree(scratch, ignore_errors=True)
+def _serve() -> None:
+    """A background compiler's thread: the queue's compiles, one at a time, until a None."""
+    while (job := _QUEUE.get()) is not None:
+        future, command, library, scratch = job
+        try:
+            _compile_and_install(command, library, scratch)
+        except (_CompilerFailed, OSError):
+            pass  # compiled_from compiles again and reports why it fails
+        finally:
+            shutil.rmtree(scratch, ignore_errors=True)
+            future.set_result(None)
+
+
+@atexit.register
+def _stop_compilers() -> None:
+    """At exit: kill the compilers running, start no other, and remove their scratch folders.
+
+    Runs before the interpreter stops the daemon threads of :func:`compile_in_background`, which
+    then empty the queue without compiling; waits up to :data:`STOP_TIMEOUT` for each.
+    """
+    global _exiting
+    with _RUNNING_LOCK:
+        _exiting = True
+        for process in _RUNNING:
+            _kill_group(process)
+    for _ in _WORKERS:
+        _QUEUE.put(None)
+    for worker in _WORKERS:
+        worker.join(STOP_TIMEOUT)
 
 
 def _source_key(
