@@ -280,11 +280,12 @@ def integrate(
     current = x0.copy()  # the state after `done` units
     while done < units:
         size = min(size, units - done)
-        function = _segment_function(model, step, compiled, inner, size)
         steps = np.arange(done * inner, (done + size) * inner) * step
         target = states[done + 1 : done + 1 + size] if repeats == 1 else scratch[:size]
         started = time.perf_counter()
-        evaluate_into(function, [current, stage_inputs(drive, steps, step).T], [target])
+        step_states(
+            model, current, stage_inputs(drive, steps, step).T, step, inner, compiled, target
+        )
         elapsed = time.perf_counter() - started
         ends = np.arange(done + 1, done + size + 1)
         last = ends % repeats == 0
@@ -310,6 +311,44 @@ def integrate(
         size = most if wanted >= most else 2 ** max(0, int(math.log2(max(wanted, 1.0))))
     progress.close()
     return RawRun(all_times, states, all_inputs, largest)
+
+
+def step_states(
+    model: CableModel,
+    x0: np.ndarray,
+    stages: np.ndarray,
+    step: float,
+    every: int,
+    compiled: bool,
+    out: np.ndarray,
+) -> np.ndarray:
+    """RK4 steps from ``x0``, the state kept after every ``every`` of them, written into ``out``.
+
+    The runner of :func:`integrate` and of the closed loop's plant: one call of the step folded
+    ``every`` times and mapped ``len(out)`` times (:func:`_segment_function`).
+
+    Parameters
+    ----------
+    model : CableModel
+    x0 : array (state_size,)
+    stages : array (3 every len(out), 15)
+        The inputs at the stages of each step (:func:`stage_inputs`, transposed).
+    step : float, s
+    every : int
+        RK4 steps between two kept states.
+    compiled : bool
+        The step compiled to C (cached on disk).
+    out : array (k, state_size)
+        Row ``j`` becomes the state after ``(j + 1) every`` steps.
+
+    Returns
+    -------
+    array (k, state_size)
+        ``out``.
+    """
+    function = _segment_function(model, step, compiled, every, out.shape[0])
+    evaluate_into(function, [x0, stages], [out])
+    return out
 
 
 def largest_divisor(number: int, most: int) -> int:
@@ -429,53 +468,109 @@ def bond_residuals(
     return norms
 
 
-def _check_block(model, block, norms, times, step, tolerance) -> None:
-    """Raise on the first state of a block (rows) that is non-finite or off its bonds."""
+@dataclass(frozen=True)
+class Fault:
+    """Why a run's state cannot be trusted (:func:`health`), and what to change.
+
+    Attributes
+    ----------
+    what : str
+        What went wrong, where and when.
+    remedy : str
+        What to change (empty when nothing general helps).
+    """
+
+    what: str
+    remedy: str = ""
+
+    def __str__(self) -> str:
+        return f"{self.what}. Remedy: {self.remedy}." if self.remedy else self.what
+
+
+def health(
+    model: CableModel,
+    block: np.ndarray,
+    norms: np.ndarray,
+    times: np.ndarray,
+    step: float,
+    tolerance: float,
+) -> Fault | None:
+    """The first fault of a block of states, or None: the health check of every run.
+
+    A state that is non-finite, off its bonds by more than ``tolerance``, twisted apart (a
+    torsion model, :func:`_twist_fault`) or at the singular set of the Euler chart.
+
+    Parameters
+    ----------
+    model : CableModel
+    block : array (k, state_size)
+        States at ``times``.
+    norms : array (k,), m
+        Their largest bond residuals (:func:`bond_residuals`).
+    times : array (k,), s
+    step : float, s
+        The RK4 step they were integrated with (for the message).
+    tolerance : float, m
+        ``numerics.constraint_tolerance``.
+    """
     finite = np.all(np.isfinite(block), axis=1)
     with np.errstate(invalid="ignore"):
         off_bonds = norms > tolerance
     first_non_finite = int(np.argmin(finite)) if not finite.all() else times.size
     first_off_bonds = int(np.argmax(off_bonds)) if off_bonds.any() else times.size
     if first_non_finite < times.size and first_non_finite <= first_off_bonds:
-        raise SimulationError(
+        return Fault(
             f"the state became non-finite at t = {times[first_non_finite]:.6g} s with step "
-            f"h = {step:g} s: the RK4 step is beyond its stability limit. Remedy: a smaller "
-            "numerics.step, more damping (cable.bending_damping), or fewer elements "
-            "(model.elements)."
+            f"h = {step:g} s: the RK4 step is beyond its stability limit",
+            "a smaller numerics.step, more damping (cable.bending_damping), or fewer elements "
+            "(model.elements)",
         )
     if first_off_bonds < times.size:
         k = first_off_bonds
         residual, limit = apart(float(norms[k]), tolerance)
-        raise SimulationError(
+        return Fault(
             f"bond residual {residual} m exceeds numerics.constraint_tolerance = "
-            f"{limit} m at t = {times[k]:.6g} s with step h = {step:g} s. Remedy: a smaller "
-            "numerics.step or other Baumgarte gains (numerics.baumgarte_alpha/beta); if the run "
-            "is otherwise sound, a larger numerics.constraint_tolerance."
+            f"{limit} m at t = {times[k]:.6g} s with step h = {step:g} s",
+            "a smaller numerics.step or other Baumgarte gains (numerics.baumgarte_alpha/beta); "
+            "if the run is otherwise sound, a larger numerics.constraint_tolerance",
         )
     if model.spec.element.torsion:
-        _check_twist(model, block, times, step)
+        twisted = _twist_fault(model, block, times, step)
+        if twisted is not None:
+            return twisted
     try:
         model.check_regular(block.T)
     except ValueError as error:
-        raise SimulationError(f"at t <= {times[-1]:.6g} s: {error}") from error
+        return Fault(f"at t <= {times[-1]:.6g} s: {error}")
+    return None
 
 
-def _check_twist(model: CableModel, block: np.ndarray, times: np.ndarray, step: float) -> None:
-    """Raise when neighbouring elements twist apart by more than half a turn.
+def _check_block(model, block, norms, times, step, tolerance) -> None:
+    """Raise on the first state of a block (rows) that is non-finite or off its bonds."""
+    fault = health(model, block, norms, times, step, tolerance)
+    if fault is not None:
+        raise SimulationError(str(fault))
+
+
+def _twist_fault(
+    model: CableModel, block: np.ndarray, times: np.ndarray, step: float
+) -> Fault | None:
+    """Neighbouring elements twisted apart by more than half a turn, or None.
 
     A torsional instability leaves the bonds intact and the state finite (the twist does not
     move the axes): measured at n = 15, h = 0.27 s, the twist grew to 1e6 rad unseen by the other
     checks. Torsion springs hold neighbours within far less than pi of each other.
     """
     twist = np.abs(np.diff(block[:, model.twist_angle_index()], axis=1)).max(axis=1)
-    if np.any(twist > MAX_RELATIVE_TWIST):
-        k = int(np.argmax(twist > MAX_RELATIVE_TWIST))
-        raise SimulationError(
-            f"neighbouring elements twisted apart by {twist[k]:.3g} rad at t = {times[k]:.6g} s "
-            f"with step h = {step:g} s: a torsional instability. Remedy: a smaller "
-            "numerics.step (torsion needs about 0.12 s / n, cable_ocp.studies.stability), or "
-            "torsion off (model.torsion = false) if the scene does not need it."
-        )
+    if not np.any(twist > MAX_RELATIVE_TWIST):
+        return None
+    k = int(np.argmax(twist > MAX_RELATIVE_TWIST))
+    return Fault(
+        f"neighbouring elements twisted apart by {twist[k]:.3g} rad at t = {times[k]:.6g} s "
+        f"with step h = {step:g} s: a torsional instability",
+        "a smaller numerics.step (torsion needs about 0.12 s / n, cable_ocp.studies.stability), "
+        "or torsion off (model.torsion = false) if the scene does not need it",
+    )
 
 
 def reference_solution(

@@ -29,8 +29,7 @@ from cable_ocp.drive.vessel import top_motion
 from cable_ocp.drive.winch import with_left
 from cable_ocp.model.cable import CableModel
 from cable_ocp.model.layout import INPUTS
-from cable_ocp.simulation.figures import apart
-from cable_ocp.simulation.integrate import SimulationError, evaluate_into, step_function
+from cable_ocp.simulation.integrate import SimulationError, bond_residuals, health, step_states
 from cable_ocp.simulation.run import run_trajectory
 from cable_ocp.simulation.seabed import check_on_grid
 from cable_ocp.simulation.statics import equilibrium
@@ -374,21 +373,15 @@ class Plant:
         applied = self.apply(angle, every, np.concatenate([left, np.zeros(count + 1, bool)]))
         applied = self.drum_under(applied, angle, start, h, steps, substeps, lag)
         inputs = self.inputs(applied, every)
-        # One map per sample length and step, kept on the model for every loop of the process
-        # (building it costs 0.1 s at n = 15).
-        run = self.model.memo(
-            ("plant_run", steps, h),
-            lambda: step_function(self.model, h, compiled=True).mapaccum(steps),
-        )
         stages = inputs[:, : times.size]
-        run_states = np.empty((steps, x.size))
+        run_states = np.empty((count, x.size))
         # A Ctrl-C inside the CasADi call can leave Python's error set under a result that
         # numpy then rejects (SystemError): it is the user's interrupt. The states are written
-        # into numpy directly (evaluate_into): through CasADi's DM they cost 5.2 ms against
-        # 3.8 ms a sample at n = 20 (50 steps).
+        # into numpy directly: through CasADi's DM they cost 5.2 ms against 3.8 ms a sample at
+        # n = 20 (50 steps).
         with keeping_interrupts():
-            evaluate_into(run, [x, stages.T], [run_states])
-        states = np.vstack([x, run_states[substeps - 1 :: substeps]])
+            step_states(self.model, x, stages.T, h, substeps, True, run_states)
+        states = np.vstack([x, run_states])
         return states, inputs[:, times.size :].T, applied.tail(count + 1)
 
     def drum_under(
@@ -435,19 +428,16 @@ class Plant:
         )
 
     def _health(self, x: np.ndarray, u: np.ndarray, t: float, substeps: int) -> str | None:
-        """Why the plant's state at ``t`` cannot be trusted (None when it can)."""
-        h = self.step / substeps
-        if not np.all(np.isfinite(x)):
-            return f"the state became non-finite by t = {t:.6g} s at h = {h:g} s"
-        residual = float(np.max(np.abs(self.model.bond_values(x, u)[0])))
+        """Why the plant's state at ``t`` cannot be trusted (None when it can).
+
+        The health check of every run (:func:`~cable_ocp.simulation.integrate.health`) on the
+        sample's last state.
+        """
+        x, u = x[None, :], u[None, :]
+        norms = bond_residuals(self.model, x, u, compiled=True)
         tolerance = self.scene.numerics.constraint_tolerance
-        if residual > tolerance:
-            shown, limit = apart(residual, tolerance)
-            return (
-                f"bond residual {shown} m over numerics.constraint_tolerance = {limit} m at "
-                f"t = {t:.6g} s at h = {h:g} s"
-            )
-        return None
+        fault = health(self.model, x, norms, np.array([t]), self.step / substeps, tolerance)
+        return None if fault is None else fault.what
 
 
 def _check_command(command) -> None:
