@@ -19,7 +19,7 @@ from cable_ocp.lowering.landing import land, landing_scene
 
 @pytest.mark.parametrize("hover", ["10", None, True, [10.0]])
 def test_a_hover_that_is_not_a_number_is_a_type_error_naming_hover(hover):
-    with pytest.raises(TypeError, match="hover = .*: must be a number of metres > 0"):
+    with pytest.raises(TypeError, match=r"hover = .*: must be a number \(m\), not "):
         landing_scene(None, hover=hover)
     with pytest.raises(TypeError, match="hover = "):
         land(None, hover=hover)
@@ -27,7 +27,7 @@ def test_a_hover_that_is_not_a_number_is_a_type_error_naming_hover(hover):
 
 @pytest.mark.parametrize("hover", [0.0, -3.0, float("nan"), float("inf")])
 def test_a_hover_out_of_range_is_refused_before_the_scene_is_read(hover):
-    with pytest.raises(ValueError, match="hover = .* m is out of range: must be > 0"):
+    with pytest.raises(ValueError, match="hover = .* m is out of range: must be (> 0|finite)"):
         landing_scene(None, hover=hover)
 
 
@@ -78,3 +78,38 @@ def test_the_largest_hover_is_one_figure_that_holds_on_either_side():
     share = (landed.top_element_length + paid) / (landed.cable.length + paid)
     assert share == pytest.approx(1 / 3, abs=2e-3) and share <= 1 / 3 + 1e-9
     assert np.isfinite(landed.lowering.land_time)
+
+
+def test_hold_refuses_a_line_out_or_duration_out_of_range_before_any_statics():
+    """On the bundled deploy scene (20 m out, 1100 m more on the drum, none hauled in)."""
+    scene = co.load_scene("deploy")
+    for line_out in (-5.0, 10.0, 1e6):
+        with pytest.raises(ValueError, match=rf"line_out = {line_out!r} m is out of range: must "
+                           r"be within \[20, 1120\] m"):  # fmt: skip
+            co.hold(scene, line_out=line_out)
+    with pytest.raises(TypeError, match="line_out = '500': must be a number"):
+        co.hold(scene, line_out="500")
+    with pytest.raises(ValueError, match="duration = -1.0 s is out of range: must be > 0"):
+        co.hold(scene, line_out=500.0, duration=-1.0)
+    with pytest.raises(TypeError, match="hold: unknown keyword 'bogus'; allowed: .*horizon"):
+        co.hold(scene, bogus=1)
+    with pytest.raises(TypeError, match="hold: scene must be a Scene"):
+        co.hold(12)
+
+
+@pytest.mark.parametrize(
+    "make, height, start",
+    [(lambda: co.load_scene("deploy", {"lowering.height": 1200.0}), 1200.0, 1000.0),
+     (lambda: lowering_scene(**{"lowering.height": 250.0}), 250.0, 200.0)],
+)  # fmt: skip
+def test_a_target_at_or_above_the_start_blames_lowering_height_not_haul_in_max(make, height, start):
+    """A lowering onto a target above the end's start is refused naming lowering.height and its
+    range (it was blamed on winch.line.haul_in_max): on deploy (the frame about 1000 m above the
+    seabed) and on test_lowering's scene (the load 200 m above it)."""
+    with pytest.raises(ValueError) as caught:
+        co.plan_landing(make())
+    message = str(caught.value)
+    assert message.startswith(f"lowering.height = {height} m is out of range: must be < ")
+    assert "haul_in_max" not in message
+    found = float(re.search(r"must be < ([\d.]+) m", message).group(1))
+    assert found == pytest.approx(start, abs=10.0)

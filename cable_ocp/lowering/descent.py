@@ -128,9 +128,11 @@ def landing_line(scene) -> float:
     Raises
     ------
     DescentError
-        The landing line lies outside what the drum can pay out and haul in.
+        The target is at or above the end's start (naming ``lowering.height``), the end starts
+        under the seabed, or the landing line lies outside what the drum can pay out and haul in
+        (:func:`line_range`).
     """
-    lowering, line = scene.lowering, scene.winch.line
+    lowering = scene.lowering
     reference = seabed_reference(scene)
 
     def miss(length: float) -> float:
@@ -139,6 +141,7 @@ def landing_line(scene) -> float:
 
     lengths = [scene.cable.length]
     misses = [miss(lengths[0])]
+    _check_target(scene, lowering.height + misses[0])
     lengths.append(_within_drum(scene, lengths[0] + misses[0]))
     misses.append(miss(lengths[1]))
     for _ in range(LANDING_LINE_ITERATIONS):
@@ -149,17 +152,46 @@ def landing_line(scene) -> float:
         slope = slope if -2.0 < slope < -0.2 else -1.0
         lengths.append(_within_drum(scene, lengths[-1] - misses[-1] / slope))
         misses.append(miss(lengths[-1]))
-    least, most = scene.cable.length - line.haul_in_max, scene.cable.length + line.pay_out_max
+    least, most = line_range(scene)
     raise DescentError(
         f"lowering.height = {lowering.height!r} m: no line out between {least:g} and {most:g} m "
         f"hangs the end there (last tried {lengths[-1]:.6g} m, {misses[-1]:+.3g} m off)"
     )
 
 
+def line_range(scene) -> tuple[float, float]:
+    """The least and the most line out (m) the drum of a ``[winch.line]`` scene can give.
+
+    ``cable.length - winch.line.haul_in_max`` and ``cable.length + winch.line.pay_out_max``.
+    """
+    line = scene.winch.line
+    return scene.cable.length - line.haul_in_max, scene.cable.length + line.pay_out_max
+
+
+def _check_target(scene, start: float) -> None:
+    """Refuse a lowering whose end starts at or under its target: ``start`` (m) above the seabed.
+
+    A lowering pays out; a target above the start would be a haul-in, which the drum's
+    ``haul_in_max`` is not the cause of (DescentError naming ``lowering.height`` and its range,
+    or the seabed when the end starts under it).
+    """
+    height = scene.lowering.height
+    if start <= 0:
+        raise DescentError(
+            f"seabed: the end starts {-start:.6g} m under the seabed (its hanging start with "
+            f"cable.length = {scene.cable.length:g} m): nothing to lower onto; place the seabed "
+            "below the start (seabed.clearance, or the grid) or shorten cable.length"
+        )
+    if height >= start:
+        raise DescentError(
+            f"lowering.height = {height!r} m is out of range: must be < {start:.6g} m, the end's "
+            "height above the seabed at the start (a lowering pays the line out to its target)"
+        )
+
+
 def _within_drum(scene, length: float) -> float:
     """``length`` (m), or a DescentError naming the drum's metres when it cannot pay it out."""
-    line = scene.winch.line
-    least, most = scene.cable.length - line.haul_in_max, scene.cable.length + line.pay_out_max
+    least, most = line_range(scene)
     if not least <= length <= most:
         field = "pay_out_max" if length > most else "haul_in_max"
         raise DescentError(

@@ -23,11 +23,15 @@ from dataclasses import dataclass
 import numpy as np
 
 from cable_ocp.control.closed_loop.loop import mpc
+from cable_ocp.control.closed_loop.settings import MpcSettings
+from cable_ocp.control.keywords import refuse_unknown
 from cable_ocp.drive.drive import Drive
+from cable_ocp.lowering.arguments import real_number
 from cable_ocp.lowering.checks import Check, drum_checks, sampled_line
-from cable_ocp.lowering.descent import landing_line, seabed_reference
+from cable_ocp.lowering.descent import landing_line, line_range, seabed_reference
 from cable_ocp.model.cable import CableModel
 from cable_ocp.model.layout import INPUTS
+from cable_ocp.scene.given import scene_given
 from cable_ocp.scene.schema import Scene, scene_from_dict
 from cable_ocp.simulation.seabed import clearance
 from cable_ocp.simulation.statics import starting_state
@@ -103,8 +107,9 @@ def hold_scene(scene, line_out: float | None = None, duration: float | None = No
 
     Parameters
     ----------
-    scene : Scene
-        With ``[lowering]`` and ``[winch.line]``, its vessel holding station.
+    scene : Scene, str or path-like
+        With ``[lowering]`` and ``[winch.line]``, its vessel holding station (a path or a
+        bundled name is loaded).
     line_out : float, optional, m
         The line out to start from (default: :func:`~.descent.landing_line`); trimmed until the
         hanging end starts within :data:`LINE_TOLERANCE` of the target height.
@@ -113,11 +118,29 @@ def hold_scene(scene, line_out: float | None = None, duration: float | None = No
 
     Raises
     ------
+    TypeError
+        A scene, ``line_out`` or ``duration`` of the wrong type.
     ValueError
-        A scene without ``[lowering]`` or ``[winch.line]``, a moving vessel, or no hold time.
+        A scene without ``[lowering]`` or ``[winch.line]``, a moving vessel, no hold time, a
+        ``line_out`` beyond what the drum holds (:func:`~.descent.line_range`) or a ``duration``
+        that is not positive: each before any statics.
     """
+    scene = scene_given(scene, "hold")
     hold_time = held_on_station(scene, "a hold", duration is None)
+    if duration is not None:
+        duration = real_number("duration", duration, "s")
+        if not duration > 0:
+            raise ValueError(f"duration = {duration!r} s is out of range: must be > 0")
     duration = hold_time if duration is None else duration
+    if line_out is not None:
+        line_out = real_number("line_out", line_out, "m")
+        least, most = line_range(scene)
+        if not least <= line_out <= most:
+            raise ValueError(
+                f"line_out = {line_out!r} m is out of range: must be within [{least:g}, "
+                f"{most:g}] m, the line the drum holds (cable.length - winch.line.haul_in_max "
+                "to cable.length + winch.line.pay_out_max)"
+            )
     length = landing_line(scene) if line_out is None else line_out
     return trimmed_line(scene, scene.lowering.height, length, duration, HOLD_RANGE)
 
@@ -255,13 +278,17 @@ def hold(
     quiet : bool
         No progress bar.
     **settings
-        Fields of :class:`~cable_ocp.control.closed_loop.settings.MpcSettings`.
+        Fields of :class:`~cable_ocp.control.closed_loop.settings.MpcSettings`; another keyword
+        is refused before any work (TypeError naming the allowed ones).
 
     Returns
     -------
     HoldResult
         Never raises for a closed loop that fails: ``success`` and ``status`` say so.
     """
+    own = MpcSettings.__dataclass_fields__
+    unknown = {name: value for name, value in settings.items() if name not in own}
+    refuse_unknown("hold", unknown, ("scene", "line_out", "duration", "quiet", *own))
     held = hold_scene(scene, line_out, duration)
     result = mpc(held, quiet=quiet, **settings)
     run = result.trajectory

@@ -24,7 +24,6 @@ verified run by :func:`~.checks.check_landing`, code independent of the solver.
 from __future__ import annotations
 
 import math
-import numbers
 import time
 from collections.abc import Mapping
 from dataclasses import dataclass
@@ -38,6 +37,7 @@ from cable_ocp.control.keywords import refuse_unknown
 from cable_ocp.control.optimization import OPTIMIZE_KEYWORDS, OcpResult, optimize
 from cable_ocp.drive.drive import Drive
 from cable_ocp.drive.vessel import top_motion
+from cable_ocp.lowering.arguments import real_number
 from cable_ocp.lowering.checks import LandingReport, check_landing
 from cable_ocp.lowering.descent import landing_line
 from cable_ocp.lowering.hold import (
@@ -199,7 +199,7 @@ def landing_scene(scene, hover: float = HOVER) -> Scene:
 
 
 def checked_hover(hover) -> float:
-    """``hover`` (m) as a float, or an error naming it: a real number > 0.
+    """``hover`` (m) as a float, or an error naming it: a finite number > 0.
 
     Raises
     ------
@@ -208,12 +208,10 @@ def checked_hover(hover) -> float:
     ValueError
         Not finite and positive.
     """
-    if isinstance(hover, bool) or not isinstance(hover, numbers.Real):
-        raise TypeError(f"hover = {hover!r:.40}: must be a number of metres > 0, not "
-                        f"{type(hover).__name__}")  # fmt: skip
-    if not (math.isfinite(hover) and hover > 0):
+    hover = real_number("hover", hover, "m")
+    if not hover > 0:
         raise ValueError(f"hover = {hover!r} m is out of range: must be > 0")
-    return float(hover)
+    return hover
 
 
 def _landing_top(scene: Scene, line: float) -> float:
