@@ -11,7 +11,7 @@ from cable_ocp.control.closed_loop import MpcSettings, mpc, reference_runs
 from cable_ocp.control.closed_loop.forecast import BlendedHeight, HeightFilter, TopForecast
 from cable_ocp.control.closed_loop.projection import project_state
 from cable_ocp.control.closed_loop.result import MpcResult
-from cable_ocp.control.ocp import IpoptSettings
+from cable_ocp.control.ipopt import IpoptSettings
 from cable_ocp.control.settings import ModelSettings
 from cable_ocp.drive.bounds import BOUND_TOLERANCE
 from cable_ocp.drive.controls import HermiteIntervals

@@ -15,10 +15,11 @@ from cable_ocp.control.closed_loop import controller as controller_module
 from cable_ocp.control.closed_loop.loop import mpc
 from cable_ocp.control.closed_loop.settings import MpcSettings
 from cable_ocp.control.gauss_newton import GaussNewton, GaussNewtonSettings
+from cable_ocp.control.ipopt import IpoptSettings
 from cable_ocp.control.nelder_mead import NelderMeadSettings
-from cable_ocp.control.ocp import IpoptSettings, resolved, shooting_problem
 from cable_ocp.control.optimization import optimize
 from cable_ocp.control.settings import GridSettings, ModelSettings, TranscriptionSettings
+from cable_ocp.control.shooting import resolved, winch_problem
 from cable_ocp.control.solvers import ocp_settings
 from cable_ocp.drive.controls import HermiteIntervals
 from cable_ocp.scene.schema import SceneError, load_scene
@@ -198,7 +199,7 @@ def test_soft_clearance_rows_keep_the_closed_loop_qp_feasible(models_dir):
     tight = {"seabed.minimum_clearance": 5.0, "winch.acceleration_max": 0.004}
     scene = load_scene(models_dir / "small_tow.toml", tight)
     settings, _ = resolved(scene, ocp_settings(grid=GridSettings(intervals=8)))
-    problem = shooting_problem(scene, settings)
+    problem = winch_problem(scene, settings)
     values, guess = problem.parameter_values(), np.zeros(problem.control.size)
     hard = GaussNewton(problem, GaussNewtonSettings(max_iter=1, real_time=False)).solve(
         values, guess
@@ -291,7 +292,7 @@ def test_the_optimisation_models_runs_may_leave_the_grid(models_dir):
 
     scene = load_scene(models_dir / "survey.toml", {"numerics.duration": 20.0})
     settings, _ = resolved(scene, ocp_settings())
-    problem = shooting_problem(scene, settings)
+    problem = winch_problem(scene, settings)
     states = problem.simulate(np.zeros(problem.control.size), compiled=True).copy()
     states[-5:, 0] = 1e4  # far beyond the grid's x = 300 m
     with pytest.raises(OffGridError):

@@ -10,8 +10,8 @@ import xarray as xr
 from legacy_results import write_ocp_result
 
 from cable_ocp.control.gauss_newton import GaussNewtonSettings
+from cable_ocp.control.ipopt import IpoptSettings
 from cable_ocp.control.nelder_mead import NelderMeadSettings
-from cable_ocp.control.ocp import IpoptSettings
 from cable_ocp.control.optimization import OcpResult, optimize
 from cable_ocp.control.settings import GridSettings, ModelSettings, TranscriptionSettings
 from cable_ocp.drive.bounds import angle_bounds

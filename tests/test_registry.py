@@ -11,7 +11,7 @@ import pytest
 import cable_ocp as co
 from cable_ocp.control.closed_loop.settings import CLOSED_LOOP_SOLVERS, MpcSettings
 from cable_ocp.control.gauss_newton import DAQP_INFEASIBLE, GaussNewtonSettings
-from cable_ocp.control.ocp import IpoptSettings
+from cable_ocp.control.ipopt import IpoptSettings
 from cable_ocp.control.solvers import (
     KNOTS,
     SHOOTING,

@@ -66,7 +66,7 @@ class NelderMeadSettings:
 def resolved_nelder_mead(scene, settings: OcpSettings, compiled: bool | None = None):
     """The settings with the elements and step left unset derived from the scene, and how.
 
-    As :func:`cable_ocp.control.ocp.resolved`, the step a whole fraction of the duration. The
+    As :func:`cable_ocp.control.shooting.resolved`, the step a whole fraction of the duration. The
     paper's method takes the spline through the scene's knots, and no shooting intervals.
     """
     if settings.control != "spline" or settings.intervals is not None:

@@ -23,7 +23,6 @@ import xarray as xr
 
 from cable_ocp import result_files
 from cable_ocp.control.keywords import refuse_unknown
-from cable_ocp.control.ocp import control_of, full_model_scene
 from cable_ocp.control.problem import SolverOutcome, WinchProblem
 from cable_ocp.control.settings import (
     GridSettings,
@@ -31,6 +30,7 @@ from cable_ocp.control.settings import (
     OcpSettings,
     TranscriptionSettings,
 )
+from cable_ocp.control.shooting import control_of, full_model_scene
 from cable_ocp.control.solvers import SHOOTING, SOLVERS, Solver, ocp_settings, transcription_named
 from cable_ocp.control.verification import Verification, correction_step
 from cable_ocp.drive.drive import Drive

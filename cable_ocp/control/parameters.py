@@ -1,10 +1,11 @@
 """The named parameters of a winch problem: what changes between solves of one transcription.
 
-One transcription (:mod:`cable_ocp.control.ocp`, :mod:`cable_ocp.control.gauss_newton`) serves
-the open loop, which sets these once from the scene, and the closed loop, which sets them at every
-sample from its estimate and forecasts. They work like rockit's ``ocp.parameter``: declared once
-with a name and a shape, packed into the NLP's parameter vector in one place (:func:`pack`) and
-unpacked as named symbols in one place (:func:`symbols`).
+One transcription (:mod:`cable_ocp.control.shooting`, solved by :mod:`cable_ocp.control.ipopt`
+and :mod:`cable_ocp.control.gauss_newton`) serves the open loop, which sets these once from the
+scene, and the closed loop, which sets them at every sample from its estimate and forecasts.
+They work like rockit's ``ocp.parameter``: declared once with a name and a shape, packed into the
+NLP's parameter vector in one place (:func:`pack`) and unpacked as named symbols in one place
+(:func:`symbols`).
 """
 
 from __future__ import annotations

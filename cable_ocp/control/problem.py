@@ -3,10 +3,10 @@
 A :class:`WinchProblem` holds what every solver and the verification share: the optimisation
 model (the scene's, or a reduced one), its RK4 step and grid, the drive with the winch locked, the
 initial equilibrium, the winch parametrisation with its bounds, and the objective Omega (eq. 39:
-the RMS of the clearance error, CONVENTIONS.md §5). IPOPT (:mod:`cable_ocp.control.ocp`) transcribes
-it into an NLP, Nelder-Mead (:mod:`cable_ocp.control.nelder_mead`) searches it directly, and
-:meth:`WinchProblem.verify` scores a profile on the scene's own model. Every solver reports a
-:class:`SolverOutcome`.
+the RMS of the clearance error, CONVENTIONS.md §5). IPOPT (:mod:`cable_ocp.control.ipopt`)
+transcribes it into an NLP, Nelder-Mead (:mod:`cable_ocp.control.nelder_mead`) searches it
+directly, and :meth:`WinchProblem.verify` scores a profile on the scene's own model. Every solver
+reports a :class:`SolverOutcome`.
 """
 
 from __future__ import annotations

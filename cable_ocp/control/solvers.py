@@ -33,18 +33,12 @@ from collections.abc import Callable
 from dataclasses import dataclass, replace
 
 from cable_ocp.control.gauss_newton import DAQP_INFEASIBLE, GaussNewton, GaussNewtonSettings
+from cable_ocp.control.ipopt import Ipopt, IpoptSettings, check_ipopt
 from cable_ocp.control.nelder_mead import (
     NelderMead,
     NelderMeadSettings,
     nelder_mead_problem,
     resolved_nelder_mead,
-)
-from cable_ocp.control.ocp import (
-    IpoptSettings,
-    ShootingProblem,
-    check_ipopt,
-    resolved,
-    shooting_problem,
 )
 from cable_ocp.control.settings import (
     GridSettings,
@@ -52,6 +46,7 @@ from cable_ocp.control.settings import (
     OcpSettings,
     TranscriptionSettings,
 )
+from cable_ocp.control.shooting import resolved, winch_problem
 from cable_ocp.simulation.progress import IterationLog
 
 
@@ -83,7 +78,7 @@ class Transcription:
     verify_compiled: bool | None
 
 
-SHOOTING = Transcription("shooting", resolved, shooting_problem, True, None)
+SHOOTING = Transcription("shooting", resolved, winch_problem, True, None)
 KNOTS = Transcription("nelder-mead", resolved_nelder_mead, nelder_mead_problem, False, False)
 # Files and sweeps of before the solvers were named called shooting "ipopt", whichever ran.
 OLD_TRANSCRIPTIONS = {"ipopt": SHOOTING.name}
@@ -154,8 +149,8 @@ def _gauss_newton(problem, settings: OcpSettings, quiet, verbose, rate_weight) -
     return GaussNewton(problem, settings.solver_settings, log, rate_weight)
 
 
-def _ipopt(problem, settings: OcpSettings, quiet, verbose, rate_weight) -> ShootingProblem:
-    return ShootingProblem(problem, settings, quiet=quiet, verbose=verbose, rate_weight=rate_weight)
+def _ipopt(problem, settings: OcpSettings, quiet, verbose, rate_weight) -> Ipopt:
+    return Ipopt(problem, settings, quiet=quiet, verbose=verbose, rate_weight=rate_weight)
 
 
 def _nelder_mead(problem, settings: OcpSettings, quiet, verbose, rate_weight) -> NelderMead:

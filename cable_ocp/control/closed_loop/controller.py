@@ -25,7 +25,7 @@ import numpy as np
 
 from cable_ocp.control.closed_loop.forecast import TopForecast
 from cable_ocp.control.closed_loop.settings import MpcSettings
-from cable_ocp.control.ocp import IpoptSettings
+from cable_ocp.control.ipopt import IpoptSettings
 from cable_ocp.control.parameters import ProblemParameters
 from cable_ocp.control.problem import WinchProblem
 from cable_ocp.control.settings import GridSettings, OcpSettings, TranscriptionSettings

@@ -26,8 +26,8 @@ from cable_ocp.control.closed_loop.plant import Measurement, Plant, plant_run
 from cable_ocp.control.closed_loop.result import MpcResult, SolveLog
 from cable_ocp.control.closed_loop.settings import MpcSettings
 from cable_ocp.control.keywords import refuse_unknown
-from cable_ocp.control.ocp import compile_ahead
 from cable_ocp.control.optimization import refuse_line_scene
+from cable_ocp.control.shooting import compile_ahead
 from cable_ocp.control.solvers import SOLVERS
 from cable_ocp.control.verification import lowest_clearance
 from cable_ocp.drive.bounds import angle_bounds

@@ -16,8 +16,8 @@ import numpy as np
 from cable_ocp.control.closed_loop.plant import Plant, plant_run
 from cable_ocp.control.closed_loop.result import MpcResult
 from cable_ocp.control.interrupts import interrupt_here
-from cable_ocp.control.ocp import make_control, resolved
 from cable_ocp.control.optimization import optimize
+from cable_ocp.control.shooting import make_control, resolved
 from cable_ocp.control.solvers import ocp_settings
 from cable_ocp.drive.drive import Drive
 from cable_ocp.simulation.integrate import SimulationError

@@ -8,7 +8,7 @@ from dataclasses import asdict, dataclass, field, replace
 from cable_ocp.control import defaults
 from cable_ocp.control.checks import Rule, check_fields
 from cable_ocp.control.gauss_newton import GaussNewtonSettings
-from cable_ocp.control.ocp import IpoptSettings
+from cable_ocp.control.ipopt import IpoptSettings
 from cable_ocp.control.settings import ModelSettings
 from cable_ocp.control.solvers import SOLVERS, solver_of
 from cable_ocp.drive.bounds import angle_bounds
