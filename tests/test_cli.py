@@ -15,7 +15,7 @@ from pathlib import Path
 import pytest
 
 from cable_ocp import cli
-from cable_ocp.cli.optimiser_options import optimize_options
+from cable_ocp.cli.optimiser_options import optimize_settings
 from cable_ocp.control import optimization
 from cable_ocp.scene.output import MARKER
 from cable_ocp.scene.schema import SceneError, load_scene
@@ -123,12 +123,12 @@ def test_simulate_writes_a_marked_folder_and_replaces_it(tmp_path, capsys):
 def test_hessian_exact_runs_the_interpreted_model(capsys):
     parser = cli.build_parser()
     args = parser.parse_args(["optimize", HANGING, "--out", "o", "--hessian", "exact"])
-    options = optimize_options(args)
-    assert options["solver"] == "ipopt" and options["settings"].hessian == "exact"
-    assert options["transcription"].compiled is False
+    settings = optimize_settings(args)
+    assert settings.solver == "ipopt" and settings.solver_settings.hessian == "exact"
+    assert settings.transcription.compiled is False
     assert "--hessian exact runs the interpreted model" in capsys.readouterr().err
     args = parser.parse_args(["optimize", HANGING, "--out", "o"])
-    assert optimize_options(args)["transcription"].compiled is True
+    assert optimize_settings(args).transcription.compiled is True
 
 
 @pytest.mark.parametrize(
@@ -188,8 +188,8 @@ def test_simulate_animates_when_asked(tmp_path, monkeypatch, capsys):
 def test_shooting_option_reaches_the_ipopt_settings(tmp_path, monkeypatch, capsys, shooting):
     calls = []
 
-    def record(scene, solver=None, settings=None, transcription=None, **kwargs):
-        calls.append(transcription)
+    def record(scene, solver=None, settings=None, **kwargs):
+        calls.append(settings.transcription)
         raise ValueError("stopped by the test")
 
     monkeypatch.setattr(optimization, "optimize", record)
@@ -274,7 +274,8 @@ BAD_OPTIMISER = {
     "--max-evaluations": [*BAD_INTEGERS, "0"],
     "--refinements": [*BAD_INTEGERS, "101"],
     "--step": ["nan", "inf", "-inf", "0", "-0.5", "1e400", "", "a"],
-    "--method": ["", "ipopt2"],
+    "--method": ["", "ipopt2", "nelder-mead", "shooting"],
+    "--solver": ["", "sqp", "Gauss-Newton"],
     "--hessian": ["", "approx"],
 }
 
@@ -371,24 +372,41 @@ def test_mpc_rate_weight_must_be_finite(tmp_path, monkeypatch, capsys, no_heavy_
 
 
 def test_optimiser_defaults_are_the_registrys(monkeypatch):
-    """Unset options are optimize()'s defaults: the CLI keeps no copy of them."""
-    from cable_ocp.control.settings import GridSettings, ModelSettings, TranscriptionSettings
+    """Unset options are optimize()'s defaults: the CLI keeps no copy of them; the options given
+    are built into OcpSettings by the settings classes (ocp_settings_from)."""
+    from cable_ocp.control.settings import ModelSettings
     from cable_ocp.control.solvers import SOLVERS, ocp_settings
 
     parser = cli.build_parser()
     args = parser.parse_args(["optimize", HANGING, "--out", "o"])
-    assert ocp_settings(**optimize_options(args)) == ocp_settings()
-    simplex = parser.parse_args(["optimize", HANGING, "--out", "o", "--method", "nelder-mead"])
-    assert ocp_settings(**optimize_options(simplex)) == ocp_settings("nelder-mead")
+    assert optimize_settings(args) == ocp_settings()
+    simplex = parser.parse_args(["optimize", HANGING, "--out", "o", "--solver", "nelder-mead"])
+    assert optimize_settings(simplex) == ocp_settings("nelder-mead")
     given = parser.parse_args(["optimize", HANGING, "--out", "o", "--elements", "5", "--step",
                                "0.25", "--max-iter", "7", "--solver", "ipopt"])  # fmt: skip
-    options = optimize_options(given)
-    assert options["model"] == ModelSettings(5, 0.25)
-    assert options["settings"] == SOLVERS["ipopt"].settings(max_iter=7)
-    assert options["grid"] == GridSettings() and options["transcription"] == TranscriptionSettings()
-    with pytest.raises(ValueError, match="solver = 'sqp': must be one of 'gauss-newton'"):
-        optimize_options(parser.parse_args(["optimize", HANGING, "--out", "o",
-                                                 "--solver", "sqp"]))  # fmt: skip
+    ipopt = SOLVERS["ipopt"].settings(max_iter=7)
+    assert optimize_settings(given) == ocp_settings("ipopt", ipopt, ModelSettings(5, 0.25))
+
+
+@pytest.mark.parametrize(
+    ("options", "solver"),
+    [([], "gauss-newton"), (["--shooting", "single"], "gauss-newton"),
+     (["--shooting", "multiple"], "ipopt"), (["--hessian", "limited-memory"], "ipopt"),
+     (["--max-iter", "3", "--control", "spline"], "gauss-newton")],
+)  # fmt: skip
+def test_an_option_of_another_shooting_solver_picks_it(options, solver):
+    """Without --solver, an option that only IPOPT takes picks IPOPT; the registry says which."""
+    args = cli.build_parser().parse_args(["optimize", HANGING, "--out", "o", *options])
+    assert optimize_settings(args).solver == solver
+
+
+def test_method_is_refused_saying_it_became_solver(tmp_path, capsys, no_heavy_work):
+    """Issue 41: --method and --solver overlapped; --method is refused, naming --solver."""
+    err = assert_refused(["optimize", HANGING, "--out", tmp_path / "o", "--method",
+                          "nelder-mead"], capsys)  # fmt: skip
+    assert "argument --method: became --solver: --solver nelder-mead is the paper's" in err
+    assert "--method" not in cli.build_parser()._subparsers._group_actions[0].choices[
+        "optimize"].format_help()  # fmt: skip
 
 
 def _sweep_file(tmp_path) -> Path:

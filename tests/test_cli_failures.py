@@ -122,7 +122,7 @@ def test_ipopt_options_beside_gauss_newton_are_named(tmp_path, capsys, no_optimi
     ("command", "option", "takes"),
     [
         (["optimize", "--solver", "nelder-mead"], ["--hessian", "limited-memory"], "IPOPT"),
-        (["optimize", "--method", "nelder-mead"], ["--max-iter", "4"], "Gauss-Newton and IPOPT"),
+        (["optimize", "--solver", "nelder-mead"], ["--max-iter", "4"], "Gauss-Newton and IPOPT"),
         (["optimize", "--solver", "nelder-mead"], ["--control", "spline"], "Gauss-Newton and"),
         (["optimize", "--solver", "ipopt"], ["--max-evaluations", "9"], "Nelder-Mead"),
         (["compare", "--solver", "gauss-newton"], ["--hessian", "exact"], "IPOPT"),
@@ -144,7 +144,7 @@ def test_compare_takes_the_options_of_either_of_its_solvers(tmp_path, capsys, mo
     """compare runs a shooting solver and Nelder-Mead on the same options: each is given its own."""
     calls = []
 
-    def recorded(scene, solver, settings, **options):
+    def recorded(scene, solver=None, settings=None, **options):
         calls.append(settings)
         raise KeyboardInterrupt  # enough: the options were built and accepted
 
@@ -152,7 +152,7 @@ def test_compare_takes_the_options_of_either_of_its_solvers(tmp_path, capsys, mo
     args = ["compare", SMALL_TOW, "--max-iter", "3", "--max-evaluations", "7"]
     code, _, stderr = run_cli([*args, "--out", tmp_path / "o"], capsys)
     assert code == 130, stderr
-    assert calls[0].max_iter == 3  # the shooting solver's; Nelder-Mead's comes second
+    assert calls[0].solver_settings.max_iter == 3  # the shooting solver's; Nelder-Mead's second
 
 
 # --- the file system: a full disk, a file-size limit --------------------------------------------

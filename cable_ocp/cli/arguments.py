@@ -118,6 +118,22 @@ def fraction(text: str) -> float:
     return value
 
 
+class Renamed(argparse.Action):
+    """An option of a previous release, hidden from the help and refused saying what it became.
+
+    ``now`` (a keyword of ``add_argument``) says it: "argument --old: became NOW", argparse's one
+    line, exit 2, before any work.
+    """
+
+    def __init__(self, option_strings: list[str], dest: str, now: str, **kwargs) -> None:
+        super().__init__(option_strings, dest, help=argparse.SUPPRESS, **kwargs)
+        self.now = now
+
+    def __call__(self, parser, namespace, values, option_string=None) -> None:
+        """Refuse the option, whatever its value."""
+        raise argparse.ArgumentError(self, f"became {self.now}")
+
+
 class DefaultsShown(argparse.RawDescriptionHelpFormatter):
     """Help that ends each option with its default, unless the help already says it.
 

@@ -13,9 +13,12 @@ from cable_ocp.cli.optimiser_options import (
     check_start,
     check_step,
     elapsed,
-    optimize_options,
+    optimize_settings,
 )
+from cable_ocp.control.solvers import SOLVERS
 from cable_ocp.scene.bundled import scene_argument
+
+SIMPLEX = "nelder-mead"  # the paper's method, which compare runs beside the shooting solver
 
 
 def add_compare_command(commands) -> None:
@@ -43,22 +46,22 @@ def run_compare_command(args: argparse.Namespace) -> int:
     for scene in scenes:
         check_step(scene, args.step)
         check_start(scene)
-    if args.solver == "nelder-mead":
+    if args.solver is not None and not SOLVERS[args.solver].shootings:
         raise ValueError(
-            "--solver nelder-mead: compare runs Nelder-Mead anyway, beside a shooting solver; "
-            "give --solver gauss-newton or ipopt"
+            f"--solver {args.solver}: compare runs Nelder-Mead anyway, beside a shooting solver; "
+            f"give --solver {' or '.join(n for n, e in SOLVERS.items() if e.shootings)}"
         )
-    shooting = optimize_options(args, beside="nelder-mead")
-    simplex = optimize_options(args, "nelder-mead", beside=shooting["solver"])
-    spline = {**shooting, "grid": replace(shooting["grid"], control="spline")}
-    name = shooting["solver"]
+    shooting = optimize_settings(args, beside=SIMPLEX)
+    simplex = optimize_settings(args, SIMPLEX, beside=shooting.solver)
+    spline = replace(shooting, grid=replace(shooting.grid, control="spline"))
+    name = shooting.solver
     output = {"quiet": args.quiet, "verbose": args.verbose}
     rows = []
     for scene in scenes:
         runs = [
-            (f"{name}, hermite", optimize(scene, **shooting, **output)),
-            (f"{name}, spline", optimize(scene, **spline, **output)),
-            ("nelder-mead, spline", optimize(scene, **simplex, **output)),
+            (f"{name}, hermite", optimize(scene, settings=shooting, **output)),
+            (f"{name}, spline", optimize(scene, settings=spline, **output)),
+            (f"{SIMPLEX}, spline", optimize(scene, settings=simplex, **output)),
         ]
         rows += [(scene.name, label, r) for label, r in runs]
     lines = [

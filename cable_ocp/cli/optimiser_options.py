@@ -7,82 +7,89 @@ import sys
 import time
 
 from cable_ocp.cli.arguments import add_set, integer, positive
+from cable_ocp.control.settings import GridSettings, ModelSettings, OcpSettings
+from cable_ocp.control.solvers import DEFAULT_SOLVER, SOLVERS, Solver, ocp_settings_from
+
+# The optimiser's options, each named as the settings field it sets (OcpSettings' parts).
+OPTIONS = ("elements", "step", "control", "intervals", "shooting", "hessian", "max_iter",
+           "max_evaluations")  # fmt: skip
 
 
-def _given(args, names: tuple[str, ...]) -> dict:
-    """The options among ``names`` given on the command line (the others are None)."""
-    return {name: getattr(args, name) for name in names if getattr(args, name) is not None}
+def _takes(entry: Solver, args: argparse.Namespace, name: str) -> bool:
+    """Whether the registry's solver ``entry`` takes the option ``name`` as given in ``args``.
 
-
-def optimize_options(args, solver: str | None = None, beside: str | None = None) -> dict:
-    """``optimize``'s solver and settings from the options given; unset ones are its own.
-
-    The solver is ``solver``, else ``--solver``, else ``--method nelder-mead``'s, else IPOPT
-    when an IPOPT option (``--hessian``, ``--shooting multiple``) is given, else the registry's
-    default. ``--hessian exact`` needs the interpreted model. An option that neither the solver
-    nor the solver run ``beside`` it on the same options (compare's) takes is refused.
+    The model's (``--elements``, ``--step``) every solver; the shooting grid's (``--control``,
+    ``--intervals``) a shooting solver (not the paper's Nelder-Mead, on the scene's knots); a
+    shooting its own; else a field of its settings (``--hessian``, ``--max-iter``, ...).
     """
-    from cable_ocp.control.settings import GridSettings, ModelSettings, TranscriptionSettings
-    from cable_ocp.control.solvers import DEFAULT_SOLVER, solver_named
-
-    method = getattr(args, "method", None)
-    if method == "nelder-mead" and args.solver not in (None, "nelder-mead"):
-        raise ValueError(
-            f"--method nelder-mead with --solver {args.solver}: the paper's method is solver "
-            "nelder-mead; give one of them"
-        )
-    solver = solver or args.solver or ("nelder-mead" if method == "nelder-mead" else None)
-    if solver is None and (args.hessian is not None or args.shooting == "multiple"):
-        solver = "ipopt"
-    solver = solver or DEFAULT_SOLVER
-    entry = solver_named(solver)
-    _check_solver_options(args, entry, *([solver_named(beside)] if beside else []))
-    exact = args.hessian == "exact"
-    if exact and not args.quiet:
-        print(
-            f"cable-ocp {args.command}: note: --hessian exact runs the interpreted model "
-            "(compiled = False): the compiled step carries no second derivatives",
-            file=sys.stderr,
-        )
-    own = set(entry.settings.__dataclass_fields__)
-    options = {
-        "solver": solver,
-        "settings": entry.settings(
-            **_given(args, own & {"hessian", "max_iter", "max_evaluations"})
-        ),
-        "model": ModelSettings(**_given(args, ("elements", "step"))),
-        "transcription": TranscriptionSettings(
-            **_given(args, ("shooting",)), **({"compiled": False} if exact else {})
-        ),
-    }
-    if entry.shootings:  # the paper's Nelder-Mead takes the scene's knots, no grid
-        options["grid"] = GridSettings(**_given(args, ("control", "intervals")))
-    return options
+    if name in ModelSettings.__dataclass_fields__:
+        return True
+    if name == "shooting":
+        return args.shooting in entry.shootings
+    if name in GridSettings.__dataclass_fields__:
+        return bool(entry.shootings)
+    return name in entry.settings.__dataclass_fields__
 
 
-def _check_solver_options(args, *entries) -> None:
+def _given(args: argparse.Namespace) -> list[str]:
+    """The optimiser's options given on the command line (the others are None)."""
+    return [name for name in OPTIONS if getattr(args, name, None) is not None]
+
+
+def _solver(args: argparse.Namespace) -> Solver:
+    """``--solver``'s entry, or the one the options given ask for.
+
+    Unset, the default, unless it does not take an option given: then the first solver of the
+    same problem that takes them all (``--hessian`` or ``--shooting multiple``: IPOPT), never
+    one of another problem (the paper's Nelder-Mead on the knots: name it).
+    """
+    if args.solver is not None:
+        return SOLVERS[args.solver]
+    default = SOLVERS[DEFAULT_SOLVER]
+    same_problem = [e for e in SOLVERS.values() if bool(e.shootings) == bool(default.shootings)]
+    return next(
+        (entry for entry in [default, *same_problem]
+         if all(_takes(entry, args, name) for name in _given(args))),
+        default,
+    )  # fmt: skip
+
+
+def optimize_settings(
+    args: argparse.Namespace, solver: str | None = None, beside: str | None = None
+) -> OcpSettings:
+    """``optimize``'s settings from the options given, built by the settings classes.
+
+    The solver is ``solver``, else ``--solver``, else the default unless an option given asks
+    for another solver of the same problem (:func:`_solver`). Unset options keep the settings'
+    defaults (derived from the scene). ``--hessian exact`` needs the interpreted model. An option
+    that neither the solver nor the solver run ``beside`` it on the same options (compare's)
+    takes is refused; one that only the other takes is left to it.
+    """
+    entry = SOLVERS[solver] if solver is not None else _solver(args)
+    _check_solver_options(args, entry, *([SOLVERS[beside]] if beside else []))
+    table = {name: getattr(args, name) for name in _given(args) if _takes(entry, args, name)}
+    if table.get("hessian") == "exact":
+        table["compiled"] = False
+        if not args.quiet:
+            print(
+                f"cable-ocp {args.command}: note: --hessian exact runs the interpreted model "
+                "(compiled = False): the compiled step carries no second derivatives",
+                file=sys.stderr,
+            )
+    return ocp_settings_from(table, entry.name)
+
+
+def _check_solver_options(args: argparse.Namespace, *entries: Solver) -> None:
     """Refuse an option given that none of the solvers ``entries`` (of the registry) takes.
 
-    Its settings' fields (``--hessian``, ``--max-iter``, ``--max-evaluations``), its shootings
-    (``--shooting``), the shooting grid (``--control``, ``--intervals``; not Nelder-Mead's,
-    which takes the scene's knots). An option left unused would run another problem than the
-    one asked for (``--solver nelder-mead --hessian exact`` ran the slow interpreted model).
+    An option left unused would run another problem than the one asked for (``--solver
+    nelder-mead --hessian exact`` ran the slow interpreted model).
     """
-    from cable_ocp.control.solvers import SOLVERS
-
-    def takes(other, name: str) -> bool:
-        if name == "shooting":
-            return args.shooting in other.shootings
-        if name in ("control", "intervals"):
-            return bool(other.shootings)
-        return name in other.settings.__dataclass_fields__
-
-    names = ("hessian", "max_iter", "max_evaluations", "shooting", "control", "intervals")
-    for name in names:
-        if getattr(args, name, None) is None or any(takes(entry, name) for entry in entries):
+    for name in _given(args):
+        if any(_takes(entry, args, name) for entry in entries):
             continue
         option = f"--{name.replace('_', '-')} {getattr(args, name)}"
-        others = [other for other in SOLVERS.values() if takes(other, name)]
+        others = [other for other in SOLVERS.values() if _takes(other, args, name)]
         raise ValueError(
             f"{option} is an option of {' and '.join(o.label for o in others)}, not of "
             f"{' or '.join(e.label for e in entries)}: give --solver {others[0].name}, or leave "
@@ -141,9 +148,10 @@ def add_optimiser_options(parser: argparse.ArgumentParser) -> None:
     )
     parser.add_argument(
         "--solver",
-        help="a solver of the registry (cable_ocp.control.solvers.SOLVERS): gauss-newton or "
-        "ipopt on the shooting NLP, or the paper's nelder-mead (default: gauss-newton; ipopt "
-        "when --hessian or --shooting multiple is given)",
+        choices=list(SOLVERS),
+        help=f"a solver of the registry (cable_ocp.control.solvers.SOLVERS): gauss-newton or "
+        f"ipopt on the shooting NLP, or the paper's nelder-mead on the scene's knots (default: "
+        f"{DEFAULT_SOLVER}; ipopt when --hessian or --shooting multiple is given)",
     )
     parser.add_argument(
         "--shooting",
@@ -153,8 +161,8 @@ def add_optimiser_options(parser: argparse.ArgumentParser) -> None:
     parser.add_argument(
         "--control",
         choices=["hermite", "spline"],
-        help="the winch's parametrisation for --method shooting: hermite (cubic Hermite intervals, "
-        "the default) or spline (the paper's knots, winch.knots)",
+        help="the winch's parametrisation of a shooting solver: hermite (cubic Hermite "
+        "intervals, the default) or spline (the paper's knots, winch.knots)",
     )
     parser.add_argument(
         "--hessian",

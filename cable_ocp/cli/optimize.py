@@ -11,6 +11,7 @@ from cable_ocp.cli.arguments import (
     OUT_HELP,
     SCENE_HELP,
     DefaultsShown,
+    Renamed,
     integer,
     parse_overrides,
 )
@@ -21,9 +22,10 @@ from cable_ocp.cli.optimiser_options import (
     check_start,
     check_step,
     elapsed,
-    optimize_options,
+    optimize_settings,
 )
 from cable_ocp.cli.run_folder import EXTRA_UNITS
+from cable_ocp.control.solvers import SOLVERS
 from cable_ocp.scene.bundled import scene_argument
 
 
@@ -33,12 +35,11 @@ def add_optimize_command(commands) -> None:
         "optimize", formatter_class=DefaultsShown, help="optimise the winch angle of a scene"
     )
     parser.add_argument("scene", type=scene_argument, help=SCENE_HELP)
-    parser.add_argument("--method", choices=["shooting", "nelder-mead", "ipopt"],
-                        default="shooting",
-                        help="shooting: direct shooting on the winch parameters, solved by "
-                        "--solver (Gauss-Newton SQP or IPOPT), refined by model correction "
-                        "(ipopt: its old name); nelder-mead: the paper's simplex on winch.knots "
-                        "(as --solver nelder-mead)")  # fmt: skip
+    parser.add_argument(
+        "--method", action=Renamed,
+        now="--solver: --solver nelder-mead is the paper's method; shooting is --solver "
+        "gauss-newton (the default) or --solver ipopt",
+    )  # fmt: skip
     parser.add_argument("--out", type=Path, required=True, help=OUT_HELP)
     parser.add_argument("--refinements", type=integer(0, 100), default=3,
                         help="model-correction solves")  # fmt: skip
@@ -74,10 +75,10 @@ def run_optimize_command(args: argparse.Namespace) -> int:
     check_step(scene, args.step)
     check_start(scene)
     output = {"quiet": args.quiet, "verbose": args.verbose}
-    options = optimize_options(args)
-    if options["solver"] != "nelder-mead":
+    settings = optimize_settings(args)
+    if SOLVERS[settings.solver].shootings:  # a shooting solver's answer is refined
         output["refinements"] = args.refinements
-    result = optimize(scene, **options, **output)
+    result = optimize(scene, settings=settings, **output)
     locked, locked_failure = _locked_reference(scene)
     seabed, bounds = scene.seabed, (scene.winch.angle_min, scene.winch.angle_max)
     runs = [("locked winch", locked), (f"optimised ({result.solver})", result.trajectory)]
