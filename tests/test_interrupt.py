@@ -37,8 +37,10 @@ def _interrupted_at(command: list[str], point: str) -> tuple[int, str]:
     return run.returncode, run.stderr
 
 
-def _interrupt_when(command: list[str], marker: str, delay: float = 0.0) -> tuple[int, str]:
-    """Run ``command``, send SIGINT ``delay`` s after ``marker`` appears on its stderr.
+def _interrupt_when(
+    command: list[str], marker: str, delay: float = 0.0, number: int = signal.SIGINT
+) -> tuple[int, str]:
+    """Run ``command``, send the signal ``number`` ``delay`` s after ``marker`` is on its stderr.
 
     Returns (exit code, stderr).
     """
@@ -53,7 +55,7 @@ def _interrupt_when(command: list[str], marker: str, delay: float = 0.0) -> tupl
         seen.append(line)
         if marker in line:
             time.sleep(delay)
-            process.send_signal(signal.SIGINT)
+            process.send_signal(number)
             break
         if time.monotonic() - started > TIMEOUT:
             process.kill()
@@ -195,3 +197,136 @@ print("saved:", co.Trajectory.load(folder / "second").time.size)
     lines = run.stdout.splitlines()
     assert lines[0] == "interrupted: []", run.stdout  # neither first.nc nor its scratch file
     assert lines[1].startswith("saved: ") and int(lines[1].split()[1]) > 1
+
+
+# --- Ctrl-C while the model compiles, during the imports, and SIGTERM (issue 45 D1, D7) ----------
+
+EXIT_BOUND = 10.0  # s from the signal to the exit (it waited for every compile: 14 s and more)
+
+
+def _processes_naming(text: str) -> list[str]:
+    """Command lines of the running processes that contain ``text`` (zombies have none)."""
+    found = []
+    for entry in Path("/proc").iterdir():
+        try:
+            line = (entry / "cmdline").read_bytes().replace(b"\0", b" ").decode()
+        except OSError:
+            continue
+        if text in line:
+            found.append(line)
+    return found
+
+
+@pytest.mark.skipif(not sys.platform.startswith("linux"), reason="SIGINT, /proc")
+def test_ctrl_c_while_the_model_compiles_exits_at_once_leaving_no_compiler(tmp_path):
+    from cable_ocp.model.compile import damage, find_compiler
+
+    if find_compiler() is None:
+        pytest.skip("no C compiler")
+    cache, out = tmp_path / "cache", tmp_path / "run"
+    command = ["optimize", str(MODELS / "small_tow.toml"), *SMALL, "--quiet", "--out", str(out)]
+    process = subprocess.Popen(
+        [sys.executable, "-m", "cable_ocp.cli", *command],
+        stdout=subprocess.DEVNULL,
+        stderr=subprocess.PIPE,
+        text=True,
+        env={**os.environ, "CABLE_OCP_CACHE": str(cache)},  # empty: everything compiles
+    )
+    started = time.monotonic()
+    while not any("cc1" in line for line in _processes_naming(str(cache))):
+        assert process.poll() is None and time.monotonic() - started < TIMEOUT, "no compiler"
+        time.sleep(0.02)
+    process.send_signal(signal.SIGINT)
+    sent = time.monotonic()
+    stderr = process.communicate(timeout=TIMEOUT)[1]
+    assert process.returncode == 130 and time.monotonic() - sent < EXIT_BOUND, stderr
+    assert stderr.strip().splitlines() == ["cable-ocp optimize: interrupted"]
+    assert _processes_naming(str(cache)) == []  # no cc, cc1, as or ld left of any run
+    files = sorted(p.name for p in cache.iterdir())
+    libraries = [name for name in files if name.endswith(".so")]
+    assert files == sorted([*libraries, *(f"{name}.json" for name in libraries)])  # no scratch
+    assert all(damage(cache / name) is None for name in libraries)  # the next run loads them
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["cache"]  # no results, lock, scratch
+
+
+# A child that interrupts itself the first time a given module is imported (a deterministic
+# Ctrl-C during the imports), then runs the script's entry point with the given arguments.
+SIGINT_IN_THE_IMPORTS = """
+import os, signal, sys
+
+class Interrupt:
+    def find_spec(self, name, path=None, target=None):
+        if name == sys.argv[1]:
+            sys.meta_path.remove(self)
+            os.kill(os.getpid(), signal.SIGINT)
+        return None
+
+sys.meta_path.insert(0, Interrupt())
+from cable_ocp.entry import main
+sys.exit(main(sys.argv[2:]))
+"""
+
+
+def test_the_script_is_the_light_entry_point():
+    from importlib.metadata import entry_points
+
+    (script,) = entry_points(group="console_scripts", name="cable-ocp")
+    assert script.value == "cable_ocp.entry:main"
+    heavy = ["casadi", "numpy", "xarray", "cable_ocp.cli"]  # imported when main runs
+    light = subprocess.run([sys.executable, "-c", "import sys, cable_ocp.entry; "
+                            f"print([m for m in {heavy!r} if m in sys.modules])"],
+                           capture_output=True, text=True, timeout=TIMEOUT, check=True)  # fmt: skip
+    assert light.stdout.strip() == "[]"
+
+
+@pytest.mark.skipif(os.name != "posix", reason="SIGINT")
+@pytest.mark.parametrize("module", ["numpy", "casadi", "cable_ocp.cli.arguments"])
+def test_ctrl_c_during_the_imports_exits_130_in_one_line(module):
+    run = subprocess.run([sys.executable, "-c", SIGINT_IN_THE_IMPORTS, module, "scenes"],
+                         capture_output=True, text=True, timeout=TIMEOUT)  # fmt: skip
+    assert run.returncode == 130, run.stderr
+    assert run.stderr == "cable-ocp: interrupted\n" and run.stdout == ""
+
+
+@pytest.mark.skipif(os.name != "posix", reason="SIGINT")
+def test_ctrl_c_right_after_the_script_starts_is_no_traceback(tmp_path):
+    """The installed script, interrupted 0.2 s in: in its imports or its first work."""
+    script = Path(sys.executable).with_name("cable-ocp")
+    if not script.is_file():
+        pytest.skip("the cable-ocp script is not installed beside this Python")
+    out = tmp_path / "run"
+    process = subprocess.Popen([str(script), "simulate", str(MODELS / "hanging.toml"), "--quiet",
+                                "--out", str(out)], stderr=subprocess.PIPE, text=True)  # fmt: skip
+    time.sleep(0.2)
+    process.send_signal(signal.SIGINT)
+    stderr = process.communicate(timeout=TIMEOUT)[1]
+    assert process.returncode == 130, stderr
+    assert "Traceback" not in stderr and stderr.strip().endswith("interrupted")
+    assert sorted(p.name for p in tmp_path.iterdir()) == []
+
+
+@pytest.mark.skipif(os.name != "posix", reason="SIGTERM")
+def test_sigterm_during_a_solve_is_an_interrupt_leaving_nothing(tmp_path):
+    out = tmp_path / "run"
+    command = ["optimize", str(MODELS / "small_tow.toml"), *SMALL, "--solver", "ipopt", "--out",
+               str(out)]  # fmt: skip
+    code, stderr = _interrupt_when(command, "ipopt iter", number=signal.SIGTERM)
+    assert code == 143, stderr
+    assert "Traceback" not in stderr and "interrupted" in stderr and "failed" not in stderr
+    assert sorted(p.name for p in tmp_path.iterdir()) == []  # no folder, lock or scratch
+
+
+@pytest.mark.skipif(os.name != "posix", reason="SIGTERM")
+@pytest.mark.parametrize("at", [1, 8])
+def test_sigterm_while_a_run_is_written_is_held_to_its_end(tmp_path, at):
+    """SIGTERM goes where SIGINT goes: held by the write (which it hung), then an interrupt."""
+    out = tmp_path / "run"
+    command = ["simulate", str(MODELS / "hanging.toml"), "--set", "numerics.duration=2.0",
+               "--quiet", "--out", str(out)]  # fmt: skip
+    child = SIGINT_IN_THE_WRITE.replace("AT", str(at)).replace("SIGINT", "SIGTERM")
+    child += f"from cable_ocp.entry import main\nsys.exit(main({command!r}))"
+    run = subprocess.run([sys.executable, "-c", child], capture_output=True, text=True,
+                         timeout=WRITE_TIMEOUT)  # fmt: skip
+    assert run.returncode == 143, run.stderr
+    assert "interrupted" in run.stderr and "Traceback" not in run.stderr
+    assert sorted(p.name for p in tmp_path.iterdir()) == []

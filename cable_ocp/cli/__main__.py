@@ -2,6 +2,6 @@
 
 import sys
 
-from cable_ocp.cli import main
+from cable_ocp.entry import main
 
 sys.exit(main())
