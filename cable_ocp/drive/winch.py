@@ -15,6 +15,8 @@ from collections.abc import Callable
 
 import numpy as np
 
+from cable_ocp.scene.rules import finite_array
+
 WinchAngleFunction = Callable[..., tuple[np.ndarray, np.ndarray, np.ndarray]]
 PROFILE_SAMPLES = 2001  # samples of a profile where its largest acceleration is looked for
 SHORTEST_SETTLE = 0.1  # s, the least time constant of a winch brought to rest
@@ -56,21 +58,8 @@ def check_angle(angle: WinchAngleFunction) -> None:
         text = text if len(text) <= 60 else text[:57] + "..."
         raise ValueError(f"winch: the function returned {type(values).__name__} {text}; {wanted}")
     for name, value in zip(("phi", "phi'", "phi''"), values, strict=True):
-        try:
-            value = np.asarray(value, dtype=float)
-        except (TypeError, ValueError):
-            raise ValueError(
-                f"winch: the function's {name} is {type(value).__name__}, not numbers; {wanted}"
-            ) from None
-        if value.shape != t.shape:
-            raise ValueError(
-                f"winch: the function's {name} has shape {value.shape} for t of shape "
-                f"{t.shape}; {wanted}"
-            )
-        if not np.all(np.isfinite(value)):
-            raise ValueError(
-                f"winch: the function's {name} at t = 0 s is {value[0]}: {wanted}, finite"
-            )
+        finite_array(value, f"winch: the function's {name}", t.shape, "t",
+                     lambda k: f" at t = {t[k]:g} s", wanted)  # fmt: skip
 
 
 def coming_to_rest(angle, rate, acceleration, tau, settle: float):

@@ -49,6 +49,7 @@ class AxialChoice:
     Attributes
     ----------
     elastic : bool
+        Whether the scene's rope stretches along its axis (else it is rigid, inextensible).
     mode : str
         The scene's ``model.axial``: "rigid", "elastic" or "auto".
     period : float, s

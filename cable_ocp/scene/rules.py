@@ -14,8 +14,11 @@ from __future__ import annotations
 
 import math
 import numbers
+from collections.abc import Callable
 from dataclasses import dataclass
 from typing import Any
+
+import numpy as np
 
 # The kinds whose values FieldRule.fault checks (a scene's other kinds, path, vec3, section and
 # tuple, are checked by the scene's schema, each number of a vec3 by fault as a float).
@@ -156,3 +159,44 @@ def _number_fault(value: Any, integer: bool, rule: FieldRule) -> Fault | None:
         return Fault("finite", "finite")
     broken = rule._broken(value)
     return None if broken is None else Fault("range", broken)
+
+
+def finite_array(
+    value: Any,
+    name: str,
+    shape: tuple[int, ...],
+    of: str,
+    at: Callable[[int], str] = lambda k: f"[{k}]",
+    advice: str = "",
+) -> np.ndarray:
+    """``value`` as a float array of ``shape``, every value finite; else a ValueError naming it.
+
+    The check of an array handed to the API (a state, a winch function's angles), as
+    :meth:`FieldRule.fault` is of a field.
+
+    Parameters
+    ----------
+    value : array-like
+    name : str
+        What it is, as the message starts (``initial_state``).
+    shape : tuple of int
+        The shape it must have.
+    of : str
+        What gives that shape (``the model's state``, ``t``).
+    at : callable
+        Index ``k`` (of the flattened array) -> where that value sits, for the message.
+    advice : str
+        Appended to every message after ``"; "`` (what a right value is).
+    """
+    tail = f"; {advice}" if advice else ""
+    try:
+        values = np.asarray(value, dtype=float)
+    except (TypeError, ValueError):
+        raise ValueError(f"{name} is {type(value).__name__}, not numbers{tail}") from None
+    if values.shape != shape:
+        raise ValueError(f"{name} has shape {values.shape} for {of} of shape {shape}{tail}")
+    finite = np.isfinite(values).ravel()
+    if not finite.all():
+        k = int(np.argmin(finite))
+        raise ValueError(f"{name}{at(k)} is {values.ravel()[k]}, not finite{tail}")
+    return values

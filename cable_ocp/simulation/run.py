@@ -9,6 +9,7 @@ from cable_ocp.drive.drive import Drive
 from cable_ocp.model.cable import CableModel
 from cable_ocp.model.layout import INPUTS
 from cable_ocp.scene.given import scene_given
+from cable_ocp.scene.rules import finite_array
 from cable_ocp.simulation.budget import check_simulation_memory
 from cable_ocp.simulation.integrate import TIME_BLOCK, integrate, step_times
 from cable_ocp.simulation.landing_reference import reference_error
@@ -107,20 +108,7 @@ def check_rod(
 
 def checked_state(state, size: int) -> np.ndarray:
     """``state`` as a float vector of ``size`` finite values, or ValueError naming what is wrong."""
-    try:
-        values = np.asarray(state, dtype=float)
-    except (TypeError, ValueError):
-        raise ValueError(
-            f"initial_state: expected {size} numbers, got {type(state).__name__}"
-        ) from None
-    if values.shape != (size,):
-        raise ValueError(
-            f"initial_state: expected shape ({size},) (the model's state_size), got {values.shape}"
-        )
-    if not np.isfinite(values).all():
-        k = int(np.argmin(np.isfinite(values)))
-        raise ValueError(f"initial_state[{k}] = {values[k]}: must be finite")
-    return values
+    return finite_array(state, "initial_state", (size,), "the model's state")
 
 
 def joints_and_tensions(
