@@ -15,7 +15,9 @@ from __future__ import annotations
 import signal
 import sys
 
-INTERRUPTED, TERMINATED = 130, 143  # exit codes: 128 + the signal's number
+# Exit codes of an interrupted command, 128 + the signal's number as a shell reports it.
+INTERRUPTED = 128 + signal.SIGINT  # 130
+TERMINATED = 128 + signal.SIGTERM  # 143
 
 
 def main(argv: list[str] | None = None) -> int:

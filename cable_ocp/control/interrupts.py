@@ -6,7 +6,8 @@ QP swallows it), so a solve watches SIGINT itself: :func:`keeping_interrupts` re
 re-raises it as KeyboardInterrupt when the solve ends (or turns the RuntimeError it caused into
 one, or the SystemError of a CasADi result returned with the interrupt still set), and
 :func:`check` lets a solver's own loop stop at once. The handler is only watched from the main
-thread (a Dask worker's solve cannot be interrupted this way anyway).
+thread (a Dask worker's solve cannot be interrupted this way anyway). The command line hands a
+SIGTERM to SIGINT's handler of the moment (:mod:`cable_ocp.entry`), so it is watched the same way.
 
 A test interrupts at a known point, never after a delay: with ``CABLE_OCP_INTERRUPT_AT=POINT``
 in its environment, the process sends itself one SIGINT the first time it passes
