@@ -87,6 +87,76 @@ def reduced_elements(scene) -> int:
     return min(scene.model.elements, max(REDUCED_ELEMENTS, by_length))
 
 
+def model_elements(scene, elements: int | None) -> tuple[int, list[str]]:
+    """The open loop's model elements: those given, else :func:`reduced_elements`, and how.
+
+    Returns
+    -------
+    (int, list of str)
+        The elements and the phrases that say what was derived (none when they were given).
+    """
+    if elements is not None:
+        return elements, []
+    elements = reduced_elements(scene)
+    return elements, [f"reduced model of {elements} elements"]
+
+
+def model_step(
+    scene,
+    elements: int,
+    step: float | None,
+    unit: float | None,
+    cap: float,
+    compiled: bool,
+    name: str,
+    what: str = "at",
+) -> tuple[float, list[str]]:
+    """The RK4 step of a reduced model (the open loop's or the controller's), and how.
+
+    One derivation for the three resolvers (``optimize``'s two transcriptions and the closed
+    loop): the model's RK4 limit along the scene's locked run (:func:`run_limit`); a ``step``
+    given is refused above it (:func:`check_step`, naming the setting ``name``); an unset one is
+    the largest whole fraction of ``unit`` (s) within :data:`STABLE_SHARE` of it, at most ``cap``
+    (s) (:func:`step_within`).
+
+    Parameters
+    ----------
+    scene : Scene
+        The scene whose locked run is linearised (the open loop's, heave compensated).
+    elements : int
+        Elements of the model.
+    step : float or None, s
+        The step given, or None to derive it.
+    unit : float or None, s
+        What the derived step divides (a control interval, the duration, the sample); unused
+        when ``step`` is given.
+    cap : float, s
+        The largest step derived.
+    compiled : bool
+        Run the locked run compiled.
+    name : str
+        The setting, as an error names it (``"step"``, ``"model.step"``).
+    what : str
+        How the phrase introduces the step (``"at"``: "at h = 0.5 s (...)").
+
+    Returns
+    -------
+    (float, list of str)
+        The step (s) and the phrases that say how it was derived (none when it was given).
+
+    Raises
+    ------
+    ValueError
+        A step given above the model's RK4 limit along the locked run.
+    """
+    limit, at = run_limit(scene, elements, scene.numerics.duration, compiled)
+    if step is not None:
+        check_step(step, limit, name, "leave it unset to derive one, or give a smaller step")
+        return step, []
+    step = step_within(limit, unit, cap)
+    return step, [StepChoice(step, limit, at).describe(what)]
+
+
 def control_intervals(duration: float) -> int:
     """Hermite intervals of about :data:`CONTROL_INTERVAL` over ``duration`` (s)."""
     return max(1, round(duration / CONTROL_INTERVAL))

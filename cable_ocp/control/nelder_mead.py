@@ -75,21 +75,13 @@ def resolved_nelder_mead(scene, settings: OcpSettings, compiled: bool | None = N
             "GridSettings.control and intervals unset (or take a shooting solver)"
         )
     compiled = settings.compiled if compiled is None else compiled
-    duration = scene.numerics.duration
-    notes = []
-    elements = settings.elements or defaults.reduced_elements(scene)
-    if settings.elements is None:
-        notes.append(f"reduced model of {elements} elements")
+    elements, notes = defaults.model_elements(scene, settings.elements)
     open_loop, _ = WinchProblem.open_loop_scene(scene)
-    limit, at = defaults.run_limit(open_loop, elements, duration, compiled)
-    if settings.step is not None:
-        defaults.check_step(
-            settings.step, limit, "step", "leave it unset to derive one, or give a smaller step"
-        )
-        step = settings.step
-    else:
-        step = defaults.step_within(limit, duration, defaults.STEP_CAP)
-        notes.append(defaults.StepChoice(step, limit, at).describe("at"))
+    step, derived = defaults.model_step(
+        open_loop, elements, settings.step, scene.numerics.duration, defaults.STEP_CAP, compiled,
+        "step",
+    )  # fmt: skip
+    notes += derived
     text = "derived settings: " + ", ".join(notes) if notes else ""
     return replace(settings, model=ModelSettings(elements, step)), text
 

@@ -104,27 +104,12 @@ def resolved(scene, settings: OcpSettings, compiled: bool | None = None):
     """
     compiled = settings.compiled if compiled is None else compiled
     duration = scene.numerics.duration
-    notes = []
-    elements = settings.elements or defaults.reduced_elements(scene)
-    if settings.elements is None:
-        notes.append(f"reduced model of {elements} elements")
+    elements, notes = defaults.model_elements(scene, settings.elements)
     if settings.step is not None and settings.intervals is not None:
         steps_per_interval(duration, settings.step, settings.intervals)
+    unit = None  # what a derived step divides: a control interval
     if settings.step is not None:
         _check_memory(scene, settings, elements, settings.step, settings.intervals)
-    open_loop, _ = WinchProblem.open_loop_scene(scene)
-    limit, at = defaults.run_limit(open_loop, elements, duration, compiled)
-    choice = None
-    if settings.step is not None:
-        defaults.check_step(
-            settings.step, limit, "step",
-            "leave it unset to derive one, or give a smaller step",
-        )  # fmt: skip
-        steps_per_interval(duration, settings.step, 1)
-        step = settings.step
-        intervals = settings.intervals or defaults.intervals_for(
-            duration, step, defaults.control_intervals(duration)
-        )
     else:
         # Nodes on the scene's step ends too: the Hermite acceleration jumps there, and a jump
         # inside an RK4 step of the verifying model costs its bonds (1e-4 m, not converging
@@ -132,9 +117,17 @@ def resolved(scene, settings: OcpSettings, compiled: bool | None = None):
         # of about 5 s fits the scene's steps, the full model's step is shortened to fit it
         # (full_model_scene).
         intervals = settings.intervals or defaults.control_grid(duration, scene.numerics.step)
-        step = defaults.step_within(limit, duration / intervals, defaults.STEP_CAP)
-        choice = defaults.StepChoice(step, limit, at)
-        notes.append(choice.describe("at"))
+        unit = duration / intervals
+    open_loop, _ = WinchProblem.open_loop_scene(scene)
+    step, derived = defaults.model_step(
+        open_loop, elements, settings.step, unit, defaults.STEP_CAP, compiled, "step"
+    )
+    notes += derived
+    if settings.step is not None:
+        steps_per_interval(duration, step, 1)
+        intervals = settings.intervals or defaults.intervals_for(
+            duration, step, defaults.control_intervals(duration)
+        )
     if settings.intervals is None:
         notes.append(f"{intervals} intervals of {duration / intervals:.3g} s")
     _check_memory(scene, settings, elements, step, intervals)

@@ -187,15 +187,11 @@ class MpcSettings:
                 f"model.elements = {elements}: the controller's model needs 1 .. "
                 f"model.elements = {scene.model.elements} elements of the scene"
             )
-        limit, at = defaults.run_limit(scene, elements, duration, compiled)
-        if step is None:
-            step = defaults.step_within(limit, sample, CONTROLLER_STEP_CAP)
-            choice = defaults.StepChoice(step, limit, at)
-            notes.append(choice.describe(f"controller of {elements} elements at"))
-        else:
-            defaults.check_step(
-                step, limit, "model.step", "leave it unset to derive one, or give a smaller step"
-            )
+        step, derived = defaults.model_step(
+            scene, elements, step, sample, CONTROLLER_STEP_CAP, compiled, "model.step",
+            f"controller of {elements} elements at",
+        )  # fmt: skip
+        notes += derived
         solver, solver_settings = solver_of(self.solver, self.solver_settings, closed_loop=True)
         if self.solver_settings is None:
             solver_settings = solver.closed_loop_settings
