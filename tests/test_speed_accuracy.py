@@ -82,3 +82,22 @@ def test_files_are_written(quick):
     for study in result.scenes:
         assert f"## {study.scene_name}" in text
     assert result.ocp[0].status in text
+
+
+def test_an_ocp_setting_takes_its_settings_and_options_from_the_registry():
+    """A shooting solver is capped in iterations and refined; the knots' search in evaluations."""
+    from cable_ocp.studies.speed_accuracy.plan import OcpSetting
+
+    shooting = OcpSetting("gauss-newton", 4, 0.5, 7, refinements=2)
+    settings = shooting.settings(10)
+    assert settings.solver == "gauss-newton" and settings.solver_settings.max_iter == 7
+    assert settings.grid.intervals == 10 and settings.model.elements == 4
+    assert shooting.options == {"refinements": 2}
+    assert shooting.label == "gauss-newton, n = 4, h = 0.5 s, <= 7 iterations, 2 refinements"
+
+    search = OcpSetting("nelder-mead", 3, 0.5, 50, refinements=2, compiled=False)
+    settings = search.settings(10)
+    assert settings.solver_settings.max_evaluations == 50 and settings.grid.intervals is None
+    assert not settings.transcription.compiled
+    assert search.options == {}
+    assert search.label == "nelder-mead, n = 3, h = 0.5 s, <= 50 evaluations"

@@ -30,9 +30,8 @@ class OcpPoint(SolveRecord):
 
 def ocp_point(scene, setting: OcpSetting, intervals: int, quiet: bool = True) -> OcpPoint:
     """Solve the OCP with one setting; Omega is verified on the scene's own model."""
-    kwargs = {"refinements": setting.refinements} if setting.method == "ipopt" else {}
-    settings = setting.settings(intervals)
-    result, cpu, _ = timed(lambda: optimize(scene, settings=settings, quiet=quiet, **kwargs))
+    settings, options = setting.settings(intervals), setting.options
+    result, cpu, _ = timed(lambda: optimize(scene, settings=settings, quiet=quiet, **options))
     return OcpPoint(setting=setting, cpu_time=cpu, **solve_figures(result))
 
 

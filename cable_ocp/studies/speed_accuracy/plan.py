@@ -4,15 +4,13 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
-from cable_ocp.control.nelder_mead import NelderMeadSettings
-from cable_ocp.control.ocp import IpoptSettings
 from cable_ocp.control.settings import (
     GridSettings,
     ModelSettings,
     OcpSettings,
     TranscriptionSettings,
 )
-from cable_ocp.control.solvers import ocp_settings
+from cable_ocp.control.solvers import Solver, ocp_settings, solver_named
 
 TOLERANCES = (0.01, 0.1)  # m, the accuracy targets named in the report
 
@@ -23,21 +21,22 @@ class OcpSetting:
 
     Attributes
     ----------
-    method : str
-        ``"ipopt"`` or ``"nelder-mead"``.
+    solver : str
+        A solver of the registry (:data:`cable_ocp.control.solvers.SOLVERS`): ``"ipopt"`` or
+        ``"nelder-mead"`` here.
     elements : int
         Elements of the optimisation model.
     step : float, s
         RK4 step of the optimisation model.
     limit : int
-        IPOPT iterations per solve, or Nelder-Mead evaluations.
+        Iterations per solve of a shooting solver, or evaluations of the knots' search.
     refinements : int
-        Model-correction solves after the first (IPOPT only).
+        Model-correction solves after the first (a transcription that corrects its model only).
     compiled : bool
         Optimisation model compiled to C.
     """
 
-    method: str
+    solver: str
     elements: int
     step: float
     limit: int
@@ -47,22 +46,39 @@ class OcpSetting:
     @property
     def label(self) -> str:
         """Short name for tables and legends."""
-        cap = "iterations" if self.method == "ipopt" else "evaluations"
+        entry = solver_named(self.solver)
         plural = "" if self.refinements == 1 else "s"
-        more = f", {self.refinements} refinement{plural}" if self.method == "ipopt" else ""
-        head = f"{self.method}, n = {self.elements}, h = {self.step:g} s"
-        return f"{head}, <= {self.limit} {cap}{more}"
+        more = f", {self.refinements} refinement{plural}" if _corrects(entry) else ""
+        head = f"{self.solver}, n = {self.elements}, h = {self.step:g} s"
+        return f"{head}, <= {self.limit} {_budget(entry)[1]}{more}"
+
+    @property
+    def options(self) -> dict:
+        """What ``optimize`` takes beside the settings: the refinements, where they apply."""
+        return {"refinements": self.refinements} if _corrects(solver_named(self.solver)) else {}
 
     def settings(self, intervals: int) -> OcpSettings:
-        """The optimiser's settings (``intervals``: IPOPT's shooting intervals)."""
+        """The optimiser's settings (``intervals``: a shooting solver's shooting intervals)."""
+        entry = solver_named(self.solver)
         model = ModelSettings(self.elements, self.step)
         transcription = TranscriptionSettings(compiled=self.compiled)
-        if self.method == "ipopt":
-            grid = GridSettings(intervals=intervals)
-            return ocp_settings("ipopt", IpoptSettings(max_iter=self.limit), model, grid,
-                                transcription)  # fmt: skip
-        search = NelderMeadSettings(max_evaluations=self.limit)
-        return ocp_settings("nelder-mead", search, model, None, transcription)
+        grid = GridSettings(intervals=intervals) if entry.shootings else None
+        own = entry.settings(**{_budget(entry)[0]: self.limit})
+        return ocp_settings(entry.name, own, model, grid, transcription)
+
+
+def _corrects(entry: Solver) -> bool:
+    """Whether ``optimize`` refines the solver's answer by model correction (``refinements``)."""
+    return entry.transcription.model_correction
+
+
+def _budget(entry: Solver) -> tuple[str, str]:
+    """The field of a solver's settings that caps a solve, and what it counts.
+
+    A shooting solver counts iterations; the knots' search (no shooting) counts evaluations,
+    one simulation each (the registry's ``shootings``).
+    """
+    return ("max_iter", "iterations") if entry.shootings else ("max_evaluations", "evaluations")
 
 
 @dataclass(frozen=True)

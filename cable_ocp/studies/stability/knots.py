@@ -12,7 +12,7 @@ from cable_ocp.control.nelder_mead import NelderMeadSettings
 from cable_ocp.control.ocp import IpoptSettings
 from cable_ocp.control.optimization import optimize
 from cable_ocp.control.settings import GridSettings, ModelSettings, TranscriptionSettings
-from cable_ocp.control.solvers import ocp_settings
+from cable_ocp.control.solvers import ocp_settings, solver_named
 from cable_ocp.studies.figures import finished_chart
 from cable_ocp.studies.solve_record import SolveRecord, solve_figures
 from cable_ocp.studies.stability.markdown import table_cell
@@ -20,7 +20,7 @@ from cable_ocp.studies.stability.markdown import table_cell
 
 @dataclass(frozen=True)
 class KnotRun(SolveRecord):
-    """One optimisation of the knots study: its knots and method beside the run's figures.
+    """One optimisation of the knots study: its knots and solver beside the run's figures.
 
     The figures are a :class:`~cable_ocp.studies.solve_record.SolveRecord`'s.
 
@@ -28,16 +28,29 @@ class KnotRun(SolveRecord):
     ----------
     knots : int
         The spline's number of knots p.
-    method : str
-        ``"ipopt"``, ``"ipopt + correction"`` or ``"nelder-mead"``.
+    solver : str
+        The solver of the registry that ran (:data:`cable_ocp.control.solvers.SOLVERS`).
+    corrected : bool
+        Whether model-correction solves against the scene's model followed the first solve.
     history : tuple of float, m
         The result's ``history``: Nelder-Mead's best Omega after each evaluation, IPOPT's Omega
         per iteration.
     """
 
     knots: int
-    method: str
+    solver: str
+    corrected: bool
     history: tuple[float, ...]
+
+    @property
+    def method(self) -> str:
+        """The run as the table names it: the solver, ``+ correction`` when corrected."""
+        return f"{self.solver} + correction" if self.corrected else self.solver
+
+    @property
+    def searched(self) -> bool:
+        """Its history is a best Omega per evaluation: the knots' search, which does not shoot."""
+        return bool(self.history) and not solver_named(self.solver).shootings
 
     def evaluations_to_within(self, fraction: float) -> int:
         """Evaluations until the best Omega came within ``fraction`` of its last value."""
@@ -99,8 +112,7 @@ class KnotsComparison:
             "|---:|---|---:|---:|---|---|---:|---:|---:|---:|",
         ]
         for r in self.runs:
-            searching = r.method == "nelder-mead" and r.history
-            within = r.evaluations_to_within(self.progress_fraction) if searching else "-"
+            within = r.evaluations_to_within(self.progress_fraction) if r.searched else "-"
             lines.append(
                 f"| {r.knots} | {r.method} | {r.omega:.3g} | {r.omega_model:.3g} | {r.success} "
                 f"| {table_cell(r.status)} | {r.iterations} | {r.evaluations} | {within} "
@@ -117,20 +129,21 @@ class KnotsComparison:
         knots = sorted({r.knots for r in self.runs})
         colours = dict(zip(knots, plt.cm.viridis(np.linspace(0, 0.85, len(knots))), strict=True))
         for r in self.runs:
-            if r.method == "nelder-mead" and r.history:
+            entry = solver_named(r.solver)
+            if r.searched:
                 history.semilogy(
                     np.arange(1, len(r.history) + 1),
                     r.history,
                     color=colours[r.knots],
-                    label=f"Nelder-Mead, p = {r.knots}",
+                    label=f"{entry.label}, p = {r.knots}",
                 )
-            elif r.method == "ipopt" and math.isfinite(r.omega_model):
+            elif entry.shootings and not r.corrected and math.isfinite(r.omega_model):
                 history.axhline(
                     r.omega_model,
                     color=colours[r.knots],
                     ls="--",
                     lw=1,
-                    label=f"IPOPT, p = {r.knots} (final)",
+                    label=f"{entry.label}, p = {r.knots} (final)",
                 )
         history.set_xlabel("objective evaluations")
         history.set_ylabel("best Omega on the optimisation model [m]")
@@ -179,9 +192,13 @@ class KnotsComparison:
         return finished_chart(fig, path)
 
 
-def _knot_run(knots: int, method: str, result) -> KnotRun:
+def _knot_run(knots: int, corrected: bool, result) -> KnotRun:
     return KnotRun(
-        knots=knots, method=method, history=tuple(result.history), **solve_figures(result)
+        knots=knots,
+        solver=result.solver,
+        corrected=corrected,
+        history=tuple(result.history),
+        **solve_figures(result),
     )
 
 
@@ -214,14 +231,14 @@ def knots_comparison(
         ipopt = ocp_settings("ipopt", IpoptSettings(max_iter=max_iter), model,
                              GridSettings(control="spline"), transcription)  # fmt: skip
         plain = optimize(local, settings=ipopt, refinements=0, quiet=quiet)
-        runs.append(_knot_run(p, "ipopt", plain))
+        runs.append(_knot_run(p, False, plain))
         if refinements > 0:
             corrected = optimize(local, settings=ipopt, refinements=refinements, quiet=quiet)
-            runs.append(_knot_run(p, "ipopt + correction", corrected))
+            runs.append(_knot_run(p, True, corrected))
         search = NelderMeadSettings(max_evaluations=max_evaluations)
         searched = optimize(local, "nelder-mead", search, model=model, transcription=transcription,
                             quiet=quiet)  # fmt: skip
-        runs.append(_knot_run(p, "nelder-mead", searched))
+        runs.append(_knot_run(p, False, searched))
     return KnotsComparison(
         scene_name=scene.name,
         duration=scene.numerics.duration,
