@@ -6,7 +6,7 @@ writes case files and assembles the Dataset, ``runner`` fans the cases out on Da
 ``cable_ocp.cli.sweep``.
 """
 
-from importlib import import_module
+from cable_ocp.lazy import lazy_names
 
 # Loaded on first use, so that ``cable-ocp --help`` does not import Dask and xarray.
 _HOMES = {
@@ -14,9 +14,6 @@ _HOMES = {
     "run_sweep": "runner", "open_sweep": "store", "sweep_benchmark": "benchmark",
 }  # fmt: skip
 __all__ = sorted(_HOMES)
-
-
-def __getattr__(name: str):
-    if name in _HOMES:
-        return getattr(import_module(f"cable_ocp.sweep.{_HOMES[name]}"), name)
-    raise AttributeError(f"module 'cable_ocp.sweep' has no attribute {name!r}")
+__getattr__, __dir__ = lazy_names(
+    globals(), {name: f"cable_ocp.sweep.{module}" for name, module in _HOMES.items()}
+)

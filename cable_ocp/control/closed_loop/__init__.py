@@ -25,8 +25,9 @@ defaults without loading the solvers.
 
 from __future__ import annotations
 
-from importlib import import_module
 from typing import TYPE_CHECKING
+
+from cable_ocp.lazy import lazy_names
 
 if TYPE_CHECKING:  # what __getattr__ imports, for type checkers and the import graph
     from cable_ocp.control.closed_loop.command import WinchCommand
@@ -58,9 +59,4 @@ __all__ = [
     "RecedingHorizon", "ReferenceRuns", "SolveLog", "WinchCommand", "loop_parts", "mpc",
     "reference_runs",
 ]  # fmt: skip
-
-
-def __getattr__(name: str):
-    if name in _SOURCES:
-        return getattr(import_module(_SOURCES[name]), name)
-    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
+__getattr__, __dir__ = lazy_names(globals(), _SOURCES)
