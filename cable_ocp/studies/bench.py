@@ -33,9 +33,10 @@ from pathlib import Path
 
 import numpy as np
 
-from cable_ocp.control.ocp import IpoptSettings, control_of
+from cable_ocp.control.ipopt import IpoptSettings
 from cable_ocp.control.optimization import OcpResult, optimize
 from cable_ocp.control.settings import GridSettings, ModelSettings, TranscriptionSettings
+from cable_ocp.control.shooting import control_of
 from cable_ocp.control.solvers import DEFAULT_SOLVER, SOLVERS
 from cable_ocp.drive.drive import Drive
 from cable_ocp.model.cable import CableModel

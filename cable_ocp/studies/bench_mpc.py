@@ -20,7 +20,7 @@ from cable_ocp.control.closed_loop.loop import mpc
 from cable_ocp.control.closed_loop.references import ReferenceRuns, reference_runs
 from cable_ocp.control.closed_loop.result import MpcResult
 from cable_ocp.control.closed_loop.settings import MpcSettings
-from cable_ocp.control.ocp import IpoptSettings
+from cable_ocp.control.ipopt import IpoptSettings
 from cable_ocp.control.settings import ModelSettings
 from cable_ocp.scene.schema import load_scene
 

@@ -8,8 +8,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from cable_ocp.control.ipopt import IpoptSettings
 from cable_ocp.control.nelder_mead import NelderMeadSettings
-from cable_ocp.control.ocp import IpoptSettings
 from cable_ocp.control.optimization import optimize
 from cable_ocp.control.settings import GridSettings, ModelSettings, TranscriptionSettings
 from cable_ocp.control.solvers import ocp_settings, solver_named
