@@ -9,6 +9,9 @@ from __future__ import annotations
 import argparse
 import math
 from collections.abc import Callable
+from pathlib import Path
+
+from cable_ocp.scene.bundled import scene_argument
 
 try:
     import tomllib
@@ -23,6 +26,37 @@ OUT_HELP = (
 SCENE_HELP = "the scene: a TOML file, or a bundled scene's name (cable-ocp scenes lists them)"
 ANIMATE_HELP = "also write animation.gif: the cable, the end's path and the seabed over time"
 INTERPRETED_HELP = "the interpreted model (default: compiled to C, the library cached on disk)"
+
+
+def add_command(
+    commands, name: str, summary: str, description: str | None = None, scene: bool = True
+) -> argparse.ArgumentParser:
+    """A command's parser, each option's default in its help (:class:`DefaultsShown`).
+
+    Parameters
+    ----------
+    commands : argparse subparsers
+        Those of ``cable-ocp``.
+    name, summary : str
+        The command and its line in ``cable-ocp --help``.
+    description : str, optional
+        What ``cable-ocp NAME --help`` says beside the options.
+    scene : bool
+        The command takes a SCENE and a required ``--out`` (else it adds its own arguments).
+    """
+    parser = commands.add_parser(
+        name, formatter_class=DefaultsShown, help=summary, description=description
+    )
+    if scene:
+        parser.add_argument("scene", type=scene_argument, help=SCENE_HELP)
+        parser.add_argument("--out", type=Path, required=True, help=OUT_HELP)
+    return parser
+
+
+def add_model_options(parser: argparse.ArgumentParser, elements: str, step: str) -> None:
+    """Add ``--elements`` and ``--step``, a reduced model's ``ModelSettings``, with their help."""
+    parser.add_argument("--elements", type=integer(1, 1000), help=elements)
+    parser.add_argument("--step", type=positive, help=step)
 
 
 def add_set(parser: argparse.ArgumentParser, example: str, what: str = "a scene field") -> None:

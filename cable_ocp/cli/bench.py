@@ -5,7 +5,7 @@ from __future__ import annotations
 import argparse
 from pathlib import Path
 
-from cable_ocp.cli.arguments import DefaultsShown, integer
+from cable_ocp.cli.arguments import add_command, integer
 from cable_ocp.cli.exits import SUCCESS
 from cable_ocp.cli.files import results_folder
 from cable_ocp.scene.bundled import models_dir
@@ -16,10 +16,11 @@ NAMED_ONLY = ("robustness", "lowering")  # long: run only when --only names them
 
 def add_bench_command(commands) -> None:
     """Add ``bench`` to the subparsers of ``cable-ocp``."""
-    parser = commands.add_parser(
+    parser = add_command(
+        commands,
         "bench",
-        formatter_class=DefaultsShown,
-        help="speed benchmarks against baselines (long: see bench --help)",
+        "speed benchmarks against baselines (long: see bench --help)",
+        scene=False,
         description="Speed of the toolkit against its baselines, each part comparing within "
         "one run: rk4 (the simulation loop, interpreted against compiled), simulate (the "
         "command end to end), moordyn (MoorDyn at the same accuracy), payout (a line paid out "

@@ -5,7 +5,7 @@ from __future__ import annotations
 import argparse
 from pathlib import Path
 
-from cable_ocp.cli.arguments import OUT_HELP, DefaultsShown, parse_overrides
+from cable_ocp.cli.arguments import OUT_HELP, add_command, parse_overrides
 from cable_ocp.cli.exits import SUCCESS
 from cable_ocp.cli.files import results_folder
 from cable_ocp.cli.optimiser_options import (
@@ -23,10 +23,9 @@ SIMPLEX = "nelder-mead"  # the paper's method, which compare runs beside the sho
 
 def add_compare_command(commands) -> None:
     """Add ``compare`` to the subparsers of ``cable-ocp``."""
-    parser = commands.add_parser(
-        "compare", formatter_class=DefaultsShown,
-        help="a shooting solver against Nelder-Mead in one table",
-    )  # fmt: skip
+    parser = add_command(
+        commands, "compare", "a shooting solver against Nelder-Mead in one table", scene=False
+    )
     parser.add_argument("scenes", type=scene_argument, nargs="+",
                         help="scene files (TOML) or bundled scenes' names")  # fmt: skip
     parser.add_argument("--out", type=Path, required=True, help=OUT_HELP)

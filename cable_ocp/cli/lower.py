@@ -6,10 +6,9 @@ import argparse
 import math
 from pathlib import Path
 
-from cable_ocp.cli.arguments import OUT_HELP, SCENE_HELP, DefaultsShown, add_set, parse_overrides
+from cable_ocp.cli.arguments import add_command, add_set, parse_overrides
 from cable_ocp.cli.exits import SUCCESS, failed
 from cable_ocp.lowering.landing import HOVER
-from cable_ocp.scene.bundled import scene_argument
 
 # Units of the figures in summary.json.
 UNITS = {
@@ -25,11 +24,11 @@ UNITS = {
 
 def add_lower_command(subparsers) -> None:
     """Add the ``lower`` command to the ``cable-ocp`` sub-command parsers."""
-    parser = subparsers.add_parser(
+    parser = add_command(
+        subparsers,
         "lower",
-        formatter_class=DefaultsShown,
-        help="land a [lowering] scene's load in open loop and hold it by the closed loop",
-        description="Lower the load of SCENE (a scene with [lowering] and [winch.line]) onto its "
+        "land a [lowering] scene's load in open loop and hold it by the closed loop",
+        "Lower the load of SCENE (a scene with [lowering] and [winch.line]) onto its "
         "target: the reference descent simulated on the scene's own model, the heave fed "
         "forward on the approach, the landing line corrected until the verified run lands; "
         "every constraint measured on that run. Then the landed line held above the target by "
@@ -38,8 +37,6 @@ def add_lower_command(subparsers) -> None:
         "the target): optimised (optimize, Gauss-Newton) and closed-loop (mpc), each with its "
         "checks and figure.",
     )
-    parser.add_argument("scene", type=scene_argument, help=SCENE_HELP)
-    parser.add_argument("--out", type=Path, required=True, help=OUT_HELP)
     add_set(parser, "lowering.land_time=1000")
     parser.add_argument("--no-hold", action="store_true", help="leave out the closed-loop hold")
     parser.add_argument(

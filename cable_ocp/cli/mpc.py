@@ -7,9 +7,8 @@ from dataclasses import replace
 from pathlib import Path
 
 from cable_ocp.cli.arguments import (
-    OUT_HELP,
-    SCENE_HELP,
-    DefaultsShown,
+    add_command,
+    add_model_options,
     add_set,
     fraction,
     integer,
@@ -20,7 +19,6 @@ from cable_ocp.cli.arguments import (
 from cable_ocp.cli.exits import SUCCESS, failed
 from cable_ocp.control.closed_loop.settings import CLOSED_LOOP_SOLVERS, MpcSettings
 from cable_ocp.control.settings import ModelSettings
-from cable_ocp.scene.bundled import scene_argument
 
 # The open-loop optimum with the heave paid out by eq. 38 knows the heave exactly: an ideal, not
 # a controller, which is why it can beat the closed loop (issue 45).
@@ -33,98 +31,60 @@ IDEAL_NOTE = (
 )
 
 
+# The options that set the MpcSettings field of their name: (argparse type, help).
+SETTINGS_OPTIONS = {
+    "horizon": (positive, "prediction horizon [s] (default: about 20 s, a multiple of "
+                "--interval within the scene's duration)"),
+    "sample": (positive, "time between solves [s] (default: the duration's whole fraction "
+               "nearest 1 s that the plant's steps divide)"),
+    "interval": (positive, "interval of the plan [s] (default: the multiple of --sample nearest "
+                 "5 s)"),
+    "heave_filter": (positive, "time constant of the heave low-pass [s]"),
+    "heave_margin": (fraction, "room kept for the heave feedback, 0..1"),
+    "limiter_band": (positive, "width of the plant's soft limiter at each end of the winch "
+                     "range [rad] (default: 0.5 rad, or a quarter of a narrower range)"),
+    "rate_weight": (weight, "pay-out speed weight [s^2]"),
+}  # fmt: skip
+
+
 def add_mpc_command(subparsers) -> None:
     """Add the ``mpc`` command to the ``cable-ocp`` sub-command parsers."""
-    parser = subparsers.add_parser(
+    parser = add_command(
+        subparsers,
         "mpc",
-        formatter_class=DefaultsShown,
-        help="closed-loop winch control: a receding-horizon OCP driving the scene's model",
-        description="Closed-loop winch control of SCENE: every --sample seconds a receding-"
-        "horizon OCP on a reduced model is solved from the measured state; the scene's own model "
-        "(with its heave, e.g. --set top.heave.amplitude=1 --set top.heave.period=8) is the "
-        "plant. Writes mpc.nc (the run, netCDF), summary.json and figures to --out.",
+        "closed-loop winch control: a receding-horizon OCP driving the scene's model",
+        "Closed-loop winch control of SCENE: every --sample seconds a receding-horizon OCP on a "
+        "reduced model is solved from the measured state; the scene's own model (with its heave, "
+        "e.g. --set top.heave.amplitude=1 --set top.heave.period=8) is the plant. Writes mpc.nc "
+        "(the run, netCDF), summary.json and figures to --out.",
     )
-    parser.add_argument("scene", type=scene_argument, help=SCENE_HELP)
-    parser.add_argument("--out", type=Path, required=True, help=OUT_HELP)
     defaults = MpcSettings()
-    parser.add_argument(
-        "--horizon",
-        type=positive,
-        default=defaults.horizon,
-        help="prediction horizon [s] (default: about 20 s, a multiple of --interval within the "
-        "scene's duration)",
-    )
-    parser.add_argument(
-        "--sample",
-        type=positive,
-        default=defaults.sample,
-        help="time between solves [s] (default: the duration's whole fraction nearest 1 s that "
-        "the plant's steps divide)",
-    )
-    parser.add_argument(
-        "--interval",
-        type=positive,
-        default=defaults.interval,
-        help="interval of the plan [s] (default: the multiple of --sample nearest 5 s)",
-    )
-    parser.add_argument(
-        "--elements",
-        type=integer(1, 1000),
-        help="elements of the controller's reduced model (default: 2)",
-    )
-    parser.add_argument(
-        "--step",
-        type=positive,
-        help="RK4 step of the reduced model [s] (default: the largest whole fraction of --sample "
+    for field, (kind, text) in SETTINGS_OPTIONS.items():
+        parser.add_argument(f"--{field.replace('_', '-')}", type=kind,
+                            default=getattr(defaults, field), help=text)  # fmt: skip
+    add_model_options(
+        parser,
+        elements="elements of the controller's reduced model (default: 2)",
+        step="RK4 step of the reduced model [s] (default: the largest whole fraction of --sample "
         "within 0.7 of the reduced model's RK4 limit along the locked run, at most 1 s)",
     )
     parser.add_argument(
-        "--solver",
-        choices=tuple(CLOSED_LOOP_SOLVERS),
-        default="gauss-newton",
+        "--solver", choices=tuple(CLOSED_LOOP_SOLVERS), default=defaults.solver,
         help="gauss-newton: one Gauss-Newton step per sample (real-time iteration); ipopt: IPOPT",
-    )
+    )  # fmt: skip
     parser.add_argument(
-        "--no-heave-feedback",
-        action="store_true",
+        "--no-heave-feedback", action="store_true",
         help="apply the plan only (no pay-out of the measured heave)",
-    )
+    )  # fmt: skip
     parser.add_argument(
-        "--heave-filter",
-        type=positive,
-        default=defaults.heave_filter,
-        help="time constant of the heave low-pass [s]",
-    )
-    parser.add_argument(
-        "--heave-margin",
-        type=fraction,
-        default=defaults.heave_margin,
-        help="room kept for the heave feedback, 0..1",
-    )
-    parser.add_argument(
-        "--limiter-band",
-        type=positive,
-        default=defaults.limiter_band,
-        help="width of the plant's soft limiter at each end of the winch range [rad] (default: "
-        "0.5 rad, or a quarter of a narrower range)",
-    )
-    parser.add_argument(
-        "--rate-weight",
-        type=weight,
-        default=defaults.rate_weight,
-        help="pay-out speed weight [s^2]",
-    )
-    parser.add_argument(
-        "--max-iter",
-        type=integer(1, 10**6),
+        "--max-iter", type=integer(1, 10**6),
         help="iterations per solve (default: 1 with gauss-newton, the real-time iteration; "
         "IPOPT's own default with ipopt)",
-    )
+    )  # fmt: skip
     parser.add_argument(
-        "--open-loop",
-        action="store_true",
+        "--open-loop", action="store_true",
         help="also optimise open loop (without the heave) and simulate that profile as a reference",
-    )
+    )  # fmt: skip
     add_set(parser, "top.heave.amplitude=1")
     parser.add_argument("--quiet", action="store_true", help="no progress bar")
     parser.set_defaults(run=run_mpc_command)
@@ -141,17 +101,11 @@ def settings_from(args: argparse.Namespace) -> MpcSettings:
     if args.max_iter is not None:
         solver_settings = replace(CLOSED_LOOP_SOLVERS[args.solver], max_iter=args.max_iter)
     return MpcSettings(
-        horizon=args.horizon,
-        sample=args.sample,
-        interval=args.interval,
+        **{field: getattr(args, field) for field in SETTINGS_OPTIONS},
         model=ModelSettings(args.elements, args.step),
         solver=args.solver,
         solver_settings=solver_settings,
         heave_feedback=not args.no_heave_feedback,
-        heave_filter=args.heave_filter,
-        heave_margin=args.heave_margin,
-        limiter_band=args.limiter_band,
-        rate_weight=args.rate_weight,
     )
 
 

@@ -6,7 +6,7 @@ import argparse
 import sys
 import time
 
-from cable_ocp.cli.arguments import add_set, integer, positive
+from cable_ocp.cli.arguments import add_model_options, add_set, integer
 from cable_ocp.control.settings import GridSettings, ModelSettings, OcpSettings
 from cable_ocp.control.solvers import DEFAULT_SOLVER, SOLVERS, Solver, ocp_settings_from
 
@@ -132,14 +132,11 @@ def check_start(scene) -> None:
 def add_optimiser_options(parser: argparse.ArgumentParser) -> None:
     """Add the optimiser's options (each unset by default: ``optimize()``'s own) to a command."""
     # No defaults here: unset options keep optimize()'s (cable_ocp.control.solvers.SOLVERS).
-    parser.add_argument(
-        "--elements",
-        type=integer(1, 1000),
-        help="elements of the optimisation model (default: optimize()'s reduced model; "
+    add_model_options(
+        parser,
+        elements="elements of the optimisation model (default: optimize()'s reduced model; "
         "verification uses the scene's)",
-    )
-    parser.add_argument(
-        "--step", type=positive, help="RK4 step of the optimisation [s] (default: optimize()'s)"
+        step="RK4 step of the optimisation [s] (default: optimize()'s)",
     )
     parser.add_argument(
         "--intervals",

@@ -8,10 +8,8 @@ from pathlib import Path
 
 from cable_ocp.cli.arguments import (
     ANIMATE_HELP,
-    OUT_HELP,
-    SCENE_HELP,
-    DefaultsShown,
     Renamed,
+    add_command,
     integer,
     parse_overrides,
 )
@@ -26,21 +24,16 @@ from cable_ocp.cli.optimiser_options import (
 )
 from cable_ocp.cli.run_folder import EXTRA_UNITS
 from cable_ocp.control.solvers import SOLVERS
-from cable_ocp.scene.bundled import scene_argument
 
 
 def add_optimize_command(commands) -> None:
     """Add ``optimize`` to the subparsers of ``cable-ocp``."""
-    parser = commands.add_parser(
-        "optimize", formatter_class=DefaultsShown, help="optimise the winch angle of a scene"
-    )
-    parser.add_argument("scene", type=scene_argument, help=SCENE_HELP)
+    parser = add_command(commands, "optimize", "optimise the winch angle of a scene")
     parser.add_argument(
         "--method", action=Renamed,
         now="--solver: --solver nelder-mead is the paper's method; shooting is --solver "
         "gauss-newton (the default) or --solver ipopt",
     )  # fmt: skip
-    parser.add_argument("--out", type=Path, required=True, help=OUT_HELP)
     parser.add_argument("--refinements", type=integer(0, 100), default=3,
                         help="model-correction solves")  # fmt: skip
     add_optimiser_options(parser)

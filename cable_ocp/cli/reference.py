@@ -4,21 +4,17 @@ from __future__ import annotations
 
 import textwrap
 
-from cable_ocp.cli.arguments import DefaultsShown
+from cable_ocp.cli.arguments import add_command
 from cable_ocp.scene.bundled import models_dir, scene_names, scene_summary
 from cable_ocp.scene.fields import all_rows, rows_under
 
 
 def add_reference_commands(commands) -> None:
     """Add ``scenes`` and ``schema`` to the subparsers of ``cable-ocp``."""
-    scenes = commands.add_parser(
-        "scenes", formatter_class=DefaultsShown, help="list the bundled scenes"
-    )
+    scenes = add_command(commands, "scenes", "list the bundled scenes", scene=False)
     scenes.set_defaults(run=_scenes)
-    schema = commands.add_parser(
-        "schema",
-        formatter_class=DefaultsShown,
-        help="the scene fields: defaults, units, ranges and meanings",
+    schema = add_command(
+        commands, "schema", "the scene fields: defaults, units, ranges and meanings", scene=False
     )
     schema.add_argument(
         "key",

@@ -9,7 +9,7 @@ from cable_ocp.cli.arguments import (
     ANIMATE_HELP,
     INTERPRETED_HELP,
     OUT_HELP,
-    DefaultsShown,
+    add_command,
     add_set,
     parse_overrides,
 )
@@ -18,9 +18,9 @@ from cable_ocp.cli.run_folder import write_run
 
 def add_replay_command(commands) -> None:
     """Add ``replay`` to the subparsers of ``cable-ocp``."""
-    parser = commands.add_parser(
-        "replay", formatter_class=DefaultsShown,
-        help="drive a scene by a saved optimum (on its own scene, or changed by --set)",
+    parser = add_command(
+        commands, "replay",
+        "drive a scene by a saved optimum (on its own scene, or changed by --set)", scene=False,
     )  # fmt: skip
     parser.add_argument("result", type=Path,
                         help="a folder that optimize wrote (or its result.nc)")  # fmt: skip

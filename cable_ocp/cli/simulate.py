@@ -8,15 +8,12 @@ from pathlib import Path
 from cable_ocp.cli.arguments import (
     ANIMATE_HELP,
     INTERPRETED_HELP,
-    OUT_HELP,
-    SCENE_HELP,
-    DefaultsShown,
+    add_command,
     add_set,
     knot_angles,
     parse_overrides,
 )
 from cable_ocp.cli.run_folder import write_run
-from cable_ocp.scene.bundled import scene_argument
 
 KNOTS_HELP = (
     "winch knot angles phi_1..phi_p in rad, comma-separated, p = winch.knots (write "
@@ -28,12 +25,7 @@ KNOTS_HELP = (
 
 def add_simulate_command(commands) -> None:
     """Add ``simulate`` to the subparsers of ``cable-ocp``."""
-    parser = commands.add_parser(
-        "simulate", formatter_class=DefaultsShown,
-        help="simulate a scene and write results and figures",
-    )  # fmt: skip
-    parser.add_argument("scene", type=scene_argument, help=SCENE_HELP)
-    parser.add_argument("--out", type=Path, required=True, help=OUT_HELP)
+    parser = add_command(commands, "simulate", "simulate a scene and write results and figures")
     parser.add_argument("--knots", type=knot_angles, help=KNOTS_HELP)
     add_set(parser, "model.elements=30")
     parser.add_argument("--quiet", action="store_true", help="no progress bar")

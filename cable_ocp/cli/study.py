@@ -5,7 +5,7 @@ from __future__ import annotations
 import argparse
 from pathlib import Path
 
-from cable_ocp.cli.arguments import OUT_HELP, DefaultsShown, add_set, parse_overrides
+from cable_ocp.cli.arguments import OUT_HELP, add_command, add_set, parse_overrides
 from cable_ocp.cli.exits import SUCCESS
 from cable_ocp.cli.files import results_folder
 from cable_ocp.scene.bundled import models_dir, scene_argument
@@ -17,10 +17,11 @@ OWN_SCENES = {"speed-accuracy": "its own", "stability": "its own", "payout": "pa
 
 def add_study_command(commands) -> None:
     """Add ``study`` to the subparsers of ``cable-ocp``."""
-    parser = commands.add_parser(
+    parser = add_command(
+        commands,
         "study",
-        formatter_class=DefaultsShown,
-        help="convergence, validation, speed-accuracy and stability studies",
+        "convergence, validation, speed-accuracy and stability studies",
+        scene=False,
         description="step, elements, end-force: studies of SCENE. speed-accuracy: error vs CPU "
         "time on paper_flat and end_force, and the OCP's Omega vs wall time. stability: largest "
         "stable step vs n, Baumgarte gains, Nelder-Mead vs IPOPT as the knots grow. payout: the "

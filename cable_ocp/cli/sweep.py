@@ -11,7 +11,7 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
-from cable_ocp.cli.arguments import DefaultsShown
+from cable_ocp.cli.arguments import add_command
 from cable_ocp.cli.exits import INTERRUPTED, SUCCESS, failed
 
 if TYPE_CHECKING:
@@ -22,10 +22,11 @@ MAX_ROWS = 50  # beyond this many cases the table lists the cases that are not o
 
 def add_sweep_command(commands) -> argparse.ArgumentParser:
     """Add ``sweep`` to the subparsers of ``cable-ocp`` (its ``run`` is `run_sweep_command`)."""
-    sweep = commands.add_parser(
+    sweep = add_command(
+        commands,
         "sweep",
-        formatter_class=DefaultsShown,
-        help="many simulations or OCPs of one scene on Dask, one xarray Dataset out",
+        "many simulations or OCPs of one scene on Dask, one xarray Dataset out",
+        scene=False,
         description="Run the cases of SWEEP (a grid or sample of scene overrides, see "
         "models/sweeps/) on a Dask LocalCluster or an existing scheduler. Every finished case "
         "is saved in DIR/cases at once; a rerun skips them. All cases end up in DIR/sweep.nc.",

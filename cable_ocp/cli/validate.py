@@ -5,7 +5,7 @@ from __future__ import annotations
 import argparse
 from pathlib import Path
 
-from cable_ocp.cli.arguments import OUT_HELP, SCENE_HELP, DefaultsShown, integer
+from cable_ocp.cli.arguments import OUT_HELP, SCENE_HELP, add_command, integer
 from cable_ocp.cli.exits import SUCCESS
 from cable_ocp.cli.files import results_folder
 from cable_ocp.scene.bundled import models_dir, scene_argument
@@ -13,10 +13,9 @@ from cable_ocp.scene.bundled import models_dir, scene_argument
 
 def add_validate_command(commands) -> None:
     """Add ``validate`` to the subparsers of ``cable-ocp``."""
-    parser = commands.add_parser(
-        "validate", formatter_class=DefaultsShown,
-        help="statics check against the analytic catenary",
-    )  # fmt: skip
+    parser = add_command(
+        commands, "validate", "statics check against the analytic catenary", scene=False
+    )
     parser.add_argument("scene", type=scene_argument, nargs="?",
                         help=SCENE_HELP + "; default: catenary")  # fmt: skip
     parser.add_argument("--elements", type=integer(1, 1000), nargs="+", default=[15, 5, 30, 60],
