@@ -25,7 +25,6 @@ if TYPE_CHECKING:  # what __getattr__ imports, for type checkers and the import 
     from cable_ocp.control.nelder_mead import NelderMeadSettings
     from cable_ocp.control.ocp import IpoptSettings
     from cable_ocp.control.optimization import OcpResult, optimize
-    from cable_ocp.control.results import load_result
     from cable_ocp.control.settings import GridSettings, ModelSettings, TranscriptionSettings
     from cable_ocp.control.solvers import SOLVERS
     from cable_ocp.drive.drive import Drive
@@ -33,6 +32,7 @@ if TYPE_CHECKING:  # what __getattr__ imports, for type checkers and the import 
     from cable_ocp.lowering.hold import hold
     from cable_ocp.lowering.landing import land, landing_scene
     from cable_ocp.lowering.plan import plan_landing
+    from cable_ocp.lowering.results import load_result
     from cable_ocp.model.cable import INPUT_NAMES, CableModel
     from cable_ocp.scene.schema import Scene, load_scene
     from cable_ocp.simulation.integrate import SimulationError, integrate, reference_solution
@@ -72,7 +72,7 @@ _SOURCES = {
     "catenary_shape": "cable_ocp.studies.catenary",
     "equilibrium": "cable_ocp.simulation.statics",
     "integrate": "cable_ocp.simulation.integrate",
-    "load_result": "cable_ocp.control.results",
+    "load_result": "cable_ocp.lowering.results",
     "load_scene": "cable_ocp.scene.schema",
     "mpc": "cable_ocp.control.closed_loop.loop",
     "optimize": "cable_ocp.control.optimization",

@@ -23,12 +23,14 @@ from cable_ocp.lowering.landing import (
     PEAK_SPEED,
     SPEED_SHARE,
     TENSION_SHARE,
+    LandingResult,
     approach_time,
     heave_peaks,
     land,
     landing_scene,
     tension_acceleration,
 )
+from cable_ocp.result_files.dataset import fields_equal
 from cable_ocp.simulation.landing_reference import reference_error
 from cable_ocp.simulation.seabed import clearance, clearance_reference
 
@@ -187,6 +189,12 @@ def test_the_optimised_landing_lands_every_check_passed_on_the_scenes_own_model(
     result.result.save(tmp_path / "landing")
     saved = co.load_result(tmp_path / "landing")
     replayed = co.simulate(saved.scene, winch=saved)
+    assert replayed.omega == pytest.approx(result.result.omega, abs=1e-9)
+    # The landing itself, saved and loaded (issue 41): its optimum, report and scene restored.
+    loaded = co.load_result(result.save(tmp_path / "landed.nc"))
+    assert isinstance(loaded, LandingResult) and loaded.status == result.status
+    assert fields_equal(loaded.report, result.report) and not loaded.closed_loop
+    replayed = co.simulate(loaded.scene, winch=loaded.result)
     assert replayed.omega == pytest.approx(result.result.omega, abs=1e-9)
 
 

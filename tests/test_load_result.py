@@ -111,3 +111,53 @@ def test_every_result_of_a_lower_folder_loads(tmp_path, capsys):
              for name in ("hover_optimised.nc", "hover_closed_loop.nc", "hold.nc")}  # fmt: skip
     assert kinds == {"hover_optimised.nc": "OcpResult", "hover_closed_loop.nc": "MpcResult",
                      "hold.nc": "MpcResult"}  # fmt: skip
+
+
+def test_a_path_that_is_not_a_path_is_a_type_error():
+    for given in (12, None, ["run"]):
+        with pytest.raises(TypeError, match="load_result: path must be a result folder's or "):
+            co.load_result(given)
+
+
+@pytest.fixture(scope="module")
+def plan():
+    """test_lowering's 2 t load landed in open loop in still water (about 10 s)."""
+    from test_lowering import lowering_scene
+
+    return co.plan_landing(lowering_scene())
+
+
+def test_a_landing_plan_round_trips_and_a_forged_part_is_refused(tmp_path, plan):
+    """Saved, read back by co.load_result, every part restored; a part of another kind than its
+    field allows, or a part the plan does not have, is refused naming it (issue 41)."""
+    import netCDF4
+
+    from cable_ocp.lowering.plan import LandingPlan
+    from cable_ocp.result_files.dataset import fields_equal
+
+    path = plan.save(tmp_path / "plan.nc")
+    loaded = co.load_result(path)
+    assert isinstance(loaded, LandingPlan) and loaded.status == plan.status
+    assert loaded.scene.to_dict() == plan.scene.to_dict()
+    for name in ("descent", "report", "hold"):
+        assert fields_equal(getattr(loaded, name), getattr(plan, name)), name
+    _same_line(loaded.run, plan.run)
+    t = np.linspace(0.0, plan.scene.numerics.duration, 7)
+    np.testing.assert_array_equal(loaded.angle(t)[0], plan.angle(t)[0])
+    with netCDF4.Dataset(path, "a") as root:
+        root["report"].setncattr("cable_ocp_result", "HoldCorrection")
+    with pytest.raises(ValueError, match="report: holds a HoldCorrection, expected LandingReport"):
+        co.load_result(path)
+    path = plan.save(tmp_path / "other.nc")
+    with netCDF4.Dataset(path, "a") as root:
+        root.setncattr("parts", '["descent", "mpc"]')
+    with pytest.raises(ValueError, match="parts: mpc is not a part of a LandingPlan"):
+        co.load_result(path)
+
+
+def test_a_plan_whose_model_failed_round_trips_without_its_run(tmp_path, plan):
+    from dataclasses import replace
+
+    failed = replace(plan, run=None, report=None, failure="the model blew up")
+    loaded = co.load_result(failed.save(tmp_path / "failed.nc"))
+    assert loaded.run is None and loaded.report is None and loaded.status == failed.status

@@ -24,6 +24,7 @@ from cable_ocp.lowering.descent import (
     reference_descent,
 )
 from cable_ocp.model.layout import INPUTS
+from cable_ocp.result_files.dataset import fields_equal
 from cable_ocp.simulation.line_trajectory import LineTrajectory
 
 START, DROP, HEIGHT = 20.0, 200.0, 5.0  # m: line out at the start, start above the seabed, target
@@ -266,8 +267,8 @@ HEAVING = {  # a drum that can pay the heave of H_s = 2 m out: 2.5 m/s^2 of line
 }
 
 
-def test_the_closed_loop_holds_the_landed_load_in_its_band_against_the_heave():
-    from cable_ocp.lowering.hold import LINE_TOLERANCE, hold
+def test_the_closed_loop_holds_the_landed_load_in_its_band_against_the_heave(tmp_path):
+    from cable_ocp.lowering.hold import LINE_TOLERANCE, HoldResult, hold
 
     scene = lowering_scene(**HEAVING)
     held = hold(scene, duration=40.0)
@@ -286,6 +287,11 @@ def test_the_closed_loop_holds_the_landed_load_in_its_band_against_the_heave():
     assert np.std(locked.end[:, 2]) > 0.8 * np.std(locked.top[:, 2])
     assert "compensation ratio" in held.status
     assert held.peak_acceleration <= scene.winch.acceleration_max
+    # Saved and loaded (issue 41): every field, the scene and the closed loop's run restored.
+    loaded = co.load_result(held.save(tmp_path / "hold.nc"))
+    assert isinstance(loaded, HoldResult) and loaded.status == held.status
+    assert loaded.scene.to_dict() == held.scene.to_dict() and loaded.drum == held.drum
+    np.testing.assert_array_equal(loaded.mpc.trajectory.end, run.end)
     # The same hold on a drum too slow for the heave: the plant's drum saturates (it keeps
     # within its limit), the load leaves its band, and the result says both.
     slow = hold(scene.updated({"winch.acceleration_max": 1.0}), duration=40.0)
@@ -302,8 +308,8 @@ def test_a_hold_refuses_a_moving_vessel_and_a_run_without_hold_time():
         hold_scene(lowering_scene(**{"numerics.duration": 200.0}))
 
 
-def test_the_open_loop_landing_corrects_its_line_on_the_full_model_and_feeds_the_heave():
-    from cable_ocp.lowering.plan import CORRECTION_SHARE, plan_landing
+def test_the_open_loop_landing_corrects_its_line_on_the_full_model_and_feeds_the_heave(tmp_path):
+    from cable_ocp.lowering.plan import CORRECTION_SHARE, LandingPlan, plan_landing
 
     scene = lowering_scene(**HEAVING)
     plan = plan_landing(scene)
@@ -317,6 +323,11 @@ def test_the_open_loop_landing_corrects_its_line_on_the_full_model_and_feeds_the
     assert plan.report.hold_deviation < scene.lowering.hold_band
     flown = check_landing(plan.run, plan.angle)
     assert flown.landing_error == plan.report.landing_error
+    # Saved, loaded and flown again (issue 41): the loaded plan's angle replays its run.
+    loaded = co.load_result(plan.save(tmp_path / "plan.nc"))
+    assert isinstance(loaded, LandingPlan) and fields_equal(loaded.report, plan.report)
+    replayed = co.simulate(loaded.scene, winch=loaded.angle)
+    np.testing.assert_allclose(replayed.end, plan.run.end, rtol=0, atol=1e-9)
     # Without the feedforward the same descent leaves the load on the heave.
     bare = check_landing(co.simulate(scene, winch=plan.descent.angle), plan.descent.angle)
     assert "hold band" in failed(bare)

@@ -1,7 +1,15 @@
-"""``load_result(path)``: any result folder or file that cable_ocp wrote, read by what it holds."""
+"""A result folder or file read by the kind it declares: the mechanism, and this layer's kinds.
+
+:func:`read_result` finds a folder's result file and reads it by its kind with the readers it
+is given; :data:`READERS` are the kinds of this layer and those below it (an optimum, a closed
+loop, a run). :func:`cable_ocp.lowering.results.load_result` (``co.load_result``) adds the
+lowering's kinds, which this layer cannot import; :func:`load_result` here reads this layer's.
+"""
 
 from __future__ import annotations
 
+import os
+from collections.abc import Callable, Mapping
 from pathlib import Path
 
 from cable_ocp import result_files
@@ -28,7 +36,15 @@ Result = OcpResult | MpcResult | Trajectory | LineTrajectory
 
 
 def load_result(path: str | Path) -> Result:
-    """Read what ``optimize``, ``mpc``, ``simulate`` or ``lower`` saved (the API's or the CLI's).
+    """Read what ``optimize``, ``mpc`` or ``simulate`` saved (:func:`read_result`, :data:`READERS`).
+
+    :func:`cable_ocp.load_result` reads the lowering's results too.
+    """
+    return read_result(path, READERS)
+
+
+def read_result(path: str | Path, readers: Mapping[str, Callable[[Path], object]]):
+    """Read a result folder or file by the kind it declares, with the reader of that kind.
 
     Parameters
     ----------
@@ -38,19 +54,27 @@ def load_result(path: str | Path) -> Result:
         ``result.json`` or ``mpc.json``), or any result file, whatever its name (``cable-ocp
         lower``'s ``hover_optimised.nc``, ``hover_closed_loop.nc``, ``hold.nc``): its kind is
         read from the file.
+    readers : mapping of str to callable
+        The reader of each kind (the file's global attribute ``cable_ocp_result``).
 
     Returns
     -------
-    OcpResult, MpcResult, Trajectory or LineTrajectory
-        A run of a line paid out by elements (``[winch.line]``) is a LineTrajectory. Each holds
-        the scene it ran (``.scene``), so ``simulate(result.scene, winch=result)`` replays an
-        optimum.
+    The result
+        Each holds the scene it ran (``.scene``), so ``simulate(result.scene, winch=result)``
+        replays an optimum.
 
     Raises
     ------
+    TypeError
+        ``path`` is not a path (a number, None).
     ValueError
         Naming the path, when it holds none of them, or the file that cannot be read.
     """
+    if not isinstance(path, str | os.PathLike):
+        raise TypeError(
+            f"load_result: path must be a result folder's or file's path (str or Path); got "
+            f"{type(path).__name__}"
+        )
     path = Path(path)
     if not path.exists() and not path.suffix and path.with_suffix(".nc").is_file():
         path = path.with_suffix(".nc")  # as Trajectory.save was given it: run/trajectory
@@ -73,9 +97,9 @@ def load_result(path: str | Path) -> Result:
             )
         path = path / found[0]
     kind = netcdf.kind_of(path)
-    if kind not in READERS:
+    if kind not in readers:
         raise ValueError(
             f"{path}: holds a {kind}, which load_result does not read (it reads "
-            f"{', '.join(READERS)})"
+            f"{', '.join(readers)})"
         )
-    return READERS[kind](path)
+    return readers[kind](path)

@@ -22,6 +22,7 @@ import numpy as np
 from cable_ocp.control.closed_loop.result import MpcResult
 from cable_ocp.control.verification import CLEARANCE_TOLERANCE
 from cable_ocp.drive.bounds import BOUND_TOLERANCE
+from cable_ocp.lowering.files import Flat
 from cable_ocp.model import structured
 from cable_ocp.model.cable import CableModel, spec_from_scene
 from cable_ocp.model.layout import INPUTS
@@ -87,7 +88,7 @@ class Check:
 
 
 @dataclass(frozen=True)
-class LandingReport:
+class LandingReport(Flat):
     """The checks of one landing run (:func:`check_landing`).
 
     Attributes

@@ -18,6 +18,7 @@ import numpy as np
 
 from cable_ocp.drive.bounds import BOUND_TOLERANCE
 from cable_ocp.drive.vessel import smoothstep
+from cable_ocp.lowering.files import Flat
 from cable_ocp.model.cable import spec_from_scene
 from cable_ocp.model.line_models import line_models
 from cable_ocp.simulation.line_run import SegmentDrive, pay_out_drive
@@ -38,7 +39,7 @@ class DescentError(ValueError):
 
 
 @dataclass(frozen=True)
-class ReferenceDescent:
+class ReferenceDescent(Flat):
     """A pay-out from ``start_line`` to ``landing_line`` (m) over ``land_time`` (s), then held.
 
     Attributes

@@ -23,12 +23,14 @@ from dataclasses import dataclass
 import numpy as np
 
 from cable_ocp.control.closed_loop.loop import mpc
+from cable_ocp.control.closed_loop.result import MpcResult
 from cable_ocp.control.closed_loop.settings import MpcSettings
 from cable_ocp.control.keywords import refuse_unknown
 from cable_ocp.drive.drive import Drive
 from cable_ocp.lowering.arguments import real_number
 from cable_ocp.lowering.checks import Check, drum_checks, sampled_line
 from cable_ocp.lowering.descent import landing_line, line_range, seabed_reference
+from cable_ocp.lowering.files import WithParts
 from cable_ocp.model.cable import CableModel
 from cable_ocp.model.layout import INPUTS
 from cable_ocp.scene.given import scene_given
@@ -43,7 +45,7 @@ CALM = 1e-6  # m: a vessel heaving less (std) has no compensation ratio (NaN)
 
 
 @dataclass(frozen=True)
-class HoldResult:
+class HoldResult(WithParts):
     """A closed-loop hold above the target.
 
     Attributes
@@ -67,7 +69,10 @@ class HoldResult:
         Those peaks against the winch's limits (:func:`~.checks.drum_checks`).
     """
 
-    mpc: object
+    PARTS = ("mpc",)
+    WHAT = "hold"
+
+    mpc: MpcResult
     scene: Scene
     deviation: float
     band: float

@@ -40,6 +40,7 @@ from cable_ocp.drive.vessel import top_motion
 from cable_ocp.lowering.arguments import real_number
 from cable_ocp.lowering.checks import LandingReport, check_landing
 from cable_ocp.lowering.descent import landing_line
+from cable_ocp.lowering.files import WithParts
 from cable_ocp.lowering.hold import (
     HOLD_RANGE,
     compensation_ratio,
@@ -270,7 +271,7 @@ def _on_steps(duration: float, step: float) -> float:
 
 
 @dataclass(frozen=True)
-class LandingResult:
+class LandingResult(WithParts):
     """A landing from the hover, optimised (open loop) or closed-loop, and its checks.
 
     Attributes
@@ -278,6 +279,7 @@ class LandingResult:
     scene : Scene
         The landing scene (:func:`landing_scene`).
     closed_loop : bool
+        Whether the closed loop landed it (:func:`cable_ocp.mpc`), else the optimum.
     result : OcpResult or MpcResult
         What :func:`cable_ocp.optimize` or :func:`cable_ocp.mpc` returned.
     report : LandingReport or None
@@ -286,7 +288,11 @@ class LandingResult:
     compensation_ratio : float, %
         Over the hold (from ``land_time`` on): ``100 (1 - std z_E / std z_top)``; NaN in a calm.
     wall_time : float, s
+        Wall-clock time of the landing, the landing scene's making included.
     """
+
+    PARTS = ("result", "report")
+    WHAT = "landing from the hover"
 
     scene: Scene
     closed_loop: bool

@@ -27,6 +27,8 @@ import numpy as np
 from cable_ocp.drive.vessel import smoothstep, smoothstep_curvature, top_motion
 from cable_ocp.lowering.checks import LandingReport, check_landing
 from cable_ocp.lowering.descent import ReferenceDescent, reference_descent
+from cable_ocp.lowering.files import Flat, WithParts
+from cable_ocp.scene.schema import Scene
 from cable_ocp.simulation.integrate import SimulationError
 from cable_ocp.simulation.line_trajectory import LineTrajectory
 from cable_ocp.simulation.progress import stage
@@ -40,12 +42,13 @@ HOLD_FADE = 10.0  # s after the landing over which the hold's correction fades i
 
 
 @dataclass(frozen=True)
-class LandingPlan:
+class LandingPlan(WithParts):
     """An open-loop landing and its verified run.
 
     Attributes
     ----------
     scene : Scene
+        The ``[lowering]`` scene landed (kept in a file as its ``scene_record``).
     descent : ReferenceDescent
         The descent flown, its landing line corrected.
     heave_feedforward : bool
@@ -57,13 +60,18 @@ class LandingPlan:
     landing_errors : tuple of float, m
         The landing error of each run, first to last.
     wall_time : float, s
+        Wall-clock time of the plan, every run included.
     failure : str
         Why the full model failed ('' when it ran).
     hold : HoldCorrection or None
         The line paid out after the landing, learnt from the runs before the last.
     """
 
-    scene: object
+    PARTS = ("descent", "run", "report", "hold")
+    DIMS = {"landing_errors": ("run_index",)}  # noqa: RUF012 (a class constant)
+    WHAT = "landing plan"
+
+    scene: Scene
     descent: ReferenceDescent
     heave_feedforward: bool
     run: LineTrajectory | None
@@ -124,7 +132,7 @@ def approach_feedforward(scene, descent: ReferenceDescent):
 
 
 @dataclass(frozen=True)
-class HoldCorrection:
+class HoldCorrection(Flat):
     """Line paid out on top of the descent after the landing (m), learnt from full-model runs.
 
     ``c(t) = w(t) g(t)``: ``g`` the runs' settling after the landing (``e(t) - e(T)``, ``e``
@@ -133,7 +141,18 @@ class HoldCorrection:
     whose value, slope and curvature vanish there, so that ``c`` is C2 and zero before the
     landing. :meth:`learnt` adds a run's settling to ``g``: the next run pays it out, as the end
     falls by what is paid out.
+
+    Attributes
+    ----------
+    land_time : float, s
+        Where the correction starts to fade in (``lowering.land_time``).
+    times : array (k,), s
+        The settling's knots, from ``land_time`` on.
+    values : array (k,), m
+        The line paid out at each knot (``g``).
     """
+
+    DIMS = {"times": ("hold_knot",), "values": ("hold_knot",)}  # noqa: RUF012
 
     land_time: float
     times: np.ndarray
