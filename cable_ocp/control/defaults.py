@@ -63,6 +63,7 @@ class StepChoice:
     Attributes
     ----------
     step : float, s
+        The step chosen: a whole fraction of its unit within :data:`STABLE_SHARE` of ``limit``.
     limit : float, s
         The smallest linearised RK4 limit along the run.
     limit_time : float, s

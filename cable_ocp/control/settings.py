@@ -128,8 +128,12 @@ class OcpSettings:
     solver_settings : GaussNewtonSettings, IpoptSettings or NelderMeadSettings
         That solver's own settings (its class is the registry's).
     model : ModelSettings
+        The optimisation model (elements, RK4 step; unset ones derived from the scene).
     grid : GridSettings
+        The winch parametrisation and its intervals (its control set to the solver's default
+        by :func:`~cable_ocp.control.solvers.ocp_settings`).
     transcription : TranscriptionSettings
+        Single or multiple shooting, compiled or interpreted.
     """
 
     solver: str

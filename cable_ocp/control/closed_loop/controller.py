@@ -76,9 +76,14 @@ class Solve:
     parameters : array
         The plan: free-start Hermite parameters (rad, rad/s), time from the solve's start.
     status : str
+        The solver's status in its own words (with :data:`WIDENED` when it solved again on the
+        winch's own range), or why nothing was solved.
     success : bool
+        The solver converged (the plan then takes effect; a failed one leaves the plan in force).
     iterations : int
+        The solver's iterations (of the second solve when it solved again).
     solve_time : float, s
+        Wall time inside the solver (of both solves when it solved again).
     """
 
     parameters: np.ndarray

@@ -53,9 +53,14 @@ class LoopParts:
     derived : str
         How the settings left unset were derived.
     estimator : Estimator
+        Turns the plant's measurements into the controller's view (reduced state, forecast,
+        heave room).
     controller : RecedingHorizon
+        Solves the receding-horizon problem at each sample.
     command : WinchCommand
+        Holds the plan in force and the heave feedback; says where the drum is.
     plant : Plant
+        The scene's own model, run one sample at a time under the command.
     """
 
     settings: MpcSettings
