@@ -67,7 +67,10 @@ class Check:
     limit : float
         The bound it is held to, in ``unit``.
     unit : str
+        The unit of ``value`` and ``limit`` (``m``, ``N``, ``rad/s``, ``of static``: each check
+        has its own).
     passed : bool
+        Whether ``value`` keeps within ``limit`` (the side the check names).
     where : str
         When (and where) the figure was reached.
     """
@@ -94,12 +97,15 @@ class LandingReport(Flat):
     Attributes
     ----------
     checks : tuple of Check
+        Every constraint measured, in the order checked (kept in a file as a JSON table).
     landing_error : float, m
         ``z_E - z_sb - lowering.height`` at the landing time.
     landing_speed : float, m/s
         The end's vertical speed there (negative: going down).
-    least_tension, peak_tension : float, N
-        Of the top tension over the run.
+    least_tension : float, N
+        The least top tension over the run.
+    peak_tension : float, N
+        The largest top tension over the run.
     least_bond_tension : float, N
         The least signed tension of any bond at any sample (negative: a bond pushes).
     hold_deviation : float, m

@@ -19,6 +19,7 @@ same spectrum and seed, so the same sea in distribution, not the same waves as a
 from __future__ import annotations
 
 from dataclasses import dataclass
+from types import MappingProxyType
 
 import numpy as np
 
@@ -71,6 +72,11 @@ class HoldResult(WithParts):
 
     PARTS = ("mpc",)
     WHAT = "hold"
+    # CF units of the fields kept as variables (a percentage is no SI symbol of a docstring).
+    UNITS = MappingProxyType({
+        "deviation": "m", "band": "m", "compensation_ratio": "percent", "heave_std": "m",
+        "load_std": "m", "peak_rate": "rad s-1", "peak_acceleration": "rad s-2",
+    })  # fmt: skip
 
     mpc: MpcResult
     scene: Scene

@@ -27,6 +27,7 @@ import math
 import time
 from collections.abc import Mapping
 from dataclasses import dataclass
+from types import MappingProxyType
 
 import numpy as np
 
@@ -51,7 +52,7 @@ from cable_ocp.lowering.hold import (
 from cable_ocp.model.cable import CableModel
 from cable_ocp.scene.given import scene_given
 from cable_ocp.scene.schema import Scene, whole_steps
-from cable_ocp.simulation.run import TOP_SHARE, joints_and_tensions
+from cable_ocp.simulation.run import TOP_SHARE, check_rod, joints_and_tensions
 from cable_ocp.simulation.statics import starting_state
 
 HOVER = 10.0  # m above the target height where the descent stops before the landing
@@ -172,7 +173,7 @@ def landing_scene(scene, hover: float = HOVER) -> Scene:
     ValueError
         A scene without ``[lowering]`` or ``[winch.line]``, a moving vessel, a hover that is not
         positive or that would make the top element a rigid rod of the line (naming ``hover``
-        and its largest value here, :func:`_check_rod`), or no hold.
+        and its largest value here, :func:`_check_hover_rod`), or no hold.
     """
     checked_hover(hover)
     scene = scene_given(scene, "landing_scene")
@@ -180,13 +181,13 @@ def landing_scene(scene, hover: float = HOVER) -> Scene:
     lowering, step = scene.lowering, scene.numerics.step
     landing = landing_line(scene)
     line = landing - hover
-    _check_rod(hover, _landing_top(scene, line), line)
+    _check_hover_rod(hover, _landing_top(scene, line), line)
     approach = _on_steps(approach_time(scene, hover, hold), step)
     table = {**scene.to_dict()["lowering"], "land_time": approach}
     landed = trimmed_line(
         scene, lowering.height + hover, line, approach + hold, hover + HOLD_RANGE, table
     )
-    _check_rod(hover, landed.top_element_length, landed.cable.length)
+    _check_hover_rod(hover, landed.top_element_length, landed.cable.length)
     # The tension limits bound the load's acceleration, not the drum's: a compensated heave
     # moves the drum and leaves the load (and the tension) still. So they lengthen the approach.
     allowed, _ = tension_acceleration(landed, hover)
@@ -226,30 +227,32 @@ def _landing_top(scene: Scene, line: float) -> float:
     return max(line / (2 * mesh.starting_elements(line)), mesh.top_length_min + HOLD_RANGE)
 
 
-def _check_rod(hover: float, top: float, line: float) -> None:
+def _check_hover_rod(hover: float, top: float, line: float) -> None:
     """Refuse a hover whose pay-out would make the landing scene's top element a rigid rod.
 
     The landing pays the hover (and :data:`~.hold.HOLD_RANGE` more) out through its graded top
-    element of ``top`` (m) at the hover, on ``line`` (m) of line there; the simulation refuses a
-    top element of more than :data:`~cable_ocp.simulation.run.TOP_SHARE` of the line
-    (:func:`~cable_ocp.simulation.run.check_rod`). The excess falls one for one with the hover
-    (the line out at the end, ``line + hover + HOLD_RANGE``, does not depend on it), so the
-    largest hover is the hover less the excess: one figure, the same before and after the line
-    is trimmed.
+    element of ``top`` (m) at the hover, on ``line`` (m) of line there; the simulation's rule
+    (:func:`~cable_ocp.simulation.run.check_rod`) refuses a top element of more than
+    :data:`~cable_ocp.simulation.run.TOP_SHARE` of the line, and is asked here, blaming
+    ``hover``. The excess falls one for one with the hover (the line out at the end,
+    ``line + hover + HOLD_RANGE``, does not depend on it), so the largest hover is the hover
+    less the excess: one figure, the same before and after the line is trimmed.
     """
     paid = hover + HOLD_RANGE
-    excess = top + paid - TOP_SHARE * (line + paid)
-    if excess <= 0:
+    try:
+        check_rod(np.array([top + paid]), np.array([line + paid]), np.zeros(1))
+    except ValueError:
+        largest = hover - (top + paid - TOP_SHARE * (line + paid))
+    else:
         return
-    largest = hover - excess
     if largest <= 0:
         raise ValueError(
             f"hover = {hover!r} m is out of range: no hover fits here, the landing scene's top "
             f"element alone ({top:.4g} m: winch.line.top_length_min and the hold's "
             f"{HOLD_RANGE:g} m of haul-in) and the hold's pay-out leave more than "
             f"{TOP_SHARE:.0%} of the {line + paid:.4g} m of line out in it (a rigid rod, not a "
-            "rope): land on a longer line, or "
-            "shorten winch.line.top_length_min or winch.line.element_length"
+            "rope): land on a longer line, or shorten winch.line.top_length_min or "
+            "winch.line.element_length"
         )
     raise ValueError(
         f"hover = {hover!r} m is out of range: must be > 0 and <= about {largest:.4g} m here: "
@@ -293,6 +296,10 @@ class LandingResult(WithParts):
 
     PARTS = ("result", "report")
     WHAT = "landing from the hover"
+    # CF units of the fields kept as variables (a percentage is no SI symbol of a docstring).
+    UNITS = MappingProxyType(
+        {"closed_loop": "1", "compensation_ratio": "percent", "wall_time": "s"}
+    )
 
     scene: Scene
     closed_loop: bool
