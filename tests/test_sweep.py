@@ -165,6 +165,16 @@ def test_bad_sweep_file_names_the_key(tmp_path, body, message):
          "optimizer: intervals: unknown setting for solver 'nelder-mead'"),
         ('scene = "hanging"\ntask = "optimize"\n[optimizer]\nsolver = "ipopt"\nhessian = "exact"',
          "optimizer: IpoptSettings.hessian = 'exact' needs second derivatives"),
+        # A named method and a solver that does not run on it (the registry says which do).
+        ('scene = "hanging"\ntask = "optimize"\nmethod = "nelder-mead"\n[optimizer]\n'
+         'solver = "ipopt"',
+         "optimizer.solver: solver = 'ipopt' with method = 'nelder-mead': that method is run by "
+         "'nelder-mead'"),
+        ('scene = "hanging"\ntask = "optimize"\nmethod = "shooting"\n[optimizer]\n'
+         'solver = "nelder-mead"',
+         "that method is run by 'gauss-newton' or 'ipopt'"),
+        ('scene = "hanging"\ntask = "optimize"\nmethod = "simplex"',
+         "method: method = 'simplex': must be one of 'shooting', 'nelder-mead'"),
     ],
 )  # fmt: skip
 def test_bad_sweep_header_names_the_key(tmp_path, text, message):
