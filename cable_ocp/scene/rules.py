@@ -14,15 +14,13 @@ from __future__ import annotations
 
 import math
 import numbers
+import operator
 from collections.abc import Callable
 from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
 
-# The kinds whose values FieldRule.fault checks (a scene's other kinds, path, vec3, section and
-# tuple, are checked by the scene's schema, each number of a vec3 by fault as a float).
-CHECKED_KINDS = ("float", "int", "bool", "str", "choice", "table")
 EXPECTED = {
     "int": "an integer",
     "float": "a number",
@@ -112,23 +110,25 @@ class FieldRule:
 
     def accepts(self, x: float) -> bool:
         """Whether the number ``x`` lies in the allowed range."""
-        return self._broken(x) is None
+        return self.broken_bound(x) is None
 
-    def _broken(self, x: float) -> str | None:
+    def broken_bound(self, x: float) -> str | None:
         """The first bound ``x`` breaks (the upper one first), e.g. ``<= 1``; None if none."""
         for op, bound, holds in (
-            ("<=", self.le, lambda b: x <= b),
-            (">=", self.ge, lambda b: x >= b),
-            (">", self.gt, lambda b: x > b),
+            ("<=", self.le, operator.le),
+            (">=", self.ge, operator.ge),
+            (">", self.gt, operator.gt),
         ):
-            if bound is not None and not holds(bound):
+            if bound is not None and not holds(x, bound):
                 return f"{op} {bound:g}"
         return None
 
     def fault(self, value: Any) -> Fault | None:
         """What is wrong with ``value`` for this rule (None when it is allowed).
 
-        For the kinds of :data:`CHECKED_KINDS` (a ``vec3`` checks each number as a float).
+        Checks ``float``, ``int`` (and each number of a ``vec3``, as a float), ``bool``,
+        ``str``, ``choice`` and ``table``; a scene's ``path``, ``section`` and ``tuple`` are
+        the schema's to check.
         """
         if value is None:
             return None if self.optional else Fault("missing", "set")
@@ -157,7 +157,7 @@ def _number_fault(value: Any, integer: bool, rule: FieldRule) -> Fault | None:
         finite = integer
     if not finite:
         return Fault("finite", "finite")
-    broken = rule._broken(value)
+    broken = rule.broken_bound(value)
     return None if broken is None else Fault("range", broken)
 
 
