@@ -73,6 +73,9 @@ BAD_ARGUMENTS = [
     (["optimize", HANGING, "--out", "o", "--intervals", "0"], "argument --intervals: 0 is out"),
     (["optimize", HANGING, "--out", "o", "--quiet", "--verbose"], "not allowed with argument"),
     (["compare", HANGING, "missing.toml", "--out", "o"], "missing.toml: scene file not found"),
+    (["compare", HANGING, "--out", "o", "--solver", "nelder-mead"],
+     "--solver nelder-mead: compare runs Nelder-Mead anyway, beside a shooting solver; give "
+     "--solver gauss-newton or ipopt"),
     (["study", "step", "--out", "o"], "study step needs a scene file"),
     (["study", "stability", HANGING, "--out", "o"], "study stability takes no scene"),
     (["study", "payout", HANGING, "--out", "o"], "study payout takes no scene"),

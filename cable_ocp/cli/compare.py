@@ -15,10 +15,8 @@ from cable_ocp.cli.optimiser_options import (
     elapsed,
     optimize_settings,
 )
-from cable_ocp.control.solvers import SOLVERS
+from cable_ocp.control.solvers import KNOTS, SHOOTING, SOLVERS, solver_for
 from cable_ocp.scene.bundled import scene_argument
-
-SIMPLEX = "nelder-mead"  # the paper's method, which compare runs beside the shooting solver
 
 
 def add_compare_command(commands) -> None:
@@ -45,13 +43,15 @@ def run_compare_command(args: argparse.Namespace) -> int:
     for scene in scenes:
         check_step(scene, args.step)
         check_start(scene)
-    if args.solver is not None and not SOLVERS[args.solver].shootings:
+    simplex_solver = solver_for(KNOTS.name, None)
+    if args.solver is not None and SOLVERS[args.solver].transcription is not SHOOTING:
+        shooting_solvers = [n for n, e in SOLVERS.items() if e.transcription is SHOOTING]
         raise ValueError(
-            f"--solver {args.solver}: compare runs Nelder-Mead anyway, beside a shooting solver; "
-            f"give --solver {' or '.join(n for n, e in SOLVERS.items() if e.shootings)}"
+            f"--solver {args.solver}: compare runs {SOLVERS[simplex_solver].label} anyway, beside "
+            f"a shooting solver; give --solver {' or '.join(shooting_solvers)}"
         )
-    shooting = optimize_settings(args, beside=SIMPLEX)
-    simplex = optimize_settings(args, SIMPLEX, beside=shooting.solver)
+    shooting = optimize_settings(args, beside=simplex_solver)
+    simplex = optimize_settings(args, simplex_solver, beside=shooting.solver)
     spline = replace(shooting, grid=replace(shooting.grid, control="spline"))
     name = shooting.solver
     output = {"quiet": args.quiet, "verbose": args.verbose}
@@ -60,7 +60,7 @@ def run_compare_command(args: argparse.Namespace) -> int:
         runs = [
             (f"{name}, hermite", optimize(scene, settings=shooting, **output)),
             (f"{name}, spline", optimize(scene, settings=spline, **output)),
-            (f"{SIMPLEX}, spline", optimize(scene, settings=simplex, **output)),
+            (f"{simplex_solver}, spline", optimize(scene, settings=simplex, **output)),
         ]
         rows += [(scene.name, label, r) for label, r in runs]
     lines = [

@@ -46,7 +46,7 @@ def _solver(args: argparse.Namespace) -> Solver:
     if args.solver is not None:
         return SOLVERS[args.solver]
     default = SOLVERS[DEFAULT_SOLVER]
-    same_problem = [e for e in SOLVERS.values() if bool(e.shootings) == bool(default.shootings)]
+    same_problem = [e for e in SOLVERS.values() if e.transcription is default.transcription]
     return next(
         (entry for entry in [default, *same_problem]
          if all(_takes(entry, args, name) for name in _given(args))),

@@ -69,7 +69,7 @@ def run_optimize_command(args: argparse.Namespace) -> int:
     check_start(scene)
     output = {"quiet": args.quiet, "verbose": args.verbose}
     settings = optimize_settings(args)
-    if SOLVERS[settings.solver].shootings:  # a shooting solver's answer is refined
+    if SOLVERS[settings.solver].transcription.model_correction:
         output["refinements"] = args.refinements
     result = optimize(scene, settings=settings, **output)
     locked, locked_failure = _locked_reference(scene)
