@@ -57,6 +57,14 @@ def test_each_entry_states_its_capabilities():
         "ipopt": ipopt.closed_loop_settings,
     }
     assert MpcSettings(solver="ipopt").solver == "ipopt"
+    # IPOPT warm-starts in the closed loop (the user's options win); the others run as given.
+    started = ipopt.warm_started(IpoptSettings(ipopt_options={"mu_init": 0.1}))
+    assert started.ipopt_options == {"warm_start_init_point": "yes", "mu_init": 0.1}
+    assert (
+        gauss_newton.warm_started(gauss_newton.closed_loop_settings)
+        == gauss_newton.closed_loop_settings
+    )
+    assert nelder_mead.warm_started(nelder_mead.settings()) == nelder_mead.settings()
     # Only the QP solver reports an infeasible QP, in its own words.
     assert [e.infeasible for e in SOLVERS.values()] == [DAQP_INFEASIBLE, None, None]
 

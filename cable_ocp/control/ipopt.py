@@ -9,7 +9,7 @@ shooting, built once per problem and solved as often as asked (the registry's ru
 from __future__ import annotations
 
 import time
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 
 import casadi as ca
 import numpy as np
@@ -96,6 +96,15 @@ def check_ipopt(settings: OcpSettings) -> None:
             "hessian='limited-memory'"
         )
     check_ipopt_options(ipopt.ipopt_options)
+
+
+# IPOPT's options in the closed loop (the baseline): warm-started from the shifted plan.
+IPOPT_WARM_START = {"warm_start_init_point": "yes", "mu_init": 1e-3}
+
+
+def warm_started(settings: IpoptSettings) -> IpoptSettings:
+    """IPOPT's settings with the closed loop's warm start (the user's options win)."""
+    return replace(settings, ipopt_options={**IPOPT_WARM_START, **settings.ipopt_options})
 
 
 def ipopt_options(

@@ -33,7 +33,7 @@ from collections.abc import Callable
 from dataclasses import dataclass, replace
 
 from cable_ocp.control.gauss_newton import DAQP_INFEASIBLE, GaussNewton, GaussNewtonSettings
-from cable_ocp.control.ipopt import Ipopt, IpoptSettings, check_ipopt
+from cable_ocp.control.ipopt import Ipopt, IpoptSettings, check_ipopt, warm_started
 from cable_ocp.control.nelder_mead import (
     NelderMead,
     NelderMeadSettings,
@@ -84,6 +84,11 @@ KNOTS = Transcription("nelder-mead", resolved_nelder_mead, nelder_mead_problem, 
 OLD_TRANSCRIPTIONS = {"ipopt": SHOOTING.name}
 
 
+def _as_they_are(settings):
+    """A solver's settings, unchanged (a :attr:`Solver.warm_started` with nothing to add)."""
+    return settings
+
+
 @dataclass(frozen=True)
 class Solver:
     """One entry of the registry: a solver and what it can do.
@@ -113,6 +118,9 @@ class Solver:
         not run it (it takes no ``fixed``, ``lower`` and ``upper``, rule 2).
     closed_loop_settings : object or None
         Its settings in the closed loop when none are given.
+    warm_started : callable
+        ``(settings) -> settings``: its settings as the closed loop runs them, started from the
+        plan in force (IPOPT's warm start; the others take the settings as they are).
     infeasible : str or None
         The text in a failed solve's ``status`` that says its QP had no feasible point (the
         closed loop then solves again on the winch's own range); None: it reports none.
@@ -137,6 +145,7 @@ class Solver:
     infeasible: str | None
     history_unit: str
     check: Callable[[OcpSettings], None] | None = None
+    warm_started: Callable = _as_they_are
 
     @property
     def closed_loop(self) -> bool:
@@ -193,6 +202,7 @@ SOLVERS: dict[str, Solver] = {
             infeasible=None,
             history_unit="m2",
             check=check_ipopt,
+            warm_started=warm_started,
         ),
         Solver(
             "nelder-mead",

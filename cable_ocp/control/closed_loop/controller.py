@@ -25,7 +25,6 @@ import numpy as np
 
 from cable_ocp.control.closed_loop.forecast import TopForecast
 from cable_ocp.control.closed_loop.settings import MpcSettings
-from cable_ocp.control.ipopt import IpoptSettings
 from cable_ocp.control.parameters import ProblemParameters
 from cable_ocp.control.problem import WinchProblem
 from cable_ocp.control.settings import GridSettings, OcpSettings, TranscriptionSettings
@@ -33,8 +32,6 @@ from cable_ocp.control.solvers import SOLVERS
 from cable_ocp.drive.drive import end_force, stage_times
 from cable_ocp.simulation.landing_reference import reference_error
 
-# IPOPT's options for the closed loop (the baseline): warm-started from the shifted plan.
-IPOPT_WARM_START = {"warm_start_init_point": "yes", "mu_init": 1e-3}
 # In a solve's status when it ran on the winch's own range, its narrowed one being infeasible.
 WIDENED = "on the winch's own range: the room for the heave feedback left no feasible plan"
 
@@ -93,13 +90,6 @@ class Solve:
     solve_time: float
 
 
-def _warm_started(settings):
-    """IPOPT's settings with the closed loop's warm start (the user's options win)."""
-    if not isinstance(settings, IpoptSettings):
-        return settings
-    return replace(settings, ipopt_options={**IPOPT_WARM_START, **settings.ipopt_options})
-
-
 class RecedingHorizon:
     """The receding-horizon controller of a scene (see the module docstring).
 
@@ -118,7 +108,7 @@ class RecedingHorizon:
         self.entry = entry = SOLVERS[settings.solver]
         transcription = OcpSettings(
             settings.solver,
-            _warm_started(settings.solver_settings),
+            entry.warm_started(settings.solver_settings),
             settings.model,
             GridSettings(control=entry.default_control, intervals=settings.intervals),
             TranscriptionSettings(shooting=entry.closed_loop_shooting),
