@@ -18,11 +18,12 @@ from cable_ocp.scene import schema
 from cable_ocp.simulation.integrate import SimulationError
 from cable_ocp.simulation.seabed import OffGridError
 from cable_ocp.simulation.statics import EquilibriumError
+from cable_ocp.sweep import spec
 
 MODELS = Path(__file__).resolve().parent.parent / "models"
 HANGING = str(MODELS / "hanging.toml")
 
-# Every command that reads a scene (or a result), with what it reads through.
+# Every command that reads a scene (load_scene), a result (load_result) or a sweep (load_sweep).
 COMMANDS = {
     "simulate": ["simulate", HANGING],
     "optimize": ["optimize", HANGING],
@@ -30,7 +31,9 @@ COMMANDS = {
     "mpc": ["mpc", HANGING],
     "lower": ["lower", HANGING],
     "study": ["study", "step", HANGING],
+    "validate": ["validate", HANGING],
     "replay": ["replay", "RESULT"],
+    "sweep": ["sweep", "SWEEP"],
 }
 
 # (the error, its code, what stderr says after "cable-ocp COMMAND: ").
@@ -55,9 +58,9 @@ def test_an_error_has_one_exit_code_in_every_command(
     def fail(*args, **kwargs):
         raise error
 
-    monkeypatch.setattr(schema, "load_scene", fail)
-    monkeypatch.setattr(results, "load_result", fail)
-    args = [a if a != "RESULT" else tmp_path / "result" for a in COMMANDS[command]]
+    for module, name in ((schema, "load_scene"), (results, "load_result"), (spec, "load_sweep")):
+        monkeypatch.setattr(module, name, fail)
+    args = [tmp_path / a if a in ("RESULT", "SWEEP") else a for a in COMMANDS[command]]
     result = cli.main([*map(str, args), "--out", str(tmp_path / "o")])
     out, err = capsys.readouterr()
     assert result == code
