@@ -13,6 +13,8 @@ code   meaning
        run that blew up (``SimulationError``: nothing written)
 130    interrupted (Ctrl-C)
 141    the output's reader closed it (``| head``)
+143    terminated (SIGTERM, handled as an interrupt; the script's :mod:`cable_ocp.entry`
+       says which signal it was, and gives 130 for a Ctrl-C during the imports)
 =====  ===============================================================================
 """
 
