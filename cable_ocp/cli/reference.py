@@ -5,6 +5,7 @@ from __future__ import annotations
 import textwrap
 
 from cable_ocp.cli.arguments import add_command
+from cable_ocp.cli.exits import SUCCESS
 from cable_ocp.scene.bundled import models_dir, scene_names, scene_summary
 from cable_ocp.scene.fields import all_rows, rows_under
 
@@ -31,7 +32,7 @@ def _scenes(args) -> int:
     for name in names:
         print(f"{name:<{width}}  {scene_summary(name)}")
     print(f"(in {models_dir()}; give a name wherever a scene file is asked for)")
-    return 0
+    return SUCCESS
 
 
 def _schema(args) -> int:
@@ -45,4 +46,4 @@ def _schema(args) -> int:
         lines = [f"range: {row['range']}", row["meaning"]]
         for line in lines:
             print(textwrap.indent(textwrap.fill(line, 96 - 4), "    "))
-    return 0
+    return SUCCESS
