@@ -113,3 +113,10 @@ def test_a_target_at_or_above_the_start_blames_lowering_height_not_haul_in_max(m
     assert "haul_in_max" not in message
     found = float(re.search(r"must be < ([\d.]+) m", message).group(1))
     assert found == pytest.approx(start, abs=10.0)
+
+
+def test_plan_landing_takes_a_bundled_name_and_refuses_a_scene_without_a_lowering():
+    with pytest.raises(ValueError, match="'paper_hill': plan_landing needs a scene with"):
+        co.plan_landing("paper_hill")
+    with pytest.raises(TypeError, match="plan_landing: scene must be a Scene"):
+        co.plan_landing(3.0)

@@ -28,6 +28,7 @@ from cable_ocp.drive.vessel import smoothstep, smoothstep_curvature, top_motion
 from cable_ocp.lowering.checks import LandingReport, check_landing
 from cable_ocp.lowering.descent import ReferenceDescent, reference_descent
 from cable_ocp.lowering.files import Flat, WithParts
+from cable_ocp.scene.given import scene_given
 from cable_ocp.scene.schema import Scene
 from cable_ocp.simulation.integrate import SimulationError
 from cable_ocp.simulation.line_trajectory import LineTrajectory
@@ -223,8 +224,8 @@ def plan_landing(scene, quiet: bool = True) -> LandingPlan:
 
     Parameters
     ----------
-    scene : Scene
-        With ``[lowering]`` and ``[winch.line]``.
+    scene : Scene, str or path-like
+        With ``[lowering]`` and ``[winch.line]`` (a path or a bundled name is loaded).
     quiet : bool
         No progress bars.
 
@@ -236,10 +237,20 @@ def plan_landing(scene, quiet: bool = True) -> LandingPlan:
 
     Raises
     ------
+    TypeError
+        A scene that is none (:func:`~cable_ocp.scene.given.scene_given`).
+    ValueError
+        A scene without ``[lowering]`` or ``[winch.line]``, before any work.
     DescentError
         Before any simulation: no descent within the winch's limits reaches the landing.
     """
     started = time.perf_counter()
+    scene = scene_given(scene, "plan_landing")
+    if scene.lowering is None or scene.winch.line is None:
+        raise ValueError(
+            f"scene {scene.name!r}: plan_landing needs a scene with [lowering] and [winch.line] "
+            "(see models/deploy.toml)"
+        )
     lowering = scene.lowering
     descent = reference_descent(scene)
     feedforward = _heaves(scene)
