@@ -455,7 +455,7 @@ def load_sweep(path: str | Path) -> SweepSpec:
     if task not in TASKS:
         raise _fail("task", f" = {task!r}: must be one of {', '.join(TASKS)}")
     try:
-        method = transcription_named(data.get("method", "shooting")).name
+        method = transcription_named(data.get("method", SHOOTING.name)).name
     except ValueError as error:
         raise _fail("method", f": {error}") from None
     settings = _settings(data, task)

@@ -10,7 +10,7 @@ from cable_ocp.control.checks import Rule, check_fields
 from cable_ocp.control.gauss_newton import GaussNewtonSettings
 from cable_ocp.control.ipopt import IpoptSettings
 from cable_ocp.control.settings import ModelSettings
-from cable_ocp.control.solvers import SOLVERS, solver_of
+from cable_ocp.control.solvers import DEFAULT_SOLVER, SOLVERS, solver_of
 from cable_ocp.drive.bounds import angle_bounds
 
 # Targets (s) of the derived timing: a solve every second, plan intervals of 5 s (1 s intervals
@@ -115,7 +115,7 @@ class MpcSettings:
     sample: float | None = None
     interval: float | None = None
     model: ModelSettings = field(default_factory=ModelSettings)
-    solver: str = "gauss-newton"
+    solver: str = DEFAULT_SOLVER
     solver_settings: GaussNewtonSettings | IpoptSettings | None = None
     heave_feedback: bool = True
     heave_filter: float = 15.0
