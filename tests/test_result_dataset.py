@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 from dataclasses import dataclass, field
+from typing import ClassVar
 
 import numpy as np
 import pytest
@@ -28,6 +29,11 @@ class Toy:
     scores : dict of str to float
     settings : dict
     """
+
+    UNITS: ClassVar[dict[str, str]] = {
+        "speed": "m s-2", "count": "1", "flag": "1", "history": "m2", "span": "rad",
+        "series": "m", "scores": "1", "added": "s",
+    }  # fmt: skip
 
     speed: np.ndarray
     count: int
@@ -57,7 +63,7 @@ def test_every_kind_of_field_goes_through_netcdf(tmp_path):
         assert all(v.attrs.get("units") for v in data.variables.values())
         assert data["speed"].attrs == {"units": "m s-2", "long_name": "How fast it goes"}
         assert data["history"].attrs["units"] == "m2" and data["span"].attrs["units"] == "rad"
-        assert data["added"].attrs["long_name"] == "added"  # undocumented: its name, units 1
+        assert data["added"].attrs == {"units": "s", "long_name": "added"}  # not documented
         assert data.attrs["name"] == "x" and data.attrs["cable_ocp_result"] == "Toy"
     with pytest.raises(ValueError, match="holds a Toy, not a Trajectory"):
         netcdf.read(path, "Trajectory")
@@ -78,3 +84,79 @@ def test_a_field_the_file_lacks_takes_its_default(tmp_path):
                                           ("N", "N"), ("s^2", "s2")])  # fmt: skip
 def test_units_in_the_cf_spelling(unit, cf):
     assert units.cf_units(unit) == cf
+
+
+@dataclass(frozen=True)
+class Undeclared:
+    """A result that declares units, but not for every field it stores.
+
+    Attributes
+    ----------
+    depth : float, m
+    rate : float, m/s
+    """
+
+    UNITS: ClassVar[dict[str, str]] = {"depth": "m"}
+
+    depth: float
+    rate: float
+
+
+@dataclass(frozen=True)
+class Documented:
+    """A result whose units are in its docstring (the classes that declare no UNITS yet).
+
+    Attributes
+    ----------
+    depth : float, m
+        Depth below the surface.
+    steps : int
+    rate : float, metres a second
+    """
+
+    depth: float
+    steps: int
+    rate: float = 0.0
+
+
+def test_an_undeclared_unit_is_an_error_at_write_time(tmp_path):
+    """Not a silent "1" (issue 41): the field, and the remedy, are named; nothing is written."""
+    with pytest.raises(ValueError, match=r"Undeclared\.rate: no declared unit \(add it to Undec"):
+        dataset.to_dataset(Undeclared(1.0, 2.0), "Undeclared", {})
+    with pytest.raises(ValueError, match=r"Documented\.rate : float, metres a second: 'metres a"):
+        dataset.to_dataset(Documented(1.0, 2), "Documented", {})
+    bare = xr.Dataset({"depth": ((), 3.0)}, attrs=netcdf.file_attributes("Bare"))
+    with pytest.raises(ValueError, match=r"bare\.nc: depth has no declared units"):
+        netcdf.write(bare, tmp_path / "bare.nc")
+    assert list(tmp_path.iterdir()) == []
+
+
+def test_units_stated_in_a_docstring_are_read_strictly():
+    @dataclass(frozen=True)
+    class Stated:
+        """A result whose units are in its docstring.
+
+        Attributes
+        ----------
+        depth : float, m
+            Depth below the surface.
+        steps : int
+        """
+
+        depth: float
+        steps: int
+
+    assert units.field_units(Stated) == {"depth": "m", "steps": "1"}
+    data = dataset.to_dataset(Stated(1.0, 2), "Stated", {})
+    assert data["depth"].attrs == {"units": "m", "long_name": "Depth below the surface"}
+
+
+def test_declared_units_agree_with_the_docstrings():
+    """A class that declares its units and also states them in its docstring says the same."""
+    from cable_ocp.simulation.trajectory import Trajectory
+
+    for cls in (Trajectory, Toy):
+        declared, stated = units.field_units(cls), units.docstring_units(cls)
+        shared = [name for name in stated if name in declared and stated[name] != "1"]
+        assert len(shared) >= 3
+        assert {n: stated[n] for n in shared} == {n: declared[n] for n in shared}, cls.__name__

@@ -17,7 +17,7 @@ by their type, so a field added to a result is carried without code changes:
   attributes joined to the outer ones, each whose name the outer result already uses prefixed
   by the field's name (``trajectory_omega``, ``solves_iterations``).
 
-Units and long names come from the class docstring's ``Attributes`` section (:mod:`.units`).
+Units are those the class declares, long names its docstring's (:mod:`.units`).
 """
 
 from __future__ import annotations
@@ -32,7 +32,7 @@ import numpy as np
 import xarray as xr
 
 from cable_ocp.result_files.netcdf import GLOBAL, file_attributes
-from cable_ocp.result_files.units import DIMENSIONLESS, describe, field_docs
+from cable_ocp.result_files.units import DIMENSIONLESS, describe, long_names, unit_of
 from cable_ocp.scene.records import check_field, parse_json
 
 COMPONENT = ("x", "y", "z")
@@ -92,10 +92,17 @@ def to_dataset(
     coords : dict of str to sequence, optional
         Labels of dimensions, e.g. ``{"component": ("x", "y", "z")}``.
     units : dict of str to str, optional
-        Units that the docstring cannot state (they depend on the instance).
+        Units that the class cannot declare (they depend on the instance); every other field
+        stored as a variable takes the unit its class declares (:func:`.units.unit_of`).
+
+    Raises
+    ------
+    ValueError
+        A field stored as a variable whose unit is not declared, naming it.
     skip : names of fields left out (the caller adds them)
     """
-    docs, hints = field_docs(type(result)), _hints(type(result))
+    cls = type(result)
+    names, hints = long_names(cls), _hints(cls)
     coords, units = dict(coords or {}), dict(units or {})
     variables: dict[str, xr.Variable] = {}
     attrs: dict[str, object] = file_attributes(kind)
@@ -104,8 +111,6 @@ def to_dataset(
         if f.name in skip:
             continue
         value, how = getattr(result, f.name), _kind_of(hints[f.name])
-        unit, long_name = docs.get(f.name, (DIMENSIONLESS, f.name.replace("_", " ")))
-        unit = units.get(f.name, unit)
         if how == "nested":
             if value is not None:
                 nested.append((f.name, value.to_xarray()))
@@ -135,7 +140,8 @@ def to_dataset(
                 data = data.astype(float) if data.size == 0 else data
             default = tuple(f"{f.name}_{i}" for i in range(data.ndim))
             variables[f.name] = xr.Variable(dims.get(f.name, default), data)
-        describe(variables[f.name], unit, long_name)
+        unit = units[f.name] if f.name in units else unit_of(cls, f.name)
+        describe(variables[f.name], unit, names.get(f.name, f.name.replace("_", " ")))
     used = {d for v in variables.values() for d in v.dims}
     labels = {d: describe(xr.Variable(d, list(v)), DIMENSIONLESS, d.replace("_", " "))
               for d, v in coords.items() if d in used and d not in variables}  # fmt: skip

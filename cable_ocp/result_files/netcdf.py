@@ -78,14 +78,24 @@ def format_of(dataset: xr.Dataset) -> int:
     return int(dataset.attrs[VERSION])
 
 
-def write(dataset: xr.Dataset, path: Path, groups: dict[str, xr.Dataset] | None = None) -> Path:
+def write(
+    dataset: xr.Dataset,
+    path: Path,
+    groups: dict[str, xr.Dataset] | None = None,
+    mode: int | None = None,
+) -> Path:
     """Write a result's Dataset to netCDF at ``path``, atomically, without Dask's scheduler lock.
 
-    ``groups`` are written beside it as netCDF groups by name (a line's segments).
+    The one writer of netCDF files: every result's and a sweep's (its case files and
+    ``sweep.nc``). ``groups`` are written beside it as netCDF groups by name (a line's
+    segments); ``mode`` (permission bits) is set on the file, else the process's default.
+    Every variable of numbers must declare its ``units`` (CF; ``"1"`` for a count): one that
+    does not is refused before anything is written (:func:`_check_units`).
 
-    The file is written as a scratch file ``.NAME.XXXXXXXX.tmp`` beside ``path`` and renamed onto
-    it, so ``path`` holds either its old content or the whole new file; on any exception,
-    Ctrl-C included, the scratch file is removed. A Ctrl-C that arrives while netCDF4 writes is
+    The file is written as a scratch file ``.NAME.XXXXXXXX.tmp`` beside ``path``, flushed to
+    the disk (``fsync``) and renamed onto it, so ``path`` holds either its old content or the
+    whole new file, even after a crash of the machine; on any exception, Ctrl-C included, the
+    scratch file is removed. A Ctrl-C that arrives while netCDF4 writes is
     held until the part being written (the root, or a group) is written, then raised: an
     interrupt inside xarray's write leaves netCDF4's process-wide locks held, and the next close
     waits on them for ever. The file is opened once for all its parts (a line run of 100
@@ -102,9 +112,10 @@ def write(dataset: xr.Dataset, path: Path, groups: dict[str, xr.Dataset] | None 
 
     path = Path(path)
     parts = {None: dataset, **(groups or {})}
-    for part in parts.values():
+    for group, part in parts.items():
         if any(variable.chunks is not None for variable in part.variables.values()):
             raise ValueError(f"{path}: a result's arrays must be in memory, not Dask arrays")
+        _check_units(part, f"{group}/" if group else "", path)
     lock = combine_locks([NETCDFC_LOCK, HDF5_LOCK])  # what to_netcdf takes, less Dask's
     scratch = path.parent / f".{path.name}.{secrets.token_hex(4)}.tmp"
     try:
@@ -113,6 +124,9 @@ def write(dataset: xr.Dataset, path: Path, groups: dict[str, xr.Dataset] | None 
                 for group, part in parts.items():
                     part.dump_to_store(NetCDF4DataStore(root, group=group, mode="a", lock=lock))
                     interrupt_if_seen()
+        _flushed(scratch)
+        if mode is not None:
+            os.chmod(scratch, mode)
         os.replace(scratch, path)
     except RuntimeError as error:  # netCDF's "NetCDF: HDF error": a refused write
         size = scratch.stat().st_size if scratch.exists() else 0
@@ -122,6 +136,27 @@ def write(dataset: xr.Dataset, path: Path, groups: dict[str, xr.Dataset] | None 
         scratch.unlink(missing_ok=True)
         raise
     return path
+
+
+def _check_units(dataset: xr.Dataset, where: str, path: Path) -> None:
+    """ValueError naming the first variable of numbers in ``dataset`` without ``units``.
+
+    Booleans and text carry none; coordinates label a dimension (a sweep's swept values).
+    """
+    for name, variable in dataset.data_vars.items():
+        if variable.dtype.kind in "iufc" and not variable.attrs.get("units"):
+            raise ValueError(
+                f"{path}: {where}{name} has no declared units (CF units, '1' for a count)"
+            )
+
+
+def _flushed(path: Path) -> None:
+    """Flush the file ``path`` from the system's cache to the disk."""
+    handle = os.open(path, os.O_RDONLY)
+    try:
+        os.fsync(handle)
+    finally:
+        os.close(handle)
 
 
 class WriteFailed(RuntimeError):

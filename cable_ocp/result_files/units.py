@@ -1,8 +1,16 @@
-"""Units and long names of a result's fields, read from its class docstring.
+"""Units and long names of a result's fields, for the netCDF files and ``summary()``.
 
-A result states each field's unit once, beside the field in the numpydoc ``Attributes`` section
-(``omega : float, m`` and the first sentence below it); :func:`field_docs` reads them for the
-netCDF files (CF ``units`` and ``long_name``) and for ``summary()``'s ``"units"`` entry.
+A result class declares the unit of each field that it stores as a variable, once, beside its
+fields: a ``UNITS`` mapping (a ``ClassVar``) from field name to the unit in the udunits spelling
+of CF (``"m s-1"``, ``"1"`` for a count or a ratio). :func:`field_units` reads it, and
+:func:`unit_of` refuses a field that has none: a result with an undeclared unit is not written.
+
+A class that declares no ``UNITS`` (yet) states its units in the numpydoc ``Attributes`` section
+of its docstring, ``omega : float, m``; :func:`docstring_units` reads those, and a unit there
+that is not a unit (``metres a second``) is an error, never a silent ``"1"``.
+
+Long names (CF ``long_name``) are the first sentence of each field's description in that
+section (:func:`long_names`); a field without one is named by its name.
 """
 
 from __future__ import annotations
@@ -14,8 +22,13 @@ from functools import cache
 import xarray as xr
 
 DIMENSIONLESS = "1"
-UNIT = re.compile(r"^[A-Za-z][A-Za-z0-9^/ ·-]*$")
-NOT_UNITS = {"optional", "rad or m"}
+# SI symbols a result's docstring may state, each with an optional power: ``m/s^2``, ``N m``.
+SYMBOLS = ("m", "s", "kg", "N", "rad", "Pa", "J", "W", "Hz")
+TERM = rf"(?:{'|'.join(SYMBOLS)})(?:\^-?\d+)?"
+UNIT = re.compile(rf"^{TERM}(?:[ ·/]{TERM})*$")
+# Last parts of a numpydoc type that are not units: an optional field (no unit), and a unit
+# that depends on the instance (the caller gives it, ``to_dataset(units=...)``).
+NO_UNIT, PER_INSTANCE = "optional", "rad or m"
 
 
 def _top_level_split(text: str) -> list[str]:
@@ -43,49 +56,102 @@ def cf_units(unit: str) -> str:
 
 
 @cache
-def field_docs(cls: type) -> dict[str, tuple[str, str]]:
-    """``{field: (units, long_name)}`` from the numpydoc ``Attributes`` section of ``cls``.
-
-    Units are in the CF spelling (:func:`cf_units`). A field documented without a unit gets
-    ``"1"``; one not documented, ``"1"`` and its name.
-    """
+def _attributes(cls: type) -> dict[str, tuple[str, str]]:
+    """``{field: (type, description)}`` from the numpydoc ``Attributes`` section of ``cls``."""
     lines = inspect.cleandoc(cls.__doc__ or "").splitlines()
-    docs: dict[str, tuple[str, str]] = {}
+    entries: dict[str, tuple[str, str]] = {}
     try:
         start = next(i for i, line in enumerate(lines[:-1]) if line.strip() == "Attributes"
                      and set(lines[i + 1].strip()) == {"-"}) + 2  # fmt: skip
     except StopIteration:
-        return docs
+        return entries
     k = start
     while k < len(lines):
         line = lines[k]
         if k + 1 < len(lines) and lines[k + 1].strip() and set(lines[k + 1].strip()) == {"-"}:
             break  # the next section
-        if line and not line[0].isspace():
-            names, _, kind = line.partition(" : ")
-            parts = _top_level_split(kind)
-            unit = parts[-1] if len(parts) > 1 else ""
-            unit = cf_units(unit) if UNIT.match(unit) and unit not in NOT_UNITS else DIMENSIONLESS
-            text = []
-            k += 1
-            while k < len(lines) and (not lines[k] or lines[k][0].isspace()):
-                if not lines[k].strip():
-                    break
-                text.append(lines[k].strip())
-                k += 1
-            sentence = _plain(re.split(r"\.(?:\s+(?=[A-Z])|$)", " ".join(text))[0])
-            for name in (n.strip() for n in names.split(",")):
-                docs[name] = (unit, sentence or name.replace("_", " "))
-            continue
         k += 1
-    return docs
+        if not line or line[0].isspace():
+            continue
+        names, _, kind = line.partition(" : ")
+        text = []
+        while k < len(lines) and lines[k].strip() and lines[k][0].isspace():
+            text.append(lines[k].strip())
+            k += 1
+        for name in (n.strip() for n in names.split(",")):
+            entries[name] = (kind, " ".join(text))
+    return entries
+
+
+@cache
+def long_names(cls: type) -> dict[str, str]:
+    """``{field: long_name}``: the first sentence of each field's description in ``cls``."""
+    names = {}
+    for name, (_, text) in _attributes(cls).items():
+        sentence = _plain(re.split(r"\.(?:\s+(?=[A-Z])|$)", text)[0])
+        names[name] = sentence or name.replace("_", " ")
+    return names
+
+
+@cache
+def field_units(cls: type) -> dict[str, str]:
+    """``{field: units}`` (CF spelling) that ``cls`` declares: its ``UNITS``, else its docstring's.
+
+    Raises
+    ------
+    ValueError
+        As :func:`docstring_units`, for a class without ``UNITS``.
+    """
+    declared = getattr(cls, "UNITS", None)
+    return dict(declared) if declared is not None else docstring_units(cls)
+
+
+@cache
+def docstring_units(cls: type) -> dict[str, str]:
+    """``{field: units}`` (CF spelling) stated in the ``Attributes`` section of ``cls``.
+
+    A field documented without a unit (``steps : int``) is dimensionless, ``"1"``; one whose
+    unit depends on the instance (``rad or m``) is left out.
+
+    Raises
+    ------
+    ValueError
+        Naming the class and the field: a unit that is not a unit (``metres a second``).
+    """
+    units = {}
+    for name, (kind, _) in _attributes(cls).items():
+        parts = _top_level_split(kind)
+        unit = parts[-1] if len(parts) > 1 else NO_UNIT
+        if unit == PER_INSTANCE:
+            continue
+        if unit != NO_UNIT and not UNIT.match(unit):
+            raise ValueError(f"{cls.__name__}.{name} : {kind}: {unit!r} is not a unit")
+        units[name] = DIMENSIONLESS if unit == NO_UNIT else cf_units(unit)
+    return units
+
+
+def unit_of(cls: type, name: str) -> str:
+    """The unit that ``cls`` declares for its field ``name``.
+
+    Raises
+    ------
+    ValueError
+        The field has no declared unit (name it in ``cls.UNITS``; ``"1"`` for a count).
+    """
+    try:
+        return field_units(cls)[name]
+    except KeyError:
+        raise ValueError(
+            f"{cls.__name__}.{name}: no declared unit (add it to {cls.__name__}.UNITS, "
+            f'"1" for a count or a ratio)'
+        ) from None
 
 
 def units_of(cls: type, names) -> dict[str, str]:
     """``{name: units}`` of the fields ``names`` of ``cls`` that have a unit (not ``"1"``)."""
-    docs = field_docs(cls)
-    return {name: docs[name][0] for name in names
-            if name in docs and docs[name][0] != DIMENSIONLESS}  # fmt: skip
+    units = field_units(cls)
+    return {name: units[name] for name in names
+            if name in units and units[name] != DIMENSIONLESS}  # fmt: skip
 
 
 def _plain(text: str) -> str:

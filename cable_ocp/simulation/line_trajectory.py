@@ -149,22 +149,24 @@ class LineTrajectory(PhysicsChecked):
 
     def to_xarray(self) -> xr.Dataset:
         """The whole-run views over ``time`` (the segments are in :meth:`save`'s groups)."""
-        whole = xr.Dataset(
+        return xr.Dataset(
             {
-                "element_count": ("time", self.element_count, {"long_name": "n, elements 0..n"}),
-                "line_out": ("time", self.line_out, {"units": "m", "long_name": "line out"}),
-                "top_length": ("time", self.top_length, {"units": "m"}),
-                "end": (("time", "component"), self.end, {"units": "m"}),
-                "top_tension": ("time", self.top_tension, {"units": "N"}),
+                "element_count": ("time", self.element_count, _cf("1", "n, elements 0..n")),
+                "line_out": ("time", self.line_out, _cf("m", "line out")),
+                "top_length": ("time", self.top_length, _cf("m", "length of the top element")),
+                "end": (("time", "component"), self.end, _cf("m", "position of the end E")),
+                "top_tension": ("time", self.top_tension, _cf("N", "signed tension at the top")),
             },
-            coords={"time": ("time", self.time, {"units": "s"}), "component": ["x", "y", "z"]},
+            coords={
+                "time": ("time", self.time, _cf("s", "time")),
+                "component": ("component", ["x", "y", "z"], _cf("1", "component (z up)")),
+            },
             attrs={
                 **netcdf.file_attributes(KIND),
                 "segments": len(self.segments),
                 "element_length": self.element_length,
-            },  # fmt: skip
+            },
         )
-        return whole
 
     def save(self, path: str | Path) -> Path:
         """Write ``path.nc``: the whole-run views at its root, segment ``K`` in group ``segment_K``.
@@ -211,6 +213,11 @@ class LineTrajectory(PhysicsChecked):
             where = "" if str(path) in str(error) else f"{path}: "
             raise ValueError(f"{where}not a readable line trajectory ({error})") from None
         return run
+
+
+def _cf(units: str, long_name: str) -> dict[str, str]:
+    """The CF attributes of a variable of the whole run."""
+    return {"units": units, "long_name": long_name}
 
 
 def _old_segment(path: Path, group: str) -> xr.Dataset:

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass, field, fields
 from pathlib import Path
+from typing import ClassVar
 
 import numpy as np
 import xarray as xr
@@ -58,6 +59,13 @@ class Trajectory(PhysicsChecked):
         (:func:`~cable_ocp.simulation.slack.signed_tensions`); the last is the top tension. Empty
         in runs written before it was kept (:attr:`kept_signs`).
     """
+
+    # The states and inputs are stored split into named quantities, each with its own unit
+    # (:mod:`cable_ocp.simulation.trajectory_dataset`).
+    UNITS: ClassVar[dict[str, str]] = {
+        "time": "s", "joints": "m", "tensions": "N", "winch_angle": "rad",
+        "clearance_error": "m", "omega": "m", "signed_tensions": "N",
+    }  # fmt: skip
 
     time: np.ndarray
     states: np.ndarray

@@ -37,6 +37,7 @@ from typing import Any
 import numpy as np
 import xarray as xr
 
+from cable_ocp.result_files import netcdf
 from cable_ocp.scene.output import MARKER, FolderInUse, check_target, file_mode, write_atomic
 from cable_ocp.scene.output import folder_lock as output_lock
 from cable_ocp.sweep.execute import SERIES
@@ -50,9 +51,12 @@ LOCK = ".sweep.lock"  # the lock inside the folder of cable_ocp up to 0.3: remov
 SWEEP_NAMES = {MARKER, LOCK, "sweep.json", "sweep.toml", "cases", "sweep.nc"}
 RECOVER = "rerun the same command with --retry-failed to compute it again"
 TIME_DECIMALS = 9  # output times rounded to 1 ns so equal times of different cases coincide
+# The units of every variable of numbers that a case file and sweep.nc hold (CF spelling; the
+# writer refuses one without): the run's series, its figures and the optimiser's counts.
 UNITS = {
-    "omega": "m", "wall_time": "s", "omega_model": "m", "winch_angle": "rad", "end_x": "m",
-    "end_y": "m", "end_z": "m", "clearance_error": "m", "top_tension": "N", "time": "s",
+    "omega": "m", "wall_time": "s", "omega_model": "m", "iterations": "1", "evaluations": "1",
+    "winch_angle": "rad", "end_x": "m", "end_y": "m", "end_z": "m", "clearance_error": "m",
+    "top_tension": "N", "time": "s",
 }  # fmt: skip
 
 
@@ -61,25 +65,21 @@ def case_path(folder: Path, index: int) -> Path:
     return Path(folder) / "cases" / f"case_{index:05d}.nc"
 
 
-def _atomic_netcdf(dataset: xr.Dataset, target: Path) -> None:
-    """Write ``dataset`` to ``target`` through a scratch file, without any Dask scheduler.
+def _write(dataset: xr.Dataset, target: Path) -> None:
+    """Write ``dataset`` to ``target`` by the one netCDF writer (atomic, without Dask).
 
-    xarray takes its write lock through the current Dask scheduler; with a distributed client
-    that is the scheduler, which a sweep must outlive. The synchronous scheduler keeps the lock
-    in this process.
+    The folder is made if new; the file gets its permissions (:func:`file_mode`).
     """
-    import dask
-
     target.parent.mkdir(parents=True, exist_ok=True)
-    scratch = target.parent / f".{target.name}.{os.urandom(4).hex()}.tmp"
-    try:
-        with dask.config.set(scheduler="synchronous"):
-            dataset.to_netcdf(scratch)
-        os.chmod(scratch, file_mode(target.parent))
-        os.replace(scratch, target)
-    except BaseException:
-        scratch.unlink(missing_ok=True)
-        raise
+    netcdf.write(dataset, target, mode=file_mode(target.parent))
+
+
+def _with_units(dataset: xr.Dataset) -> xr.Dataset:
+    """``dataset`` with the :data:`UNITS` of its variables; returns it."""
+    for name, unit in UNITS.items():
+        if name in dataset.variables:
+            dataset[name].attrs["units"] = unit
+    return dataset
 
 
 def write_case(folder: Path, case: Case, record: dict[str, Any]) -> Path:
@@ -100,7 +100,7 @@ def write_case(folder: Path, case: Case, record: dict[str, Any]) -> Path:
         "overrides": json.dumps(case.overrides),
     }
     path = case_path(folder, case.index)
-    _atomic_netcdf(xr.Dataset(data, coords=coords, attrs=attrs), path)
+    _write(_with_units(xr.Dataset(data, coords=coords, attrs=attrs)), path)
     return path
 
 
@@ -396,17 +396,13 @@ def assemble(folder: Path, spec: SweepSpec) -> xr.Dataset:
         "swept": json.dumps(list(spec.swept)),
         "fixed": json.dumps(spec.fixed),
     }
-    dataset = xr.Dataset(variables, coords=coords, attrs=attrs)
-    for name, unit in UNITS.items():
-        if name in dataset.variables:
-            dataset[name].attrs["units"] = unit
-    return dataset
+    return _with_units(xr.Dataset(variables, coords=coords, attrs=attrs))
 
 
 def save_dataset(folder: Path, dataset: xr.Dataset) -> Path:
     """Write the assembled Dataset to ``folder/sweep.nc`` atomically."""
     path = Path(folder) / "sweep.nc"
-    _atomic_netcdf(dataset, path)
+    _write(dataset, path)
     return path
 
 
