@@ -16,7 +16,7 @@ from typing import TYPE_CHECKING
 
 from cable_ocp.lazy import lazy_names
 
-if TYPE_CHECKING:  # what __getattr__ imports, for type checkers and the import graph
+if TYPE_CHECKING:  # what __getattr__ imports (lazy_names reads it), for type checkers too
     from cable_ocp import plots
     from cable_ocp.control.closed_loop.loop import mpc
     from cable_ocp.control.closed_loop.result import MpcResult
@@ -42,44 +42,6 @@ if TYPE_CHECKING:  # what __getattr__ imports, for type checkers and the import 
     from cable_ocp.simulation.trajectory import Trajectory
     from cable_ocp.studies.catenary import catenary_shape
     from cable_ocp.studies.validation import catenary_check
-
-# Each public name and the module that defines it ("plots" is a subpackage).
-_SOURCES = {
-    "INPUT_NAMES": "cable_ocp.model.cable",
-    "CableModel": "cable_ocp.model.cable",
-    "GaussNewtonSettings": "cable_ocp.control.gauss_newton",
-    "GridSettings": "cable_ocp.control.settings",
-    "IpoptSettings": "cable_ocp.control.ocp",
-    "ModelSettings": "cable_ocp.control.settings",
-    "SOLVERS": "cable_ocp.control.solvers",
-    "TranscriptionSettings": "cable_ocp.control.settings",
-    "MpcResult": "cable_ocp.control.closed_loop.result",
-    "MpcSettings": "cable_ocp.control.closed_loop.settings",
-    "NelderMeadSettings": "cable_ocp.control.nelder_mead",
-    "OcpResult": "cable_ocp.control.optimization",
-    "Drive": "cable_ocp.drive.drive",
-    "EquilibriumError": "cable_ocp.simulation.statics",
-    "LineTrajectory": "cable_ocp.simulation.line_trajectory",
-    "Scene": "cable_ocp.scene.schema",
-    "SimulationError": "cable_ocp.simulation.integrate",
-    "Trajectory": "cable_ocp.simulation.trajectory",
-    "catenary_check": "cable_ocp.studies.validation",
-    "check_landing": "cable_ocp.lowering.checks",
-    "hold": "cable_ocp.lowering.hold",
-    "land": "cable_ocp.lowering.landing",
-    "landing_scene": "cable_ocp.lowering.landing",
-    "plan_landing": "cable_ocp.lowering.plan",
-    "catenary_shape": "cable_ocp.studies.catenary",
-    "equilibrium": "cable_ocp.simulation.statics",
-    "integrate": "cable_ocp.simulation.integrate",
-    "load_result": "cable_ocp.lowering.results",
-    "load_scene": "cable_ocp.scene.schema",
-    "mpc": "cable_ocp.control.closed_loop.loop",
-    "optimize": "cable_ocp.control.optimization",
-    "plots": "cable_ocp.plots",
-    "reference_solution": "cable_ocp.simulation.integrate",
-    "simulate": "cable_ocp.simulation.run",
-}
 
 __all__ = [
     "INPUT_NAMES",
@@ -117,4 +79,4 @@ __all__ = [
     "reference_solution",
     "simulate",
 ]
-__getattr__, __dir__ = lazy_names(globals(), _SOURCES)
+__getattr__, __dir__ = lazy_names(globals())  # the names imported under TYPE_CHECKING
