@@ -11,6 +11,7 @@ import pytest
 import cable_ocp as co
 from cable_ocp import cli
 from cable_ocp.control.closed_loop import MpcSettings
+from cable_ocp.drive.winch import RETIMES
 from cable_ocp.scene.bundled import scene_path
 
 HEAVE = {"top.heave.amplitude": 0.5, "top.heave.period": 8.0}
@@ -143,8 +144,71 @@ def test_cable_ocp_replay_refuses_what_is_not_an_optimum(tmp_path, capsys):
     run.save(tmp_path / "run" / "trajectory")
     code = cli.main(["replay", str(tmp_path / "run"), "--out", str(tmp_path / "o"), "--quiet"])
     assert code == 2
-    assert "holds a Trajectory; replay takes what optimize saved" in capsys.readouterr().err
+    err = capsys.readouterr().err
+    assert "holds a Trajectory, a run whose winch is not kept as a profile to drive" in err
+    assert "replay takes what optimize or mpc saved" in err and err.count("\n") == 1
     assert not (tmp_path / "o").exists()
+
+
+@pytest.fixture(scope="module")
+def short_optimum(tmp_path_factory):
+    """A 10 s optimum of small_tow, saved by the command line."""
+    folder = tmp_path_factory.mktemp("short") / "optimum"
+    assert cli.main(["optimize", "small_tow", "--set", "numerics.duration=10", "--quiet",
+                     "--out", str(folder)]) == 0  # fmt: skip
+    return folder
+
+
+def test_cable_ocp_replay_on_another_duration_is_refused_naming_retime(
+    short_optimum, tmp_path, capsys, monkeypatch
+):
+    """Issue 45 item 3 on the command line: the refusal names the option that chooses, before
+    any work (it named the API's result.retimed)."""
+    from cable_ocp.simulation import run
+
+    monkeypatch.setattr(run, "simulate", lambda *a, **k: pytest.fail("refused before any work"))
+    out = tmp_path / "o"
+    code = cli.main(["replay", str(short_optimum), "--set", "numerics.duration=25",
+                     "--out", str(out), "--quiet"])  # fmt: skip
+    err = capsys.readouterr().err
+    assert code == 2 and err.count("\n") == 1, err
+    assert "numerics.duration = 25 s, but the winch profile was made for 10 s" in err
+    assert "--retime 'hold': played in its own time" in err and "retimed(" not in err
+    assert not out.exists()
+
+
+@pytest.mark.parametrize("retime", ["hold", "stretch"])
+def test_cable_ocp_replay_retimes_by_the_users_choice_and_says_so(
+    short_optimum, tmp_path, capsys, retime
+):
+    import json
+
+    out = tmp_path / retime
+    code = cli.main(["replay", str(short_optimum), "--set", "numerics.duration=25", "--retime",
+                     retime, "--out", str(out), "--quiet"])  # fmt: skip
+    printed = capsys.readouterr().out
+    assert code == 0
+    assert f"note: the 10 s optimum {RETIMES[retime]}, on a 25 s scene" in printed
+    assert json.loads((out / "summary.json").read_text())["saved_omega"] > 0
+    assert co.load_result(out).time[-1] == pytest.approx(25.0)
+
+
+def test_cable_ocp_replay_drives_a_closed_loops_winch(tmp_path, capsys):
+    """An mpc.nc replays too: the plant's run again from the applied winch (to 1 mm, as the
+    API's simulate(scene, winch=MpcResult)), its Omega beside the saved one."""
+    import json
+
+    loop = tmp_path / "loop"
+    assert cli.main(["mpc", "small_tow", "--set", "numerics.duration=10", "--quiet",
+                     "--out", str(loop)]) == 0  # fmt: skip
+    out = tmp_path / "replayed"
+    assert cli.main(["replay", str(loop), "--out", str(out), "--quiet"]) == 0
+    summary = json.loads((out / "summary.json").read_text())
+    saved = co.load_result(loop)
+    assert summary["saved_omega"] == saved.omega
+    assert summary["omega"] == pytest.approx(saved.omega, rel=0.05)
+    np.testing.assert_allclose(co.load_result(out).end, saved.trajectory.end, atol=1e-3)
+    capsys.readouterr()
 
 
 @pytest.mark.parametrize("given", ["folder", "file", "parent"])

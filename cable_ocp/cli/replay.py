@@ -1,4 +1,4 @@
-"""``cable-ocp replay RESULT --out DIR``: a saved optimum driving its scene, or a changed one."""
+"""``cable-ocp replay RESULT --out DIR``: a saved winch driving its scene, or a changed one."""
 
 from __future__ import annotations
 
@@ -14,18 +14,27 @@ from cable_ocp.cli.arguments import (
     parse_overrides,
 )
 from cable_ocp.cli.run_folder import write_run
+from cable_ocp.drive.winch import RETIMES, replayed_duration
+
+REPLAYABLE = "what optimize or mpc saved (result.nc, mpc.nc; lower's hover_*.nc and hold.nc)"
 
 
 def add_replay_command(commands) -> None:
     """Add ``replay`` to the subparsers of ``cable-ocp``."""
     parser = add_command(
         commands, "replay",
-        "drive a scene by a saved optimum (on its own scene, or changed by --set)", scene=False,
+        "drive a scene by a saved optimum or closed loop (its own scene, or changed by --set)",
+        scene=False,
     )  # fmt: skip
-    parser.add_argument("result", type=Path,
-                        help="a folder that optimize wrote (or its result.nc)")  # fmt: skip
+    parser.add_argument("result", type=Path, help=f"a folder or file holding {REPLAYABLE}")
     parser.add_argument("--out", type=Path, required=True, help=OUT_HELP)
     add_set(parser, "model.elements=60", "a field of the saved scene")
+    parser.add_argument(
+        "--retime", choices=list(RETIMES),
+        help="on a scene of another numerics.duration (--set): "
+        + "; ".join(f"{name}: {text}" for name, text in RETIMES.items())
+        + " (default: such a replay is refused)",
+    )  # fmt: skip
     parser.add_argument("--quiet", action="store_true", help="no progress bar")
     parser.add_argument("--interpreted", action="store_true", help=INTERPRETED_HELP)
     parser.add_argument("--animate", action="store_true", help=ANIMATE_HELP)
@@ -35,9 +44,10 @@ def add_replay_command(commands) -> None:
 def run_replay_command(args: argparse.Namespace) -> int:
     """Run ``cable-ocp replay``; 3 when the run is not physical, 0 otherwise.
 
-    The summary adds ``saved_omega``, the Omega the optimum was saved with (m).
+    The summary adds ``saved_omega``, the Omega the result was saved with (m). A replay on
+    another duration is refused unless ``--retime`` says how, before any work; a retimed one
+    prints what the retiming did.
     """
-    from cable_ocp.control.optimization import OcpResult
     from cable_ocp.control.results import load_result
     from cable_ocp.simulation.progress import stage
     from cable_ocp.simulation.run import simulate
@@ -51,14 +61,19 @@ def run_replay_command(args: argparse.Namespace) -> int:
             "would replace; give another folder; nothing was written"
         )
     result = load_result(args.result)
-    if not isinstance(result, OcpResult):
+    if not hasattr(result, "retimed"):  # a run, not a winch: its winch is not kept to drive
         raise ValueError(
-            f"{args.result}: holds a {type(result).__name__}; replay takes what optimize saved "
-            "(result.nc), whose profile it drives"
+            f"{args.result}: holds a {type(result).__name__}, a run whose winch is not kept as a "
+            f"profile to drive; replay takes {REPLAYABLE}, whose winch it drives (a run is "
+            "made again by cable-ocp simulate on its scene)"
         )
     scene = result.scene.updated(parse_overrides(args.set)) if args.set else result.scene
+    replayed_duration(result.duration, scene.numerics.duration, args.retime, "--retime {}")
+    winch = result if args.retime is None else result.retimed(args.retime)
     with stage(f"replay {scene.name}", scene.numerics.duration, quiet=args.quiet):
-        trajectory = simulate(scene, winch=result, quiet=args.quiet, compiled=not args.interpreted)
+        trajectory = simulate(scene, winch=winch, quiet=args.quiet, compiled=not args.interpreted)
+    if args.retime is not None and winch.note(scene):
+        print(f"note: {winch.note(scene)}")
     return write_run(
         "replay", trajectory, scene, Path(args.out), args.animate, {"saved_omega": result.omega}
     )
