@@ -73,8 +73,12 @@ def test_what_is_not_a_result_is_named(tmp_path):
     xr.Dataset({"a": ("x", [1.0])}).to_netcdf(tmp_path / "other.nc")
     with pytest.raises(ValueError, match=r"other\.nc: not a cable_ocp result"):
         co.load_result(tmp_path / "other.nc")
+    xr.Dataset(attrs={"cable_ocp_result": "Tide"}).to_netcdf(tmp_path / "tide.nc")
+    with pytest.raises(ValueError, match=r"holds a Tide, which load_result does not read \(it "
+                       r"reads .*LandingPlan, LandingResult, HoldResult\)"):  # fmt: skip
+        co.load_result(tmp_path / "tide.nc")
     xr.Dataset(attrs={"cable_ocp_result": "HoldResult"}).to_netcdf(tmp_path / "hold.nc")
-    with pytest.raises(ValueError, match=r"holds a HoldResult, which load_result does not read"):
+    with pytest.raises(ValueError, match=r"hold\.nc: not a readable hold \(cable_ocp_format"):
         co.load_result(tmp_path / "hold.nc")
 
 
@@ -144,6 +148,8 @@ def test_a_landing_plan_round_trips_and_a_forged_part_is_refused(tmp_path, plan)
     _same_line(loaded.run, plan.run)
     t = np.linspace(0.0, plan.scene.numerics.duration, 7)
     np.testing.assert_array_equal(loaded.angle(t)[0], plan.angle(t)[0])
+    replayed = co.simulate(loaded.scene, winch=loaded)  # as any result with a winch replays
+    np.testing.assert_allclose(replayed.end, plan.run.end, rtol=0, atol=1e-9)
     with netCDF4.Dataset(path, "a") as root:
         root["report"].setncattr("cable_ocp_result", "HoldCorrection")
     with pytest.raises(ValueError, match="report: holds a HoldCorrection, expected LandingReport"):

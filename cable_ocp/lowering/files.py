@@ -160,8 +160,8 @@ def load(cls: type, path: str | Path, what: str):
             values[name] = _part(name, groups, hints[name]) if name in names else None
         return cls(**values)
     except (ValueError, KeyError, TypeError) as error:
-        where = "" if str(path) in str(error) else f"{path}: "
-        raise ValueError(f"{where}not a readable {what} ({error})") from None
+        detail = str(error).removeprefix(f"{path}: ")
+        raise ValueError(f"{path}: not a readable {what} ({detail})") from None
 
 
 def _names(root: xr.Dataset) -> list[str]:

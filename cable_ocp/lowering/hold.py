@@ -89,6 +89,13 @@ class HoldResult(WithParts):
     peak_acceleration: float
     drum: tuple[Check, ...]
 
+    def winch_profile(self, scene=None, retime: str | None = None):
+        """The drum's angle the closed loop applied, to replay the hold on its scene.
+
+        ``MpcResult.winch_profile`` on ``scene`` (default: the hold scene).
+        """
+        return self.mpc.winch_profile(scene if scene is not None else self.scene, retime)
+
     @property
     def drum_excess(self) -> str:
         """The winch limits the drum went beyond, as text ('' when it kept within them)."""

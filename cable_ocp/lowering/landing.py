@@ -308,6 +308,14 @@ class LandingResult(WithParts):
     compensation_ratio: float
     wall_time: float
 
+    def winch_profile(self, scene=None, retime: str | None = None):
+        """The landing's winch angle, to replay it: ``simulate(landing.scene, winch=landing)``.
+
+        That of its optimum or closed loop (``OcpResult.winch_profile``,
+        ``MpcResult.winch_profile``), on ``scene`` (default: the landing scene).
+        """
+        return self.result.winch_profile(scene if scene is not None else self.scene, retime)
+
     @property
     def success(self) -> bool:
         """Whether the solver or the loop succeeded and every check passed on its run."""

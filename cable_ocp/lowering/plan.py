@@ -102,6 +102,14 @@ class LandingPlan(WithParts):
         """The winch angle flown (rad, rad/s, rad/s^2), the approach's heave included."""
         return _landing_angle(self.scene, self.descent, self.heave_feedforward, self.hold)(t)
 
+    def winch_profile(self, scene=None):
+        """The winch angle flown, to replay the plan: ``simulate(plan.scene, winch=plan)``.
+
+        :meth:`angle`, in the plan's own time on any ``scene``: held after the landing, its
+        heave feedforward that of the plan's scene's sea.
+        """
+        return self.angle
+
 
 def _faded(t: np.ndarray, start: float, length: float, value, rate, acceleration):
     """``w(t) f(t)`` with its rate and acceleration, ``f`` given with its own (m, m/s, m/s^2).
