@@ -25,6 +25,11 @@ line run any of them alike by its name in :data:`SOLVERS`:
 6. Its own settings are a frozen dataclass, checked field by field when made
    (:mod:`cable_ocp.control.checks`); :func:`ocp_settings` checks what they must agree on with
    the grid and the transcription, before any work.
+
+What differs between solvers is asked of their entry (:class:`Solver`), never decided by
+comparing their names: the transcription ``optimize`` states for it, its default control, whether
+it needs the compiled model, how the closed loop shoots with it and starts it, and which status
+says that its QP had no feasible point. A new solver is one more entry here.
 """
 
 from __future__ import annotations
