@@ -12,6 +12,7 @@ from cable_ocp.simulation.integrate import SimulationError
 from cable_ocp.simulation.run import simulate
 from cable_ocp.simulation.statics import equilibrium
 from cable_ocp.studies.stability import (
+    StepSearch,
     baumgarte_drift,
     largest_stable_step,
     pushed_scene,
@@ -22,8 +23,8 @@ from cable_ocp.studies.stability import (
 )
 
 # Small searches: short runs, a coarse bracket (ratio 1.5).
-QUICK = {"duration": 2.0, "min_steps": 50, "resolution": 1.5}
-TORSION_QUICK = {"duration": 0.5, "min_steps": 50, "resolution": 1.5, "linearised_samples": 2}
+QUICK = StepSearch(duration=2.0, min_steps=50, resolution=1.5)
+TORSION_QUICK = StepSearch(duration=0.5, min_steps=50, resolution=1.5, linearised_samples=2)
 
 
 @pytest.fixture(scope="module")
@@ -55,10 +56,10 @@ def test_rk4_growth_on_the_imaginary_axis():
 
 def test_bisection_brackets_the_limit(end_force):
     """n = 5 without torsion: a fresh run at the found step completes, one at twice it fails."""
-    result = largest_stable_step(end_force, 5, False, **QUICK)
+    result = largest_stable_step(end_force, 5, False, search=QUICK)
     assert result.step < result.unstable_step <= 1.5 * result.step
     assert result.failure
-    tolerance = 1.0  # largest_stable_step's default bond tolerance
+    tolerance = StepSearch().tolerance  # largest_stable_step's default bond tolerance
     run = pushed_run(end_force, 5, result.step, 2.0, 50, tolerance)
     assert run.time[-1] == pytest.approx(result.duration)
     with pytest.raises(SimulationError):
@@ -72,8 +73,8 @@ def test_limit_falls_with_elements(end_force, validation):
 
     The linearised limit agrees with the bisection to within the bracket's ratio and a margin.
     """
-    coarse = largest_stable_step(end_force, 5, True, **TORSION_QUICK)
-    fine = largest_stable_step(end_force, 15, True, first_step=coarse.step, **TORSION_QUICK)
+    coarse = largest_stable_step(end_force, 5, True, search=TORSION_QUICK)
+    fine = largest_stable_step(end_force, 15, True, first_step=coarse.step, search=TORSION_QUICK)
     agreement = [result.step / result.linearised_step for result in (coarse, fine)]
     validation("largest stable RK4 step with torsion, end_force, n = 5 and 15",
                "second formulation", "linearised limit (eigenvalues of the FD Jacobian)",
@@ -143,3 +144,9 @@ def test_a_knot_run_is_named_by_its_solver_and_searched_when_it_does_not_shoot()
     assert search.evaluations_to_within(1.0) == 2  # within 0.2 m of its last 0.1 m
     assert not KnotRun(**figures, knots=7, solver="nelder-mead", corrected=False,
                        history=()).searched  # fmt: skip
+
+
+@pytest.mark.parametrize("resolution", [1.0, 0.5, float("nan")])
+def test_a_step_search_that_cannot_end_is_refused_naming_its_field(resolution):
+    with pytest.raises(ValueError, match=r"StepSearch\.resolution = .*must be > 1"):
+        StepSearch(resolution=resolution)

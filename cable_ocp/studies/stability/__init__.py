@@ -49,6 +49,7 @@ from cable_ocp.studies.stability.stable_step import (
     TWIST_LIMIT,
     TWIST_SEED,
     StableStep,
+    StepSearch,
     largest_stable_step,
     run_length,
 )
@@ -67,6 +68,7 @@ __all__ = [
     "StabilityStudy",
     "StableStep",
     "StepLimits",
+    "StepSearch",
     "TWIST_LIMIT",
     "TWIST_SEED",
     "baumgarte_drift",

@@ -4,12 +4,12 @@ from __future__ import annotations
 
 import math
 from collections.abc import Sequence
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import numpy as np
 
 from cable_ocp.studies.figures import finished_chart
-from cable_ocp.studies.stability.stable_step import StableStep, largest_stable_step
+from cable_ocp.studies.stability.stable_step import StableStep, StepSearch, largest_stable_step
 
 
 def power_law(elements: Sequence[int], steps: Sequence[float]) -> tuple[float, float]:
@@ -121,24 +121,22 @@ def step_limits(
     scene,
     elements: Sequence[int],
     torsion_elements: Sequence[int],
-    duration: float = 10.0,
+    search: StepSearch | None = None,
     torsion_duration: float = 1.0,
-    min_steps: int = 200,
-    resolution: float = 1.1,
-    tolerance: float = 1.0,
-    linearised_samples: int = 5,
     compile_from: int | None = None,
     quiet: bool = True,
 ) -> StepLimits:
     """:func:`largest_stable_step` for each ``n``: ``elements`` without, ``torsion_elements`` with.
 
     Each search starts from the limit found at the previous ``n`` (the limit falls with ``n``),
-    the first from the scene's step. Torsion runs are shorter (``torsion_duration``): their steps
-    are tiny. Models with at least ``compile_from`` elements are compiled to C (None: none).
+    the first from the scene's step. Torsion runs are shorter (``torsion_duration``, s, in place
+    of ``search.duration``): their steps are tiny. Models with at least ``compile_from`` elements
+    are compiled to C (None: none). ``search`` is ``StepSearch()`` by default.
     """
+    search = search or StepSearch()
     results = []
     for torsion, chosen, length in (
-        (False, elements, duration),
+        (False, elements, search.duration),
         (True, torsion_elements, torsion_duration),
     ):
         previous = None
@@ -148,14 +146,10 @@ def step_limits(
                 n,
                 torsion,
                 first_step=previous,
-                duration=length,
-                min_steps=min_steps,
-                resolution=resolution,
-                tolerance=tolerance,
-                linearised_samples=linearised_samples,
+                search=replace(search, duration=length),
                 compiled=compile_from is not None and n >= compile_from,
                 quiet=quiet,
             )
             results.append(result)
             previous = result.step
-    return StepLimits(tuple(results), tolerance)
+    return StepLimits(tuple(results), search.tolerance)

@@ -25,6 +25,40 @@ TWIST_SEED = 1e-6
 
 
 @dataclass(frozen=True)
+class StepSearch:
+    """How the largest stable step of a model is searched: its runs, and where the search stops.
+
+    Attributes
+    ----------
+    duration : float, s
+        Shortest run; see :func:`run_length` for ``min_steps``.
+    min_steps : int
+        Fewest steps of a run (:func:`run_length`).
+    resolution : float
+        Largest ratio ``unstable_step / step`` at the end (> 1).
+    tolerance : float, m
+        Bond residual that stops a run. The scene's own (0.1 mm for end_force) is an accuracy
+        bound: at large steps the push alone exceeds it, and so would 1 cm at n = 5, so the
+        search would measure accuracy, not stability. A blow-up passes any bound within a few
+        steps; whether the stable run is also accurate is ``quarter_step_difference``.
+    linearised_samples : int
+        States of the stable run (evenly spaced, first and last included) at which
+        :func:`linearised_step` is evaluated; the smallest is reported. The push raises the
+        tension, and with it the frequencies, above those of the equilibrium.
+    """
+
+    duration: float = 10.0
+    min_steps: int = 200
+    resolution: float = 1.1
+    tolerance: float = 1.0
+    linearised_samples: int = 5
+
+    def __post_init__(self):
+        if not self.resolution > 1:
+            raise ValueError(f"StepSearch.resolution = {self.resolution!r}: must be > 1")
+
+
+@dataclass(frozen=True)
 class StableStep:
     """The largest stable RK4 step of one model, found by bisection in ``log h``.
 
@@ -139,23 +173,20 @@ def largest_stable_step(
     elements: int,
     torsion: bool,
     first_step: float | None = None,
-    duration: float = 10.0,
-    min_steps: int = 200,
-    resolution: float = 1.1,
-    tolerance: float = 1.0,
+    search: StepSearch | None = None,
     twist_seed: float = TWIST_SEED,
-    linearised_samples: int = 5,
     compiled: bool = False,
     quiet: bool = True,
 ) -> StableStep:
     """Largest RK4 step at which a pushed run of the scene stays stable (bisection in ``log h``).
 
     A run is stable if :func:`cable_ocp.simulation.run.simulate` completes without
-    :class:`SimulationError` (non-finite state, or a bond residual beyond ``tolerance``) and, with
-    torsion, no twist angle exceeds :data:`TWIST_LIMIT`. From ``first_step`` the step is doubled
-    (or halved) until a stable and an unstable step bracket the limit; the bracket is then bisected
-    in ``log h`` until its ratio is below ``resolution``. The stable end is compared with a run at
-    a quarter of its step, so that a run that completes but is wrong shows up.
+    :class:`SimulationError` (non-finite state, or a bond residual beyond ``search.tolerance``)
+    and, with torsion, no twist angle exceeds :data:`TWIST_LIMIT`. From ``first_step`` the step is
+    doubled (or halved) until a stable and an unstable step bracket the limit; the bracket is then
+    bisected in ``log h`` until its ratio is below ``search.resolution``. The stable end is
+    compared with a run at a quarter of its step, so that a run that completes but is wrong shows
+    up.
 
     Parameters
     ----------
@@ -167,23 +198,10 @@ def largest_stable_step(
         Whether the model has torsion (6 DOF per element).
     first_step : float, optional, s
         Where the search starts (the scene's step by default).
-    duration : float, s
-        Shortest run; see :func:`run_length` for ``min_steps``.
-    min_steps : int
-        Fewest steps of a run (:func:`run_length`).
-    resolution : float
-        Largest ratio ``unstable_step / step`` at the end (> 1).
-    tolerance : float, m
-        Bond residual that stops a run. The scene's own (0.1 mm for end_force) is an accuracy
-        bound: at large steps the push alone exceeds it, and so would 1 cm at n = 5, so the
-        search would measure accuracy, not stability. A blow-up passes any bound within a few
-        steps; whether the stable run is also accurate is ``quarter_step_difference``.
+    search : StepSearch, optional
+        The runs tried and where the bisection stops (by default ``StepSearch()``).
     twist_seed : float, rad
         Random initial twist per element of a torsion model (see :class:`_Runner`).
-    linearised_samples : int
-        States of the stable run (evenly spaced, first and last included) at which
-        :func:`linearised_step` is evaluated; the smallest is reported. The push raises the
-        tension, and with it the frequencies, above those of the equilibrium.
     compiled : bool
         Integrate with the model compiled to C (for n >= 10 the right-hand side is compiled once
         for all steps; worth it when the runs are long).
@@ -194,17 +212,16 @@ def largest_stable_step(
     -------
     StableStep
     """
-    if resolution <= 1:
-        raise ValueError(f"resolution = {resolution}: must be > 1")
+    search = search or StepSearch()
     started = time.perf_counter()
     local = pushed_scene(scene, elements, torsion).updated(
-        {"numerics.constraint_tolerance": tolerance}
+        {"numerics.constraint_tolerance": search.tolerance}
     )
     runner = _Runner(local, compiled, quiet, twist_seed)
     trials: dict[float, Trajectory | str] = {}
 
     def stable(step: float) -> bool:
-        trials[step] = runner.attempt(step, run_length(step, duration, min_steps))
+        trials[step] = runner.attempt(step, run_length(step, search.duration, search.min_steps))
         return not isinstance(trials[step], str)
 
     step = first_step or scene.numerics.step
@@ -216,7 +233,7 @@ def largest_stable_step(
         low, high = step / 2, step
         while not stable(low):
             low, high = low / 2, low
-    while high / low > resolution:
+    while high / low > search.resolution:
         middle = math.sqrt(low * high)
         if stable(middle):
             low = middle
@@ -224,7 +241,7 @@ def largest_stable_step(
             high = middle
     coarse = trials[low]
     quarter = runner.run(low / 4, coarse.time[-1], output_every=4)
-    samples = np.linspace(0, coarse.time.size - 1, linearised_samples).round().astype(int)
+    samples = np.linspace(0, coarse.time.size - 1, search.linearised_samples).round().astype(int)
     return StableStep(
         elements=elements,
         torsion=torsion,

@@ -13,7 +13,7 @@ from cable_ocp.studies.stability.knots import KnotsComparison, knots_comparison
 from cable_ocp.studies.stability.limits import StepLimits, step_limits
 from cable_ocp.studies.stability.markdown import table_cell
 from cable_ocp.studies.stability.singular import SingularCase, singular_states
-from cable_ocp.studies.stability.stable_step import TWIST_LIMIT, TWIST_SEED
+from cable_ocp.studies.stability.stable_step import TWIST_LIMIT, TWIST_SEED, StepSearch
 
 
 @dataclass(frozen=True)
@@ -24,18 +24,12 @@ class StabilitySettings:
     ----------
     elements, torsion_elements : tuple of int
         ``n`` of the step limits without and with torsion.
-    duration, torsion_duration : float, s
-        Shortest stability run without and with torsion. Without torsion it covers the push's
-        ramp (15 s in end_force), since the rising tension raises the frequencies; torsion runs
-        are short for cost (the twist modes do not depend on the push).
-    min_steps : int
-        Fewest RK4 steps of a stability run.
-    resolution : float
-        Largest ratio of the unstable to the stable step at the end of a bisection (> 1).
-    tolerance : float, m
-        Bond residual that stops a stability run (a blow-up passes it within a few steps).
-    linearised_samples : int
-        States of each stable run at which the linearised step limit is evaluated.
+    search : StepSearch
+        How each largest stable step is searched. Its runs without torsion cover the push's ramp
+        (15 s in end_force), since the rising tension raises the frequencies.
+    torsion_duration : float, s
+        Shortest stability run with torsion, short for cost (the twist modes do not depend on
+        the push).
     compile_from : int or None
         Models of at least this ``n`` are compiled to C (None: none).
     drift_elements : int
@@ -66,12 +60,8 @@ class StabilitySettings:
 
     elements: tuple[int, ...] = (5, 10, 15, 30, 60, 100)
     torsion_elements: tuple[int, ...] = (5, 10, 15, 30, 60)
-    duration: float = 20.0
+    search: StepSearch = StepSearch(duration=20.0)
     torsion_duration: float = 1.0
-    min_steps: int = 200
-    resolution: float = 1.1
-    tolerance: float = 1.0
-    linearised_samples: int = 5
     compile_from: int | None = None
     drift_elements: int = 15
     drift_step: float = 0.05
@@ -101,10 +91,8 @@ class StabilitySettings:
         return cls(
             elements=(5, 10),
             torsion_elements=(5,),
-            duration=2.0,
+            search=StepSearch(duration=2.0, min_steps=50, resolution=1.5),
             torsion_duration=0.5,
-            min_steps=50,
-            resolution=1.5,
             drift_elements=5,
             drift_step=0.1,
             drift_reference_step=0.01,
@@ -151,7 +139,7 @@ class StabilityStudy:
 
     def markdown(self, quick: bool) -> str:
         """The report: every table, with what was measured and how."""
-        s = self.settings
+        s, search = self.settings, self.settings.search
         times = ", ".join(f"{k} {v:.0f} s" for k, v in self.part_times.items())
         singular = [
             "| tried | rejected | message |",
@@ -171,15 +159,15 @@ class StabilityStudy:
                 "## Largest stable RK4 step",
                 "",
                 "end_force scene with its push (F_x ramp over 15 s, F_y sine) starting at t = 0. "
-                f"A run lasts at least {s.duration:g} s (torsion: {s.torsion_duration:g} s, "
-                f"for cost) and {s.min_steps} steps. Stable: it completes with the bond residual "
-                f"below {s.tolerance:g} m, finite, and (torsion) every twist angle within "
-                f"{TWIST_LIMIT:.4g} rad; torsion models start with a {TWIST_SEED:g} rad random "
-                f"twist. Bisection in log h to a ratio of {s.resolution:g}. Cross-checks: the end "
-                "trajectory at h_max/4, and the linearised limit: the largest step for which the "
-                "eigenvalues of the Jacobian (forward differences) at "
-                f"{s.linearised_samples} evenly spaced states of the stable run (first and last "
-                "included) lie in RK4's stability region (the smallest over them).",
+                f"A run lasts at least {search.duration:g} s (torsion: {s.torsion_duration:g} s, "
+                f"for cost) and {search.min_steps} steps. Stable: it completes with the bond "
+                f"residual below {search.tolerance:g} m, finite, and (torsion) every twist angle "
+                f"within {TWIST_LIMIT:.4g} rad; torsion models start with a {TWIST_SEED:g} rad "
+                f"random twist. Bisection in log h to a ratio of {search.resolution:g}. "
+                "Cross-checks: the end trajectory at h_max/4, and the linearised limit: the "
+                "largest step for which the eigenvalues of the Jacobian (forward differences) at "
+                f"{search.linearised_samples} evenly spaced states of the stable run (first and "
+                "last included) lie in RK4's stability region (the smallest over them).",
                 "",
                 self.steps.table(),
                 "",
@@ -247,13 +235,9 @@ def run_stability(
             end_force,
             settings.elements,
             settings.torsion_elements,
-            duration=settings.duration,
-            torsion_duration=settings.torsion_duration,
-            min_steps=settings.min_steps,
-            resolution=settings.resolution,
-            tolerance=settings.tolerance,
-            linearised_samples=settings.linearised_samples,
-            compile_from=settings.compile_from,
+            settings.search,
+            settings.torsion_duration,
+            settings.compile_from,
             quiet=quiet,
         ),
     )
