@@ -1,7 +1,8 @@
 """Argparse types of the command line, each refusing a value out of its range in one line.
 
 ``DefaultsShown`` is the commands' help formatter; :func:`add_set` adds the ``--set`` option
-that :func:`parse_overrides` reads, :func:`knot_angles` reads ``--knots``.
+that :func:`parse_overrides` reads and :func:`scene_from` applies, :func:`knot_angles` reads
+``--knots``.
 """
 
 from __future__ import annotations
@@ -11,6 +12,7 @@ import math
 from collections.abc import Callable
 from pathlib import Path
 
+from cable_ocp.scene import schema
 from cable_ocp.scene.bundled import scene_argument
 
 try:
@@ -82,6 +84,15 @@ def parse_overrides(pairs: list[str]) -> dict:
             value = text
         overrides[key.strip()] = value
     return overrides
+
+
+def scene_from(args: argparse.Namespace, path=None):
+    """The scene given (``path``, else the SCENE argument), ``--set``'s overrides applied.
+
+    Loaded and checked by :func:`cable_ocp.scene.schema.load_scene` (SceneError naming the field
+    that is wrong, before any work).
+    """
+    return schema.load_scene(args.scene if path is None else path, parse_overrides(args.set))
 
 
 def knot_angles(text: str) -> list[float]:

@@ -5,7 +5,7 @@ from __future__ import annotations
 import argparse
 from pathlib import Path
 
-from cable_ocp.cli.arguments import OUT_HELP, add_command, parse_overrides
+from cable_ocp.cli.arguments import OUT_HELP, add_command, scene_from
 from cable_ocp.cli.exits import SUCCESS
 from cable_ocp.cli.files import results_folder
 from cable_ocp.cli.optimiser_options import (
@@ -36,10 +36,8 @@ def run_compare_command(args: argparse.Namespace) -> int:
     from dataclasses import replace
 
     from cable_ocp.control.optimization import optimize
-    from cable_ocp.scene.schema import load_scene
 
-    overrides = parse_overrides(args.set)
-    scenes = [load_scene(path, overrides) for path in args.scenes]  # all checked before solving
+    scenes = [scene_from(args, path) for path in args.scenes]  # all checked before solving
     for scene in scenes:
         check_step(scene, args.step)
         check_start(scene)

@@ -6,7 +6,7 @@ import argparse
 import math
 from pathlib import Path
 
-from cable_ocp.cli.arguments import add_command, add_set, parse_overrides
+from cable_ocp.cli.arguments import add_command, add_set, scene_from
 from cable_ocp.cli.exits import SUCCESS, failed
 from cable_ocp.lowering.landing import HOVER
 
@@ -64,10 +64,9 @@ def run_lower_command(args: argparse.Namespace) -> int:
     from cable_ocp.lowering.plan import plan_landing
     from cable_ocp.plots import landing, survey
     from cable_ocp.scene.output import json_text
-    from cable_ocp.scene.schema import load_scene
     from cable_ocp.simulation.run import simulate
 
-    scene = load_scene(args.scene, parse_overrides(args.set))
+    scene = scene_from(args)
     if scene.lowering is None or scene.winch.line is None:
         raise ValueError(
             f"{args.scene}: lower needs a scene with [lowering] and [winch.line] (see "

@@ -12,8 +12,8 @@ from cable_ocp.cli.arguments import (
     add_set,
     fraction,
     integer,
-    parse_overrides,
     positive,
+    scene_from,
     weight,
 )
 from cable_ocp.cli.exits import SUCCESS, failed
@@ -117,9 +117,8 @@ def run_mpc_command(args: argparse.Namespace) -> int:
     from cable_ocp.control.closed_loop.references import reference_runs
     from cable_ocp.plots import closed_loop
     from cable_ocp.scene.output import json_text
-    from cable_ocp.scene.schema import load_scene
 
-    scene = load_scene(args.scene, parse_overrides(args.set))
+    scene = scene_from(args)
     result = mpc(scene, settings_from(args), quiet=args.quiet)
     names = ("locked", "open-loop") if args.open_loop else ("locked",)
     references = reference_runs(scene, result, names)

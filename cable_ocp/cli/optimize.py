@@ -11,7 +11,7 @@ from cable_ocp.cli.arguments import (
     Renamed,
     add_command,
     integer,
-    parse_overrides,
+    scene_from,
 )
 from cable_ocp.cli.exits import SUCCESS, failed, one_line
 from cable_ocp.cli.files import results_folder
@@ -62,9 +62,8 @@ def run_optimize_command(args: argparse.Namespace) -> int:
     from cable_ocp.cli.exports import winch_csv
     from cable_ocp.control.optimization import optimize
     from cable_ocp.scene.output import json_text
-    from cable_ocp.scene.schema import load_scene
 
-    scene = load_scene(args.scene, parse_overrides(args.set))
+    scene = scene_from(args)
     check_step(scene, args.step)
     check_start(scene)
     output = {"quiet": args.quiet, "verbose": args.verbose}

@@ -11,7 +11,7 @@ from cable_ocp.cli.arguments import (
     add_command,
     add_set,
     knot_angles,
-    parse_overrides,
+    scene_from,
 )
 from cable_ocp.cli.run_folder import write_run
 
@@ -36,11 +36,10 @@ def add_simulate_command(commands) -> None:
 
 def run_simulate_command(args: argparse.Namespace) -> int:
     """Run ``cable-ocp simulate``; 3 when the run is not physical, 0 otherwise."""
-    from cable_ocp.scene.schema import load_scene
     from cable_ocp.simulation.progress import stage
     from cable_ocp.simulation.run import simulate
 
-    scene = load_scene(args.scene, parse_overrides(args.set))
+    scene = scene_from(args)
     knots = args.knots
     if knots is not None and len(knots) != scene.winch.knots:
         raise ValueError(

@@ -5,7 +5,7 @@ from __future__ import annotations
 import argparse
 from pathlib import Path
 
-from cable_ocp.cli.arguments import OUT_HELP, add_command, add_set, parse_overrides
+from cable_ocp.cli.arguments import OUT_HELP, add_command, add_set, scene_from
 from cable_ocp.cli.exits import SUCCESS
 from cable_ocp.cli.files import results_folder
 from cable_ocp.scene.bundled import models_dir, scene_argument
@@ -62,12 +62,11 @@ def run_study_command(args: argparse.Namespace) -> int:
 
 def _scene_study(args: argparse.Namespace) -> int:
     """step, elements or end-force of the scene given: a table, and elements' figure."""
-    from cable_ocp.scene.schema import load_scene
     from cable_ocp.studies import convergence as studies
 
     if args.scene is None:
         raise ValueError(f"study {args.name} needs a scene file, e.g. models/paper_flat.toml")
-    scene = load_scene(args.scene, parse_overrides(args.set))
+    scene = scene_from(args)
     with results_folder(args.out) as folder:
         if args.name == "step":
             result = studies.step_halving(scene, quiet=args.quiet)
