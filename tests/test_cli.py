@@ -73,6 +73,8 @@ BAD_ARGUMENTS = [
     (["optimize", HANGING, "--out", "o", "--intervals", "0"], "argument --intervals: 0 is out"),
     (["optimize", HANGING, "--out", "o", "--quiet", "--verbose"], "not allowed with argument"),
     (["compare", HANGING, "missing.toml", "--out", "o"], "missing.toml: scene file not found"),
+    (["lower", "deploy", "--out", "o", "--hover=nan"], "argument --hover: 'nan' is out of range"),
+    (["lower", "deploy", "--out", "o", "--hover=-5"], "argument --hover: '-5' is out of range"),
     (["compare", HANGING, "--out", "o", "--solver", "nelder-mead"],
      "--solver nelder-mead: compare runs Nelder-Mead anyway, beside a shooting solver; give "
      "--solver gauss-newton or ipopt"),

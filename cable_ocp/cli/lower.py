@@ -6,7 +6,7 @@ import argparse
 import math
 from pathlib import Path
 
-from cable_ocp.cli.arguments import add_command, add_set, scene_from
+from cable_ocp.cli.arguments import add_command, add_set, positive, scene_from
 from cable_ocp.cli.exits import SUCCESS, failed
 from cable_ocp.lowering.landing import HOVER
 
@@ -40,7 +40,7 @@ def add_lower_command(subparsers) -> None:
     add_set(parser, "lowering.land_time=1000")
     parser.add_argument("--no-hold", action="store_true", help="leave out the closed-loop hold")
     parser.add_argument(
-        "--hover", type=float, default=HOVER,
+        "--hover", type=positive, default=HOVER,
         help="m above the target where the descent stops before the landing from the hover",
     )  # fmt: skip
     parser.add_argument(
