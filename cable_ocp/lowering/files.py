@@ -34,7 +34,6 @@ from cable_ocp.simulation.trajectory import Trajectory, check_recorded
 
 PARTS = "parts"  # the root's attribute that lists the groups
 SCENE = "scene_record"
-SEGMENT = "run/segment_{}"
 
 
 def own_dataset(result, skip: Iterable[str] = (), dims=None) -> xr.Dataset:
@@ -122,7 +121,7 @@ def save(result, path: str | Path) -> Path:
         part = getattr(result, name)
         groups[name] = part.to_xarray()
         if isinstance(part, LineTrajectory):
-            groups |= {SEGMENT.format(k): s.to_xarray() for k, s in enumerate(part.segments)}
+            groups |= {_segment(name, k): s.to_xarray() for k, s in enumerate(part.segments)}
     return netcdf.write(root, Path(path), groups)
 
 
@@ -153,7 +152,7 @@ def load(cls: type, path: str | Path, what: str):
         unknown = sorted(set(names) - set(parts))
         if unknown:
             raise ValueError(f"{PARTS}: {', '.join(unknown)} is not a part of a {kind}")
-        groups = _groups(path, kind, root, names)
+        groups = _groups(path, kind, names)
         values = own_fields(cls, root, (*parts, "scene"))
         values["scene"] = scene_of(parse_json(root.attrs[SCENE]), f"the {what}'s")
         for name in parts:
@@ -171,16 +170,24 @@ def _names(root: xr.Dataset) -> list[str]:
     return names
 
 
-def _groups(path: Path, kind: str, root: xr.Dataset, names: list[str]) -> dict[str, xr.Dataset]:
-    """The parts' groups, a line run's segments included, read in one open of the file."""
-    wanted = list(names)
-    if "run" in names:
-        head = netcdf.read(path, kind, "run")
-        count = head.attrs.get("segments")
-        if not isinstance(count, int | np.integer) or isinstance(count, bool) or count < 1:
-            raise ValueError(f"run: segments = {count!r:.40}: expected an integer >= 1")
-        wanted += [SEGMENT.format(k) for k in range(int(count))]
-    return dict(zip(wanted, netcdf.read_groups(path, kind, wanted), strict=True))
+def _groups(path: Path, kind: str, names: list[str]) -> dict[str, xr.Dataset]:
+    """The parts' groups, then the segments of each that is a line run (``segments``)."""
+    groups = dict(zip(names, netcdf.read_groups(path, kind, names), strict=True))
+    segments = []
+    for name in names:
+        if "segments" in groups[name].attrs:
+            count = groups[name].attrs["segments"]
+            if not isinstance(count, int | np.integer) or isinstance(count, bool) or count < 1:
+                raise ValueError(f"{name}: segments = {count!r:.40}: expected an integer >= 1")
+            segments += [_segment(name, k) for k in range(int(count))]
+    if segments:
+        groups |= dict(zip(segments, netcdf.read_groups(path, kind, segments), strict=True))
+    return groups
+
+
+def _segment(name: str, k: int) -> str:
+    """The group of segment ``k`` of the line run kept as the part ``name``."""
+    return f"{name}/segment_{k}"
 
 
 def _part(name: str, groups: dict[str, xr.Dataset], hint) -> object:
@@ -193,18 +200,18 @@ def _part(name: str, groups: dict[str, xr.Dataset], hint) -> object:
     cls = allowed[found]
     try:
         if cls is LineTrajectory:
-            return _line_run(group, groups)
+            return _line_run(name, group, groups)
         return cls.from_xarray(group)
     except (ValueError, KeyError, TypeError) as error:
         raise ValueError(f"{name}: {error}") from None
 
 
-def _line_run(head: xr.Dataset, groups: dict[str, xr.Dataset]) -> LineTrajectory:
-    """The line run of the group ``run`` and its segments' groups, checked as a line run file."""
+def _line_run(name: str, head: xr.Dataset, groups: dict[str, xr.Dataset]) -> LineTrajectory:
+    """The line run of the part ``name`` and its segments' groups, checked as a line run file."""
     count, length = int(head.attrs["segments"]), float(head.attrs["element_length"])
     if not (np.isfinite(length) and length > 0):
         raise ValueError(f"element_length = {length!r}: expected a finite length > 0, m")
-    segments = [Trajectory.from_xarray(groups[SEGMENT.format(k)]) for k in range(count)]
+    segments = [Trajectory.from_xarray(groups[_segment(name, k)]) for k in range(count)]
     run = LineTrajectory(segments, length)
     check_recorded(run, run.time, run.clearance_error, None)
     return run
