@@ -12,6 +12,7 @@ from cable_ocp.simulation.integrate import SimulationError
 from cable_ocp.simulation.run import simulate
 from cable_ocp.simulation.statics import equilibrium
 from cable_ocp.studies.stability import (
+    DriftSizes,
     StepSearch,
     baumgarte_drift,
     largest_stable_step,
@@ -89,9 +90,8 @@ def test_limit_falls_with_elements(end_force, validation):
 
 def test_no_stabilisation_drifts_more(end_force, validation):
     """Sharp push, n = 5, h = 0.1 s: without Baumgarte the bonds drift over 10x further."""
-    drift = baumgarte_drift(
-        end_force, ((0.0, 0.0), (1.0, 1.0)), elements=5, step=0.1, reference_step=0.01, duration=10
-    )
+    sizes = DriftSizes(elements=5, step=0.1, reference_step=0.01, duration=10)
+    drift = baumgarte_drift(end_force, ((0.0, 0.0), (1.0, 1.0)), sizes)
     none, default = drift.runs
     assert not none.failure and not default.failure
     validation("Baumgarte stabilisation, sharp push, n = 5, h = 0.1 s, 10 s", "conservation",

@@ -36,11 +36,12 @@ Modules, one job each:
 from cable_ocp.simulation.stability import GROWTH_SLACK, linearised_step, rk4_growth
 from cable_ocp.studies.stability.baumgarte import (
     BaumgarteDrift,
+    DriftSizes,
     GainRun,
     baumgarte_drift,
     bond_residuals,
 )
-from cable_ocp.studies.stability.knots import KnotRun, KnotsComparison, knots_comparison
+from cable_ocp.studies.stability.knots import KnotRun, KnotsComparison, KnotsSizes, knots_comparison
 from cable_ocp.studies.stability.limits import StepLimits, power_law, step_limits
 from cable_ocp.studies.stability.markdown import table_cell
 from cable_ocp.studies.stability.push import PUSH, SHARP_PUSH, pushed_scene
@@ -57,10 +58,12 @@ from cable_ocp.studies.stability.study import StabilitySettings, StabilityStudy,
 
 __all__ = [
     "BaumgarteDrift",
+    "DriftSizes",
     "GROWTH_SLACK",
     "GainRun",
     "KnotRun",
     "KnotsComparison",
+    "KnotsSizes",
     "PUSH",
     "SHARP_PUSH",
     "SingularCase",

@@ -142,13 +142,32 @@ class BaumgarteDrift:
         return finished_chart(fig, path)
 
 
+@dataclass(frozen=True)
+class DriftSizes:
+    """The runs of the drift study: one model, one step, one length, against a finer reference.
+
+    Attributes
+    ----------
+    elements : int
+        ``n`` of the model.
+    step : float, s
+        RK4 step of every compared run.
+    reference_step : float, s
+        Step of the reference run (the scene's own gains), a whole fraction of ``step``.
+    duration : float, s
+        Simulated time of each run.
+    """
+
+    elements: int = 15
+    step: float = 0.05
+    reference_step: float = 0.005
+    duration: float = 30.0
+
+
 def baumgarte_drift(
     scene,
     gains: Sequence[tuple[float, float]],
-    elements: int = 15,
-    step: float = 0.05,
-    reference_step: float = 0.005,
-    duration: float = 30.0,
+    sizes: DriftSizes | None = None,
     quiet: bool = True,
 ) -> BaumgarteDrift:
     """Bond residual over time and end error for each ``(alpha, beta)`` of ``gains``.
@@ -156,8 +175,10 @@ def baumgarte_drift(
     The scene (usually end_force) is pushed sharply (:data:`SHARP_PUSH`). Its
     ``numerics.constraint_tolerance`` is raised to the cable length, so that only a blow-up stops
     a run (its message, with the time, is kept); the reference uses the scene's own gains at
-    ``reference_step``.
+    ``sizes.reference_step`` (``sizes``: ``DriftSizes()`` by default).
     """
+    sizes = sizes or DriftSizes()
+    elements, step, duration = sizes.elements, sizes.step, sizes.duration
     base = pushed_scene(scene, elements, scene.model.torsion, SHARP_PUSH).updated(
         {
             "numerics.duration": duration,
@@ -165,7 +186,7 @@ def baumgarte_drift(
             "numerics.output_every": 1,
         }
     )
-    every = max(1, round(step / reference_step))
+    every = max(1, round(step / sizes.reference_step))
     reference = simulate(
         base.updated({"numerics.step": step / every, "numerics.output_every": every}), quiet=quiet
     )

@@ -202,40 +202,64 @@ def _knot_run(knots: int, corrected: bool, result) -> KnotRun:
     )
 
 
+@dataclass(frozen=True)
+class KnotsSizes:
+    """How each optimisation of the knots study runs.
+
+    Attributes
+    ----------
+    elements : int
+        ``n`` of the reduced optimisation model (Omega verified on the scene's own).
+    step : float, s
+        RK4 step of that model.
+    max_evaluations : int
+        Nelder-Mead's cap.
+    max_iter : int
+        IPOPT's cap per solve.
+    refinements : int
+        Model-correction solves of the ``"ipopt + correction"`` runs (0: no such runs).
+    compiled : bool
+        The optimisers simulate with the RK4 step compiled to C (cached on disk).
+    """
+
+    elements: int = 3
+    step: float = 0.5
+    max_evaluations: int = 600
+    max_iter: int = 300
+    refinements: int = 3
+    compiled: bool = True
+
+
 def knots_comparison(
     scene,
     knots: Sequence[int] = (7, 14, 28, 56),
-    elements: int = 3,
-    step: float = 0.5,
-    max_evaluations: int = 600,
-    max_iter: int = 300,
-    refinements: int = 3,
-    compiled: bool = True,
+    sizes: KnotsSizes | None = None,
     quiet: bool = True,
 ) -> KnotsComparison:
     """IPOPT with the paper's spline control and Nelder-Mead, for each number of knots.
 
-    Both optimise on a reduced model (``elements``, ``step``) as the front door's defaults do,
-    and so minimise the same objective (methods ``"ipopt"``, ``"nelder-mead"``). With
-    ``refinements > 0`` IPOPT is also run with that many model-correction solves against the
-    scene's model (``"ipopt + correction"``, see
-    :func:`cable_ocp.control.optimization.solve_verified`). ``compiled``: the optimisers
-    simulate with the RK4 step compiled to C (cached on disk). A failed solve is kept with its
-    status.
+    Both optimise on a reduced model (``sizes.elements``, ``sizes.step``; ``sizes`` is
+    ``KnotsSizes()`` by default) as the front door's defaults do, and so minimise the same
+    objective (methods ``"ipopt"``, ``"nelder-mead"``). With ``sizes.refinements > 0`` IPOPT is
+    also run with that many model-correction solves against the scene's model
+    (``"ipopt + correction"``, see :func:`cable_ocp.control.optimization.solve_verified`). A
+    failed solve is kept with its status.
     """
+    sizes = sizes or KnotsSizes()
+    elements, step, refinements = sizes.elements, sizes.step, sizes.refinements
     runs = []
     for p in knots:
         local = scene.updated({"winch.knots": p})
         model = ModelSettings(elements, step)
-        transcription = TranscriptionSettings(compiled=compiled)
-        ipopt = ocp_settings("ipopt", IpoptSettings(max_iter=max_iter), model,
+        transcription = TranscriptionSettings(compiled=sizes.compiled)
+        ipopt = ocp_settings("ipopt", IpoptSettings(max_iter=sizes.max_iter), model,
                              GridSettings(control="spline"), transcription)  # fmt: skip
         plain = optimize(local, settings=ipopt, refinements=0, quiet=quiet)
         runs.append(_knot_run(p, False, plain))
         if refinements > 0:
             corrected = optimize(local, settings=ipopt, refinements=refinements, quiet=quiet)
             runs.append(_knot_run(p, True, corrected))
-        search = NelderMeadSettings(max_evaluations=max_evaluations)
+        search = NelderMeadSettings(max_evaluations=sizes.max_evaluations)
         searched = optimize(local, "nelder-mead", search, model=model, transcription=transcription,
                             quiet=quiet)  # fmt: skip
         runs.append(_knot_run(p, False, searched))
@@ -244,8 +268,8 @@ def knots_comparison(
         duration=scene.numerics.duration,
         elements=elements,
         step=step,
-        evaluation_cap=max_evaluations,
-        iteration_cap=max_iter,
+        evaluation_cap=sizes.max_evaluations,
+        iteration_cap=sizes.max_iter,
         refinements=refinements,
         runs=tuple(runs),
     )

@@ -8,8 +8,8 @@ from pathlib import Path
 
 from cable_ocp.scene.output import atomic_directory
 from cable_ocp.scene.schema import load_scene
-from cable_ocp.studies.stability.baumgarte import BaumgarteDrift, baumgarte_drift
-from cable_ocp.studies.stability.knots import KnotsComparison, knots_comparison
+from cable_ocp.studies.stability.baumgarte import BaumgarteDrift, DriftSizes, baumgarte_drift
+from cable_ocp.studies.stability.knots import KnotsComparison, KnotsSizes, knots_comparison
 from cable_ocp.studies.stability.limits import StepLimits, step_limits
 from cable_ocp.studies.stability.markdown import table_cell
 from cable_ocp.studies.stability.singular import SingularCase, singular_states
@@ -32,28 +32,16 @@ class StabilitySettings:
         the push).
     compile_from : int or None
         Models of at least this ``n`` are compiled to C (None: none).
-    drift_elements : int
-        ``n`` of the drift study's model.
-    drift_step, drift_reference_step, drift_duration : float, s
-        Its RK4 step, the reference run's step, and the simulated time.
+    drift : DriftSizes
+        The drift study's model, steps and length.
     gains : tuple of (alpha, beta), 1/s
         The Baumgarte gains the drift study compares.
     knots : tuple of int
         The numbers of knots the optimisers are compared at.
     knots_duration : float or None, s
         Horizon of the knots study (None: the scene's).
-    optimisation_elements : int
-        ``n`` of the optimisers' reduced model.
-    optimisation_step : float, s
-        RK4 step of that model.
-    max_evaluations : int
-        Nelder-Mead's cap.
-    max_iter : int
-        IPOPT's cap.
-    refinements : int
-        Model-correction solves of the ``"ipopt + correction"`` runs (0: none).
-    compiled : bool
-        Optimisers simulate with the RK4 step compiled to C.
+    optimisation : KnotsSizes
+        How each optimisation of the knots study runs.
     singular_scene : str
         Scene file (in the models folder) of the singularity check.
     """
@@ -63,10 +51,7 @@ class StabilitySettings:
     search: StepSearch = StepSearch(duration=20.0)
     torsion_duration: float = 1.0
     compile_from: int | None = None
-    drift_elements: int = 15
-    drift_step: float = 0.05
-    drift_reference_step: float = 0.005
-    drift_duration: float = 30.0
+    drift: DriftSizes = DriftSizes()
     gains: tuple[tuple[float, float], ...] = (
         (0.0, 0.0),
         (0.5, 0.5),
@@ -77,12 +62,7 @@ class StabilitySettings:
     )
     knots: tuple[int, ...] = (7, 14, 28, 56)
     knots_duration: float | None = None
-    optimisation_elements: int = 3
-    optimisation_step: float = 0.5
-    max_evaluations: int = 1000
-    max_iter: int = 300
-    refinements: int = 3
-    compiled: bool = True
+    optimisation: KnotsSizes = KnotsSizes(max_evaluations=1000)
     singular_scene: str = "hanging.toml"
 
     @classmethod
@@ -93,17 +73,11 @@ class StabilitySettings:
             torsion_elements=(5,),
             search=StepSearch(duration=2.0, min_steps=50, resolution=1.5),
             torsion_duration=0.5,
-            drift_elements=5,
-            drift_step=0.1,
-            drift_reference_step=0.01,
-            drift_duration=10.0,
+            drift=DriftSizes(elements=5, step=0.1, reference_step=0.01, duration=10.0),
             gains=((0.0, 0.0), (1.0, 1.0), (5.0, 5.0)),
             knots=(3, 5),
             knots_duration=21.0,
-            max_evaluations=10,
-            max_iter=2,
-            refinements=0,
-            compiled=False,
+            optimisation=KnotsSizes(max_evaluations=10, max_iter=2, refinements=0, compiled=False),
         )
 
 
@@ -243,15 +217,7 @@ def run_stability(
     )
     drift = timed(
         "Baumgarte",
-        lambda: baumgarte_drift(
-            end_force,
-            settings.gains,
-            elements=settings.drift_elements,
-            step=settings.drift_step,
-            reference_step=settings.drift_reference_step,
-            duration=settings.drift_duration,
-            quiet=quiet,
-        ),
+        lambda: baumgarte_drift(end_force, settings.gains, settings.drift, quiet),
     )
     singular = timed(
         "singularity",
@@ -259,17 +225,7 @@ def run_stability(
     )
     knots = timed(
         "knots",
-        lambda: knots_comparison(
-            flat,
-            settings.knots,
-            elements=settings.optimisation_elements,
-            step=settings.optimisation_step,
-            max_evaluations=settings.max_evaluations,
-            max_iter=settings.max_iter,
-            refinements=settings.refinements,
-            compiled=settings.compiled,
-            quiet=quiet,
-        ),
+        lambda: knots_comparison(flat, settings.knots, settings.optimisation, quiet),
     )
     study = StabilityStudy(
         steps, drift, knots, singular, settings, times, time.perf_counter() - started
