@@ -125,6 +125,7 @@ def test_ipopt_options_beside_gauss_newton_are_named(tmp_path, capsys, no_optimi
         (["optimize", "--solver", "nelder-mead"], ["--max-iter", "4"], "Gauss-Newton and IPOPT"),
         (["optimize", "--solver", "nelder-mead"], ["--control", "spline"], "Gauss-Newton and"),
         (["optimize", "--solver", "ipopt"], ["--max-evaluations", "9"], "Nelder-Mead"),
+        (["optimize", "--solver", "nelder-mead"], ["--refinements", "2"], "Gauss-Newton and"),
         (["compare", "--solver", "gauss-newton"], ["--hessian", "exact"], "IPOPT"),
     ],
 )  # fmt: skip

@@ -10,9 +10,11 @@ from cable_ocp.cli.arguments import add_model_options, add_set, integer
 from cable_ocp.control.settings import GridSettings, ModelSettings, OcpSettings
 from cable_ocp.control.solvers import DEFAULT_SOLVER, SOLVERS, Solver, ocp_settings_from
 
-# The optimiser's options, each named as the settings field it sets (OcpSettings' parts).
+# The optimiser's options, each named as the settings field it sets (OcpSettings' parts), and
+# optimize()'s keyword of the model correction (optimize's option only).
 OPTIONS = ("elements", "step", "control", "intervals", "shooting", "hessian", "max_iter",
            "max_evaluations")  # fmt: skip
+CORRECTION = "refinements"
 
 
 def _takes(entry: Solver, args: argparse.Namespace, name: str) -> bool:
@@ -20,10 +22,13 @@ def _takes(entry: Solver, args: argparse.Namespace, name: str) -> bool:
 
     The model's (``--elements``, ``--step``) every solver; the shooting grid's (``--control``,
     ``--intervals``) a shooting solver (not the paper's Nelder-Mead, on the scene's knots); a
-    shooting its own; else a field of its settings (``--hessian``, ``--max-iter``, ...).
+    shooting its own; ``--refinements`` a solver whose transcription corrects its model; else a
+    field of its settings (``--hessian``, ``--max-iter``, ...).
     """
     if name in ModelSettings.__dataclass_fields__:
         return True
+    if name == CORRECTION:
+        return entry.transcription.model_correction
     if name == "shooting":
         return args.shooting in entry.shootings
     if name in GridSettings.__dataclass_fields__:
@@ -33,7 +38,7 @@ def _takes(entry: Solver, args: argparse.Namespace, name: str) -> bool:
 
 def _given(args: argparse.Namespace) -> list[str]:
     """The optimiser's options given on the command line (the others are None)."""
-    return [name for name in OPTIONS if getattr(args, name, None) is not None]
+    return [name for name in (*OPTIONS, CORRECTION) if getattr(args, name, None) is not None]
 
 
 def _solver(args: argparse.Namespace) -> Solver:
@@ -67,7 +72,8 @@ def optimize_settings(
     """
     entry = SOLVERS[solver] if solver is not None else _solver(args)
     _check_solver_options(args, entry, *([SOLVERS[beside]] if beside else []))
-    table = {name: getattr(args, name) for name in _given(args) if _takes(entry, args, name)}
+    table = {name: getattr(args, name) for name in _given(args)
+             if name != CORRECTION and _takes(entry, args, name)}  # fmt: skip
     if table.get("hessian") == "exact":
         table["compiled"] = False
         if not args.quiet:

@@ -23,7 +23,6 @@ from cable_ocp.cli.optimiser_options import (
     optimize_settings,
 )
 from cable_ocp.cli.run_folder import EXTRA_UNITS
-from cable_ocp.control.solvers import SOLVERS
 
 
 def add_optimize_command(commands) -> None:
@@ -34,8 +33,10 @@ def add_optimize_command(commands) -> None:
         now="--solver: --solver nelder-mead is the paper's method; shooting is --solver "
         "gauss-newton (the default) or --solver ipopt",
     )  # fmt: skip
-    parser.add_argument("--refinements", type=integer(0, 100), default=3,
-                        help="model-correction solves")  # fmt: skip
+    parser.add_argument(
+        "--refinements", type=integer(0, 100),
+        help="model-correction solves of a shooting solver (default: optimize()'s)",
+    )  # fmt: skip
     add_optimiser_options(parser)
     parser.add_argument("--animate", action="store_true", help=ANIMATE_HELP)
     parser.set_defaults(run=run_optimize_command)
@@ -66,11 +67,8 @@ def run_optimize_command(args: argparse.Namespace) -> int:
     scene = scene_from(args)
     check_step(scene, args.step)
     check_start(scene)
-    output = {"quiet": args.quiet, "verbose": args.verbose}
-    settings = optimize_settings(args)
-    if SOLVERS[settings.solver].transcription.model_correction:
-        output["refinements"] = args.refinements
-    result = optimize(scene, settings=settings, **output)
+    output = {"quiet": args.quiet, "verbose": args.verbose, "refinements": args.refinements}
+    result = optimize(scene, settings=optimize_settings(args), **output)
     locked, locked_failure = _locked_reference(scene)
     seabed, bounds = scene.seabed, (scene.winch.angle_min, scene.winch.angle_max)
     runs = [("locked winch", locked), (f"optimised ({result.solver})", result.trajectory)]
