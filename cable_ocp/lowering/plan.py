@@ -69,7 +69,7 @@ class LandingPlan(WithParts):
     """
 
     PARTS = ("descent", "run", "report", "hold")
-    DIMS = {"landing_errors": ("run_index",)}  # noqa: RUF012 (a class constant)
+    DIMS = {"landing_errors": ("run_index",)}
     WHAT = "landing plan"
 
     scene: Scene
@@ -161,7 +161,7 @@ class HoldCorrection(Flat):
         The line paid out at each knot (``g``).
     """
 
-    DIMS = {"times": ("hold_knot",), "values": ("hold_knot",)}  # noqa: RUF012
+    DIMS = {"times": ("hold_knot",), "values": ("hold_knot",)}
 
     land_time: float
     times: np.ndarray
