@@ -3,7 +3,7 @@
 from __future__ import annotations
 
 from collections.abc import Sequence
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import numpy as np
 
@@ -58,8 +58,8 @@ def bond_residuals(model: CableModel, run: Trajectory) -> np.ndarray:
 
 
 @dataclass(frozen=True)
-class BaumgarteDrift:
-    """Bond drift and end error for several Baumgarte gains at one step.
+class DriftSizes:
+    """The runs of the drift study: one model, one step, one length, against a finer reference.
 
     Attributes
     ----------
@@ -68,28 +68,42 @@ class BaumgarteDrift:
     step : float, s
         RK4 step of every compared run.
     reference_step : float, s
-        Step of the reference run (default gains of the scene).
+        Step of the reference run (the scene's own gains), a whole fraction of ``step``.
     duration : float, s
         Simulated time of each run.
+    """
+
+    elements: int = 15
+    step: float = 0.05
+    reference_step: float = 0.005
+    duration: float = 30.0
+
+
+@dataclass(frozen=True)
+class BaumgarteDrift:
+    """Bond drift and end error for several Baumgarte gains at one step.
+
+    Attributes
+    ----------
+    sizes : DriftSizes
+        As run: the reference's step is the whole fraction of ``step`` it took.
     reference_gains : tuple of float, 1/s
         The scene's own ``(alpha, beta)``, those of the reference run.
     runs : tuple of GainRun
         One per compared pair of gains.
     """
 
-    elements: int
-    step: float
-    reference_step: float
-    duration: float
+    sizes: DriftSizes
     reference_gains: tuple[float, float]
     runs: tuple[GainRun, ...]
 
     def table(self) -> str:
         """Markdown table: largest and final residual, end error, or why the run stopped."""
+        sizes = self.sizes
         lines = [
-            f"end_force scene, push from t = 0 ramped over 1 s, n = {self.elements}, "
-            f"h = {self.step:g} s, {self.duration:g} s; reference: (alpha, beta) = "
-            f"{self.reference_gains} at h = {self.reference_step:g} s",
+            f"end_force scene, push from t = 0 ramped over 1 s, n = {sizes.elements}, "
+            f"h = {sizes.step:g} s, {sizes.duration:g} s; reference: (alpha, beta) = "
+            f"{self.reference_gains} at h = {sizes.reference_step:g} s",
             "",
             "| alpha [1/s] | beta [1/s] | max abs(Phi) [m] | final abs(Phi) [m] "
             "| max end diff vs reference [m] | stopped |",
@@ -119,7 +133,7 @@ class BaumgarteDrift:
                 left.semilogy(r.time[1:], np.maximum(r.residual[1:], 1e-16), label=label)
         left.set_xlabel("t [s]")
         left.set_ylabel("max bond residual |Phi| [m]")
-        left.set_title(f"constraint drift, n = {self.elements}, h = {self.step:g} s")
+        left.set_title(f"constraint drift, n = {self.sizes.elements}, h = {self.sizes.step:g} s")
         left.grid(alpha=0.3, which="both")
         left.legend(fontsize=7)
 
@@ -130,7 +144,7 @@ class BaumgarteDrift:
             positions + 0.2,
             [r.end_difference for r in done],
             0.4,
-            label=f"max end diff vs reference (h = {self.reference_step:g} s)",
+            label=f"max end diff vs reference (h = {self.sizes.reference_step:g} s)",
         )
         right.set_yscale("log")
         right.set_xticks(positions, [f"({r.alpha:g}, {r.beta:g})" for r in done])
@@ -140,28 +154,6 @@ class BaumgarteDrift:
         right.grid(alpha=0.3, which="both", axis="y")
         right.legend(fontsize=8)
         return finished_chart(fig, path)
-
-
-@dataclass(frozen=True)
-class DriftSizes:
-    """The runs of the drift study: one model, one step, one length, against a finer reference.
-
-    Attributes
-    ----------
-    elements : int
-        ``n`` of the model.
-    step : float, s
-        RK4 step of every compared run.
-    reference_step : float, s
-        Step of the reference run (the scene's own gains), a whole fraction of ``step``.
-    duration : float, s
-        Simulated time of each run.
-    """
-
-    elements: int = 15
-    step: float = 0.05
-    reference_step: float = 0.005
-    duration: float = 30.0
 
 
 def baumgarte_drift(
@@ -213,10 +205,7 @@ def baumgarte_drift(
         )
     numerics = scene.numerics
     return BaumgarteDrift(
-        elements=elements,
-        step=step,
-        reference_step=step / every,
-        duration=duration,
+        sizes=replace(sizes, reference_step=step / every),
         reference_gains=(numerics.baumgarte_alpha, numerics.baumgarte_beta),
         runs=tuple(runs),
     )
