@@ -88,3 +88,13 @@ def test_a_run_that_blows_up_in_simulate_exits_3_not_2(tmp_path, capsys):
 )  # fmt: skip
 def test_the_mapping_takes_the_first_class_that_matches(error, code):
     assert exits.exit_code(error) == code
+
+
+def test_the_help_states_every_exit_code_the_mapping_gives(capsys):
+    """The codes are stated once (exits.MEANINGS) and ``cable-ocp --help`` prints that table."""
+    given = {code for _, code, _ in ERRORS} | {exits.exit_code(BrokenPipeError()), 0}
+    assert given <= set(exits.MEANINGS)
+    assert cli.main(["--help"]) == 0
+    text = capsys.readouterr().out
+    for code in given:
+        assert f"\n{code:>5}  {exits.MEANINGS[code][:40]}" in text

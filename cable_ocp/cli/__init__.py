@@ -5,12 +5,7 @@ Commands: simulate, replay, optimize, compare, mpc, lower, sweep, validate, stud
 ``cable-ocp COMMAND --help`` tells what each command does.
 
 Every expected failure is one line ``cable-ocp COMMAND: error: ...`` on stderr and an exit code,
-the same for every command: 0 success; 2 bad input (arguments, scene and sweep files, a results
-folder that must not be written, one inside a read-only folder included), refused before any
-simulation; 3 when the work fails (an optimiser, the closed loop, a landing, a sweep case or its
-Dask engine, a run that blows up, or one that is not physical: a rope that pushes, an end under
-the seabed, whose results are written all the same); 1 for a failing file system; 130 when
-interrupted.
+the same for every command (``cable_ocp.cli.exits``):
 """
 
 from __future__ import annotations
@@ -22,7 +17,7 @@ import time
 
 from cable_ocp.cli.bench import add_bench_command
 from cable_ocp.cli.compare import add_compare_command
-from cable_ocp.cli.exits import BROKEN_PIPE, INTERRUPTED, exit_code, one_line
+from cable_ocp.cli.exits import BROKEN_PIPE, INTERRUPTED, described, exit_code, one_line
 from cable_ocp.cli.files import check_replaceable
 from cable_ocp.cli.lower import add_lower_command
 from cable_ocp.cli.mpc import add_mpc_command
@@ -56,7 +51,9 @@ def build_parser() -> argparse.ArgumentParser:
     # The module docstring is reStructuredText; the terminal gets it without the markup.
     parser = argparse.ArgumentParser(
         prog="cable-ocp",
-        description=__doc__.replace("``", ""),
+        description=__doc__.replace("``", "").replace(":mod:`cable_ocp.cli.exits`", "")
+        + "\n"
+        + described(),
         formatter_class=argparse.RawDescriptionHelpFormatter,
     )
     commands = parser.add_subparsers(dest="command", required=True)

@@ -1,26 +1,13 @@
 """The exit codes of ``cable-ocp``, the same for every command, and the one line of a failure.
 
-=====  ===============================================================================
-code   meaning
-=====  ===============================================================================
-0      success
-1      the file system failed (a full disk, a file-size limit, a folder not renamed)
-2      bad input, refused before any work: an argument, a scene or sweep file, a results
-       folder that must not be written, a scene with no equilibrium, a bathymetry grid
-       that the end starts under or leaves (``OffGridError``: extend the grid)
-3      the work failed: an optimiser, the closed loop, a landing or hold, a sweep case or
-       its engine, a run that is not physical (its results written all the same), or a
-       run that blew up (``SimulationError``: nothing written)
-130    interrupted (Ctrl-C)
-141    the output's reader closed it (``| head``)
-143    terminated (SIGTERM, handled as an interrupt; the script's :mod:`cable_ocp.entry`
-       says which signal it was, and gives 130 for a Ctrl-C during the imports)
-=====  ===============================================================================
+:data:`MEANINGS` states each code; ``cable-ocp --help`` prints them, :func:`exit_code` maps an
+exception that ends a command to its code.
 """
 
 from __future__ import annotations
 
 import sys
+import textwrap
 
 SUCCESS = 0
 FILE_SYSTEM = 1
@@ -28,6 +15,29 @@ BAD_INPUT = 2
 FAILED = 3
 INTERRUPTED = 130
 BROKEN_PIPE = 141
+TERMINATED = 143  # given by the script, cable_ocp.entry, for a SIGTERM
+
+MEANINGS = {
+    SUCCESS: "success",
+    BAD_INPUT: "bad input, refused before any work: an argument, a scene or sweep file, a "
+    "results folder that must not be written (one inside a read-only folder included), a scene "
+    "with no equilibrium, a bathymetry grid that the end starts under or leaves",
+    FAILED: "the work failed: an optimiser, the closed loop, a landing or hold, a sweep case or "
+    "its Dask engine, a run that is not physical (a rope that pushes, an end under the seabed: "
+    "its results written all the same), a run that blew up (nothing written)",
+    FILE_SYSTEM: "the file system failed (a full disk, a file-size limit, a folder not renamed)",
+    INTERRUPTED: "interrupted (Ctrl-C)",
+    TERMINATED: "terminated (SIGTERM), cleaned up as after a Ctrl-C",
+    BROKEN_PIPE: "the output's reader closed it (| head)",
+}
+
+
+def described(width: int = 96) -> str:
+    """The exit codes and their meanings as the help prints them, lines of ``width`` at most."""
+    return "\n".join(
+        textwrap.fill(meaning, width, initial_indent=f"{code:>5}  ", subsequent_indent=" " * 7)
+        for code, meaning in MEANINGS.items()
+    )
 
 
 def exit_code(error: BaseException) -> int | None:
