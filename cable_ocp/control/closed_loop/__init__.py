@@ -29,7 +29,7 @@ from typing import TYPE_CHECKING
 
 from cable_ocp.lazy import lazy_names
 
-if TYPE_CHECKING:  # what __getattr__ imports, for type checkers and the import graph
+if TYPE_CHECKING:  # what __getattr__ imports (lazy_names reads it), for type checkers too
     from cable_ocp.control.closed_loop.command import WinchCommand
     from cable_ocp.control.closed_loop.controller import RecedingHorizon
     from cable_ocp.control.closed_loop.estimator import Estimator
@@ -39,24 +39,9 @@ if TYPE_CHECKING:  # what __getattr__ imports, for type checkers and the import 
     from cable_ocp.control.closed_loop.result import MpcResult, SolveLog
     from cable_ocp.control.closed_loop.settings import MpcSettings
 
-_SOURCES = {
-    "Estimator": "cable_ocp.control.closed_loop.estimator",
-    "Measurement": "cable_ocp.control.closed_loop.plant",
-    "Plant": "cable_ocp.control.closed_loop.plant",
-    "RecedingHorizon": "cable_ocp.control.closed_loop.controller",
-    "LoopParts": "cable_ocp.control.closed_loop.loop",
-    "WinchCommand": "cable_ocp.control.closed_loop.command",
-    "loop_parts": "cable_ocp.control.closed_loop.loop",
-    "mpc": "cable_ocp.control.closed_loop.loop",
-    "MpcResult": "cable_ocp.control.closed_loop.result",
-    "SolveLog": "cable_ocp.control.closed_loop.result",
-    "ReferenceRuns": "cable_ocp.control.closed_loop.references",
-    "reference_runs": "cable_ocp.control.closed_loop.references",
-    "MpcSettings": "cable_ocp.control.closed_loop.settings",
-}
 __all__ = [
     "Estimator", "LoopParts", "Measurement", "MpcResult", "MpcSettings", "Plant",
     "RecedingHorizon", "ReferenceRuns", "SolveLog", "WinchCommand", "loop_parts", "mpc",
     "reference_runs",
 ]  # fmt: skip
-__getattr__, __dir__ = lazy_names(globals(), _SOURCES)
+__getattr__, __dir__ = lazy_names(globals())
