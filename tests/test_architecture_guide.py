@@ -81,3 +81,30 @@ def test_the_quoted_source_is_where_the_page_says(source, start, end):
     text = (ROOT / source).read_text(encoding="utf-8")
     assert start in text
     assert end in text.split(start, 1)[1]
+
+
+def _python_blocks(page: str) -> list[str]:
+    return re.findall(r"```python\n(.*?)```", page, re.S)
+
+
+def test_the_new_solver_example_runs_against_the_registry():
+    """The page's solver module and registry entry, executed with the package's own names."""
+    from dataclasses import dataclass
+
+    from cable_ocp.control.checks import Rule, check_fields
+    from cable_ocp.control.problem import ProblemSolver, SolverOutcome, WinchProblem
+    from cable_ocp.control.solvers import KNOTS
+
+    module, entry = [b for b in _python_blocks(PAGE.read_text(encoding="utf-8")) if "Solver" in b]
+    names = {"dataclass": dataclass, "Rule": Rule, "check_fields": check_fields,
+             "ProblemSolver": ProblemSolver, "SolverOutcome": SolverOutcome,
+             "WinchProblem": WinchProblem, "Solver": Solver, "KNOTS": KNOTS}  # fmt: skip
+    exec(module, names)
+    assert names["CoordinateSearchSettings"]().max_evaluations > 0
+    with pytest.raises(ValueError, match="CoordinateSearchSettings.max_evaluations = 0"):
+        names["CoordinateSearchSettings"](max_evaluations=0)
+    solver = eval(entry.split("\n", 1)[1], names)
+    assert isinstance(solver, Solver) and not solver.closed_loop and not solver.shootings
+    assert solver.transcription is KNOTS and solver.settings is names["CoordinateSearchSettings"]
+    with pytest.raises(ValueError, match="open-loop problem only"):
+        names["CoordinateSearch"](None, None).solve(None, [0.0], fixed={0: 0.0})
