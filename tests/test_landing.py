@@ -198,9 +198,13 @@ def test_the_optimised_landing_lands_every_check_passed_on_the_scenes_own_model(
     assert replayed.omega == pytest.approx(result.result.omega, abs=1e-9)
 
 
-def test_the_closed_loop_lands_and_holds_against_the_heave():
+def test_the_closed_loop_lands_and_holds_against_the_heave(tmp_path):
     scene = lowering_scene(**HEAVING)
     result = land(scene, closed_loop=True)
+    # Saved and loaded (issue 41): the closed loop's result read back by its kind.
+    loaded = co.load_result(result.save(tmp_path / "looped.nc"))
+    assert isinstance(loaded.result, co.MpcResult) and loaded.closed_loop
+    assert loaded.status == result.status and fields_equal(loaded.report, result.report)
     # The approach leaves the drum its heave's peaks over the landing and the hold.
     landed = result.scene
     speed, acceleration = heave_peaks(landed, landed.numerics.duration)
