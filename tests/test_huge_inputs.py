@@ -23,7 +23,10 @@ from cable_ocp.simulation import integrate as integration
 from cable_ocp.simulation import run as running
 from cable_ocp.simulation import seabed as seabeds
 from cable_ocp.simulation.budget import (
+    MODEL_BUILD,
     check_memory,
+    check_simulation_memory,
+    model_build,
     optimisation_memory,
     simulation_memory,
     state_size,
@@ -246,3 +249,39 @@ def test_a_long_run_is_called_in_bounded_steps_and_checked_in_blocks(models_dir,
     assert trajectory.time.size == 41
     assert largest["inputs"] <= running.TIME_BLOCK < 40_000
     assert largest["stage_inputs"] <= integration.MAX_CALL_STEPS
+
+
+def test_the_model_builds_estimate_passes_through_its_measurements():
+    for compiled, points in MODEL_BUILD.items():
+        for n, size, seconds in points:
+            assert model_build(n, compiled) == pytest.approx((size, seconds), rel=1e-12)
+        sizes = [model_build(n, compiled)[0] for n in (15, 100, 300, 1000)]
+        assert sizes == sorted(sizes)
+    # The symbolic statics of the interpreted model outgrow the compiled build.
+    assert model_build(1000, False)[0] > 10 * model_build(1000, True)[0]
+
+
+def test_a_scene_of_1000_elements_is_refused_before_its_model_is_built(models_dir, monkeypatch):
+    """Issue 45 item 9 (a saved scene edited to n = 1000): refused up front, with the estimate
+    and the largest n that fits; here on small_tow, interpreted, on a 16 GB machine, and
+    compiled on a 1 GB one. Nothing is built (CableModel would fail the test)."""
+    monkeypatch.setattr(CableModel, "from_scene", lambda *a, **k: pytest.fail("built"))
+    scene = load_scene(models_dir / "small_tow.toml", {"model.elements": 1000})
+    with pytest.raises(ValueError) as info:
+        check_simulation_memory(scene, available=16 * 10**9, compiled=False)
+    text = str(info.value)
+    assert text.startswith("model.elements = 1000: building the interpreted model (its statics)")
+    assert "over the limit of 12.8 GB (80% of the 16 GB available)" in text and "\n" not in text
+    most = int(text.split("; model.elements = ")[1].split()[0])
+    assert 300 < most < 1000 and text.endswith(
+        "or fewer fits, or the compiled model (not --interpreted)"
+    )
+    fitting = load_scene(models_dir / "small_tow.toml", {"model.elements": most})
+    check_simulation_memory(fitting, available=16 * 10**9, compiled=False)
+    check_simulation_memory(scene, available=16 * 10**9, compiled=True)
+    with pytest.raises(
+        ValueError,
+        match=r"^model\.elements = 1000: building the compiled model "
+        r"\(its statics and C library\) needs about 1\.2\d GB and \d+ s",
+    ):
+        check_simulation_memory(scene, available=10**9, compiled=True)

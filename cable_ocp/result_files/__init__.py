@@ -3,9 +3,9 @@
 - :mod:`.dataset`: a result dataclass as a labelled ``xarray.Dataset`` and back, field by field
   (a result inside a result, such as a run's :class:`~cable_ocp.simulation.trajectory.Trajectory`,
   included);
-- :mod:`.units`: the fields' units and long names, from the class docstring;
-- :mod:`.netcdf`: the one writer and reader of result files, which checks a file before reading
-  its data, and the format versions;
+- :mod:`.units`: the fields' units, declared by each result class, and their long names;
+- :mod:`.netcdf`: the one (atomic) writer and the reader of netCDF files, every result's and a
+  sweep's, which checks a file before reading its data, and the format versions;
 - :mod:`.format_1`: the npz + json files of cable_ocp 0.1.
 
 :func:`save` and :func:`load` are the path every result takes.

@@ -1,5 +1,9 @@
 """What a run will cost in memory, estimated from the scene before any work, and the refusal.
 
+Before its first step, a run builds its model: the hanging line's statics and, compiled, the C
+library of its right-hand side, whose memory and time grow with the number of elements
+(:data:`MODEL_BUILD`, :func:`model_build`; at the schema's 1000 elements, gigabytes).
+
 A simulation streams its RK4 steps (:func:`cable_ocp.simulation.integrate.integrate` calls the
 step in chunks of bounded size) and keeps only every ``numerics.output_every``-th state, so its
 memory is the kept outputs: the states, the inputs, the joints, the tensions and the clearance
@@ -17,6 +21,7 @@ names the scene's field to change and the limit.
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 
 from cable_ocp.model.layout import INPUT_SIZE
@@ -31,6 +36,15 @@ TOUCHED = 8  # parameters whose basis covers one step, at most (4 of a Hermite c
 # Share of the available memory a run may plan to use: the rest is for the model, CasADi's
 # Functions, the interpreter and what else runs on the machine.
 USABLE_SHARE = 0.8
+# Building a model of n elements before its first step (the statics of the hanging line and, for
+# the compiled model, its C library), measured on paper_flat on a loaded 2-core machine (cold
+# cache; peak memory of the process and the compiler): (n, bytes, seconds) at two sizes, and
+# extrapolated between and beyond them as a power of n (the symbolic statics of the interpreted
+# model grow faster than n).
+MODEL_BUILD = {
+    True: ((100, 0.40e9, 38.0), (300, 0.68e9, 99.0)),  # compiled
+    False: ((100, 0.56e9, 37.0), (300, 3.30e9, 257.0)),  # interpreted (SX virtual machine)
+}
 
 
 @dataclass(frozen=True)
@@ -40,11 +54,12 @@ class MemoryEstimate:
     Attributes
     ----------
     steps : int
-        RK4 steps of the run.
+        How many RK4 steps the run takes over its duration (a count).
     kept : int
-        States the run keeps (outputs, or every step for an optimiser).
-    parts : tuple of (str, int)
-        What holds memory and how much, bytes.
+        How many states the run holds at once: its outputs, or every step for an optimiser
+        (a count).
+    parts : tuple of (str, int), bytes
+        Each holder of memory by name (``"states"``, ``"control basis"``, ...) with its size.
     """
 
     steps: int
@@ -185,13 +200,40 @@ def check_memory(
         )
 
 
-def check_simulation_memory(
-    scene, elements: int | None = None, available: int | None = None
-) -> None:
-    """Refuse a simulation of ``scene`` whose kept outputs cannot fit, naming the fields.
+def model_build(elements: int, compiled: bool = True) -> tuple[float, float]:
+    """Peak memory (bytes) and time (s) of building a model of ``elements`` (:data:`MODEL_BUILD`).
 
-    The remedy names the smallest ``numerics.output_every`` that fits (the steps themselves are
-    streamed), or a longer ``numerics.step`` / shorter ``numerics.duration``.
+    Parameters
+    ----------
+    elements : int
+        Elements n of the model.
+    compiled : bool
+        The model compiled to C (else CasADi's SX virtual machine).
+    """
+    (n0, bytes0, seconds0), (n1, bytes1, seconds1) = MODEL_BUILD[compiled]
+    ratio = math.log(elements / n0) / math.log(n1 / n0)
+    return bytes0 * (bytes1 / bytes0) ** ratio, seconds0 * (seconds1 / seconds0) ** ratio
+
+
+def _most_elements(compiled: bool, limit: float) -> int:
+    """The most elements whose model builds within ``limit`` bytes (at least 1)."""
+    (n0, bytes0, _), (n1, bytes1, _) = MODEL_BUILD[compiled]
+    power = math.log(bytes1 / bytes0) / math.log(n1 / n0)
+    return max(1, int(n0 * (limit / bytes0) ** (1 / power)))
+
+
+def check_simulation_memory(
+    scene,
+    elements: int | None = None,
+    available: int | None = None,
+    compiled: bool = True,
+) -> None:
+    """Refuse a simulation of ``scene`` that cannot fit in memory, naming the fields, before work.
+
+    First its kept outputs: the remedy names the smallest ``numerics.output_every`` that fits
+    (the steps themselves are streamed), or a longer ``numerics.step`` / shorter
+    ``numerics.duration``. Then the building of its model (:func:`model_build`): the remedy
+    names the most ``model.elements`` that fit, and the compiled model for an interpreted run.
 
     Parameters
     ----------
@@ -200,15 +242,35 @@ def check_simulation_memory(
         Elements n of the model that runs (default: the scene's).
     available : int, optional, bytes
         Default: the memory available now.
+    compiled : bool
+        The run's model is compiled to C (else interpreted).
 
     Raises
     ------
     ValueError
-        See :func:`check_memory`.
+        See :func:`check_memory`; or the model's build, with its estimate (bytes and seconds).
     """
+    available = available_memory() if available is None else available
+    _check_outputs(scene, elements, available)
+    n = elements or scene.model.elements
+    size, seconds = model_build(n, compiled)
+    limit = USABLE_SHARE * available
+    if size > limit:
+        model = "compiled" if compiled else "interpreted"
+        other = "" if compiled else ", or the compiled model (not --interpreted)"
+        raise ValueError(
+            f"model.elements = {n}: building the {model} model (its statics"
+            f"{' and C library' if compiled else ''}) needs about {_gigabytes(size)} and "
+            f"{seconds:.3g} s, over the limit of {_gigabytes(limit)} ({USABLE_SHARE:.0%} of the "
+            f"{_gigabytes(available)} available); model.elements = "
+            f"{_most_elements(compiled, limit)} or fewer fits{other}"
+        )
+
+
+def _check_outputs(scene, elements: int | None, available: int) -> None:
+    """The kept outputs' check of :func:`check_simulation_memory`."""
     numerics = scene.numerics
     estimate = simulation_memory(scene, elements=elements)
-    available = available_memory() if available is None else available
     fits = int(USABLE_SHARE * available / estimate.per_kept)
     every = -(-estimate.steps // max(fits - 1, 1))
     while estimate.steps % every:  # the smallest divisor of the steps that fits
