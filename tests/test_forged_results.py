@@ -144,3 +144,25 @@ def test_an_edited_line_run_file_is_refused(tmp_path, line_file, change, message
     _edit(path, change)
     with pytest.raises(ValueError, match=r"forged\.nc: .*" + message):
         LineTrajectory.load(path)
+
+
+def test_a_run_inside_another_result_is_checked_by_its_own_series(run_file):
+    """check_figures, for a run kept in an OcpResult or an MpcResult: a plant that stopped
+    early is genuine (its Omega is its own), an edited Omega is not."""
+    from dataclasses import replace
+
+    from cable_ocp.simulation.seabed import rms_objective
+    from cable_ocp.simulation.trajectory import check_figures
+
+    run = Trajectory.load(run_file)
+    check_figures(run)
+    cut = slice(0, 20)
+    early = replace(
+        run, time=run.time[cut], clearance_error=run.clearance_error[cut],
+        omega=rms_objective(run.time[cut], run.clearance_error[cut]),
+    )  # fmt: skip
+    check_figures(early)
+    with pytest.raises(ValueError, match=r"^omega = 0\.5 m: expected .* eq\. 39"):
+        check_figures(replace(early, omega=0.5))
+    with pytest.raises(ValueError, match=r"^time starts at 1 s: expected 0 s"):
+        check_figures(replace(early, time=early.time + 1.0))

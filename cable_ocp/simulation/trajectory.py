@@ -247,19 +247,17 @@ class Trajectory(PhysicsChecked):
 def check_recorded(run, time: np.ndarray, error: np.ndarray, elements: int | None) -> None:
     """Check a loaded run's figures and scene against its own series (a forged file is refused).
 
-    - ``time`` (s) starts at 0;
-    - ``run.omega`` is eq. 39 recomputed from ``time`` and ``error`` (``e(t)``, m) to
-      :data:`OMEGA_RTOL` (NaN for a single sample);
-    - a ``run.scene_record`` (none in files written before runs kept their scene) validates by
-      the scene schema, ``time`` ends at its ``numerics.duration``, and where ``elements`` is
-      given (a fixed-``n`` run), the run has its ``model.elements`` and is sampled every
-      ``numerics.output_every`` steps of ``numerics.step``.
+    :func:`check_figures`, and where the run holds its ``scene_record`` (none in files written
+    before runs kept their scene): it validates by the scene schema, ``time`` ends at its
+    ``numerics.duration``, and where ``elements`` is given (a fixed-``n`` run), the run has its
+    ``model.elements`` and is sampled every ``numerics.output_every`` steps of ``numerics.step``.
 
     Parameters
     ----------
     run : Trajectory or LineTrajectory
     time : array (k,), s
     error : array (k,), m
+        ``e(t)`` of eq. 39.
     elements : int or None
         ``n`` of the run's model (None for a line run, whose ``n`` changes).
 
@@ -268,19 +266,40 @@ def check_recorded(run, time: np.ndarray, error: np.ndarray, elements: int | Non
     ValueError
         Naming the variable, its value and what was expected (the caller adds the file).
     """
-    span = max(abs(float(time[-1])), 1.0)
-    if abs(time[0]) > 1e-9 * span:
-        raise ValueError(f"time starts at {time[0]:.9g} s: expected 0 s")
+    _check_start(time)
     if run.scene_record:
         _check_scene(run, time, elements)
+    _check_omega(run.omega, time, error)
+
+
+def check_figures(run: Trajectory) -> None:
+    """Check what a run's own series say of it: its time starts at 0, its Omega is eq. 39.
+
+    For a run kept inside another result (an ``OcpResult``'s verified run, a closed loop's
+    plant, which may stop before its scene's end); a run's own file is checked further by
+    :func:`check_recorded`.
+
+    Raises
+    ------
+    ValueError
+        Naming the variable, its value and what was expected.
+    """
+    _check_start(run.time)
+    _check_omega(run.omega, run.time, run.clearance_error)
+
+
+def _check_start(time: np.ndarray) -> None:
+    if abs(time[0]) > 1e-9 * max(abs(float(time[-1])), 1.0):
+        raise ValueError(f"time starts at {time[0]:.9g} s: expected 0 s")
+
+
+def _check_omega(omega: float, time: np.ndarray, error: np.ndarray) -> None:
+    """``omega`` (m) against eq. 39 on ``time`` and ``error``, to :data:`OMEGA_RTOL`."""
     expected = rms_objective(time, error) if time.size > 1 else float("nan")
-    if not (
-        np.isclose(run.omega, expected, rtol=OMEGA_RTOL, atol=0.0)
-        or (np.isnan(run.omega) and np.isnan(expected))
-    ):
+    same = np.isclose(omega, expected, rtol=OMEGA_RTOL, atol=0.0)
+    if not (same or (np.isnan(omega) and np.isnan(expected))):
         raise ValueError(
-            f"omega = {run.omega!r} m: expected {expected!r} m, eq. 39 on its time and "
-            "clearance_error"
+            f"omega = {omega!r} m: expected {expected!r} m, eq. 39 on its time and clearance_error"
         )
 
 
