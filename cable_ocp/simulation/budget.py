@@ -93,35 +93,21 @@ def state_size(scene, elements: int | None = None) -> int:
     return 2 * (6 if scene.model.torsion else 5) * (n + 1)
 
 
-def _steps(scene, step: float | None, duration: float | None) -> tuple[int, float, float]:
+def _steps(scene, step: float | None = None) -> int:
+    """RK4 steps over the scene's ``numerics.duration`` at ``step`` (s; default its own)."""
     step = scene.numerics.step if step is None else step
-    duration = scene.numerics.duration if duration is None else duration
-    return max(1, round(duration / step)), step, duration
+    return max(1, round(scene.numerics.duration / step))
 
 
-def simulation_memory(
-    scene,
-    step: float | None = None,
-    duration: float | None = None,
-    output_every: int | None = None,
-    elements: int | None = None,
-) -> MemoryEstimate:
+def simulation_memory(scene, elements: int | None = None) -> MemoryEstimate:
     """The memory of :func:`cable_ocp.simulation.run.simulate` on ``scene``, bytes.
 
-    Parameters
-    ----------
-    scene : Scene
-    step, duration : float, optional, s
-        Default: the scene's ``numerics.step`` and ``numerics.duration``.
-    output_every : int, optional
-        Default: the scene's ``numerics.output_every``.
-    elements : int, optional
-        Elements n of the model (default: the scene's).
+    Its steps and outputs are the scene's (``numerics``); ``elements`` is n of the model
+    (default: the scene's).
     """
-    steps, _, _ = _steps(scene, step, duration)
-    every = scene.numerics.output_every if output_every is None else output_every
+    steps = _steps(scene)
     n = elements or scene.model.elements
-    kept = steps // max(every, 1) + 1
+    kept = steps // max(scene.numerics.output_every, 1) + 1
     rows = {
         "states": state_size(scene, n),
         "inputs": INPUT_SIZE,
@@ -136,24 +122,23 @@ def simulation_memory(
 def optimisation_memory(
     scene,
     step: float | None = None,
-    duration: float | None = None,
     elements: int | None = None,
     parameters: int | None = None,
 ) -> MemoryEstimate:
-    """The memory of an optimiser's run of the horizon at ``step``, bytes (module docstring).
+    """The memory of an optimiser's run of the scene's horizon at ``step``, bytes (module doc).
 
     Parameters
     ----------
     scene : Scene
-    step, duration : float, optional, s
-        The optimiser's RK4 step and horizon (default: the scene's).
+    step : float, optional, s
+        The optimiser's RK4 step (default: the scene's ``numerics.step``).
     elements : int, optional
         Elements n of the optimiser's model (default: the scene's).
     parameters : int, optional
         Winch parameters of the control (default: ``2 winch.knots``, the Hermite angles and
         rates of as many intervals).
     """
-    steps, _, _ = _steps(scene, step, duration)
+    steps = _steps(scene, step)
     nx = state_size(scene, elements)
     size = parameters or 2 * scene.winch.knots
     stage_times = RK4_STAGE_TIMES * steps
