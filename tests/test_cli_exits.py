@@ -13,7 +13,7 @@ import pytest
 
 from cable_ocp import cli
 from cable_ocp.cli import exits
-from cable_ocp.control import results
+from cable_ocp.lowering import results
 from cable_ocp.scene import schema
 from cable_ocp.simulation.integrate import SimulationError
 from cable_ocp.simulation.seabed import OffGridError

@@ -251,3 +251,21 @@ def test_cable_ocp_replay_runs_the_compiled_model_as_simulate_does(
     assert cli.main([*command, "--interpreted", "--out", str(tmp_path / "b")]) == 130
     assert seen == [True, False]
     capsys.readouterr()
+
+
+def test_cable_ocp_replay_drives_a_saved_landing_plan(tmp_path, capsys):
+    """A LandingPlan saved by the API replays on the command line: the same line run again (its
+    end to 1e-9 m, as co.simulate(plan.scene, winch=plan)); a plan keeps its own time, so
+    --retime is refused naming why."""
+    from test_lowering import lowering_scene
+
+    plan = co.plan_landing(lowering_scene(), quiet=True)
+    assert plan.run is not None, plan.status
+    path = plan.save(tmp_path / "plan.nc")
+    out = tmp_path / "replayed"
+    code = cli.main(["replay", str(path), "--out", str(out), "--quiet"])
+    assert code == 0, capsys.readouterr().err
+    np.testing.assert_allclose(co.load_result(out).end, plan.run.end, rtol=0, atol=1e-9)
+    code = cli.main(["replay", str(path), "--retime", "hold", "--out", str(tmp_path / "r")])
+    assert code == 2
+    assert "--retime hold: a LandingPlan replays in its own time" in capsys.readouterr().err

@@ -16,7 +16,10 @@ from cable_ocp.cli.arguments import (
 from cable_ocp.cli.run_folder import write_run
 from cable_ocp.drive.winch import RETIMES, replayed_duration
 
-REPLAYABLE = "what optimize or mpc saved (result.nc, mpc.nc; lower's hover_*.nc and hold.nc)"
+REPLAYABLE = (
+    "what optimize or mpc saved (result.nc, mpc.nc; lower's hover_*.nc and hold.nc), or a "
+    "landing plan, landing or hold that the API saved"
+)
 
 
 def add_replay_command(commands) -> None:
@@ -44,11 +47,11 @@ def add_replay_command(commands) -> None:
 def run_replay_command(args: argparse.Namespace) -> int:
     """Run ``cable-ocp replay``; 3 when the run is not physical, 0 otherwise.
 
-    The summary adds ``saved_omega``, the Omega the result was saved with (m). A replay on
-    another duration is refused unless ``--retime`` says how, before any work; a retimed one
-    prints what the retiming did.
+    The summary adds ``saved_omega``, the Omega the result was saved with (m), where it states
+    one. A replay on another duration is refused unless ``--retime`` says how, before any work;
+    a retimed one prints what the retiming did.
     """
-    from cable_ocp.control.results import load_result
+    from cable_ocp.lowering.results import load_result
     from cable_ocp.simulation.progress import stage
     from cable_ocp.simulation.run import simulate
 
@@ -61,19 +64,25 @@ def run_replay_command(args: argparse.Namespace) -> int:
             "would replace; give another folder; nothing was written"
         )
     result = load_result(args.result)
-    if not hasattr(result, "retimed"):  # a run, not a winch: its winch is not kept to drive
+    kind = type(result).__name__
+    if not hasattr(result, "winch_profile"):  # a run: its winch is not kept to drive
         raise ValueError(
-            f"{args.result}: holds a {type(result).__name__}, a run whose winch is not kept as a "
-            f"profile to drive; replay takes {REPLAYABLE}, whose winch it drives (a run is "
-            "made again by cable-ocp simulate on its scene)"
+            f"{args.result}: holds a {kind}, a run whose winch is not kept as a profile to "
+            f"drive; replay takes {REPLAYABLE}, whose winch it drives (a run is made again by "
+            "cable-ocp simulate on its scene)"
+        )
+    if args.retime is not None and not hasattr(result, "retimed"):
+        raise ValueError(
+            f"--retime {args.retime}: a {kind} replays in its own time on any duration (held "
+            "after its end); leave --retime out"
         )
     scene = result.scene.updated(parse_overrides(args.set)) if args.set else result.scene
-    replayed_duration(result.duration, scene.numerics.duration, args.retime, "--retime {}")
+    own = getattr(result, "duration", None)  # None: the winch keeps its own time
+    replayed_duration(own, scene.numerics.duration, args.retime, "--retime {}")
     winch = result if args.retime is None else result.retimed(args.retime)
     with stage(f"replay {scene.name}", scene.numerics.duration, quiet=args.quiet):
         trajectory = simulate(scene, winch=winch, quiet=args.quiet, compiled=not args.interpreted)
     if args.retime is not None and winch.note(scene):
         print(f"note: {winch.note(scene)}")
-    return write_run(
-        "replay", trajectory, scene, Path(args.out), args.animate, {"saved_omega": result.omega}
-    )
+    saved = {"saved_omega": result.omega} if hasattr(result, "omega") else {}
+    return write_run("replay", trajectory, scene, Path(args.out), args.animate, saved)
