@@ -61,6 +61,25 @@ class SimulationError(RuntimeError):
     """A simulation became non-finite, left its bonds or reached a singular configuration."""
 
 
+@dataclass(frozen=True)
+class HealthFault:
+    """Why a run's state cannot be trusted (:func:`health`), and what to change.
+
+    Attributes
+    ----------
+    what : str
+        What went wrong, where and when.
+    remedy : str
+        What to change (empty when nothing general helps).
+    """
+
+    what: str
+    remedy: str = ""
+
+    def __str__(self) -> str:
+        return f"{self.what}. Remedy: {self.remedy}." if self.remedy else self.what
+
+
 def rk4_step(model: CableModel, step: float) -> ca.Function:
     """One classical RK4 step of length ``step`` (s) of the model, as one SX Function.
 
@@ -468,25 +487,6 @@ def bond_residuals(
     return norms
 
 
-@dataclass(frozen=True)
-class Fault:
-    """Why a run's state cannot be trusted (:func:`health`), and what to change.
-
-    Attributes
-    ----------
-    what : str
-        What went wrong, where and when.
-    remedy : str
-        What to change (empty when nothing general helps).
-    """
-
-    what: str
-    remedy: str = ""
-
-    def __str__(self) -> str:
-        return f"{self.what}. Remedy: {self.remedy}." if self.remedy else self.what
-
-
 def health(
     model: CableModel,
     block: np.ndarray,
@@ -494,7 +494,7 @@ def health(
     times: np.ndarray,
     step: float,
     tolerance: float,
-) -> Fault | None:
+) -> HealthFault | None:
     """The first fault of a block of states, or None: the health check of every run.
 
     A state that is non-finite, off its bonds by more than ``tolerance``, twisted apart (a
@@ -519,7 +519,7 @@ def health(
     first_non_finite = int(np.argmin(finite)) if not finite.all() else times.size
     first_off_bonds = int(np.argmax(off_bonds)) if off_bonds.any() else times.size
     if first_non_finite < times.size and first_non_finite <= first_off_bonds:
-        return Fault(
+        return HealthFault(
             f"the state became non-finite at t = {times[first_non_finite]:.6g} s with step "
             f"h = {step:g} s: the RK4 step is beyond its stability limit",
             "a smaller numerics.step, more damping (cable.bending_damping), or fewer elements "
@@ -528,7 +528,7 @@ def health(
     if first_off_bonds < times.size:
         k = first_off_bonds
         residual, limit = apart(float(norms[k]), tolerance)
-        return Fault(
+        return HealthFault(
             f"bond residual {residual} m exceeds numerics.constraint_tolerance = "
             f"{limit} m at t = {times[k]:.6g} s with step h = {step:g} s",
             "a smaller numerics.step or other Baumgarte gains (numerics.baumgarte_alpha/beta); "
@@ -541,7 +541,7 @@ def health(
     try:
         model.check_regular(block.T)
     except ValueError as error:
-        return Fault(f"at t <= {times[-1]:.6g} s: {error}")
+        return HealthFault(f"at t <= {times[-1]:.6g} s: {error}")
     return None
 
 
@@ -554,7 +554,7 @@ def _check_block(model, block, norms, times, step, tolerance) -> None:
 
 def _twist_fault(
     model: CableModel, block: np.ndarray, times: np.ndarray, step: float
-) -> Fault | None:
+) -> HealthFault | None:
     """Neighbouring elements twisted apart by more than half a turn, or None.
 
     A torsional instability leaves the bonds intact and the state finite (the twist does not
@@ -565,7 +565,7 @@ def _twist_fault(
     if not np.any(twist > MAX_RELATIVE_TWIST):
         return None
     k = int(np.argmax(twist > MAX_RELATIVE_TWIST))
-    return Fault(
+    return HealthFault(
         f"neighbouring elements twisted apart by {twist[k]:.3g} rad at t = {times[k]:.6g} s "
         f"with step h = {step:g} s: a torsional instability",
         "a smaller numerics.step (torsion needs about 0.12 s / n, cable_ocp.studies.stability), "
