@@ -2,8 +2,8 @@
 
 :func:`read_result` finds a folder's result file and reads it by its kind with the readers it
 is given; :data:`READERS` are the kinds of this layer and those below it (an optimum, a closed
-loop, a run). :func:`cable_ocp.lowering.results.load_result` (``co.load_result``) adds the
-lowering's kinds, which this layer cannot import; :func:`load_result` here reads this layer's.
+loop, a run). :func:`cable_ocp.lowering.results.load_result` (``co.load_result``) reads with
+them and the lowering's kinds, which this layer cannot import.
 """
 
 from __future__ import annotations
@@ -33,14 +33,6 @@ READERS = {
 }
 
 Result = OcpResult | MpcResult | Trajectory | LineTrajectory
-
-
-def load_result(path: str | Path) -> Result:
-    """Read what ``optimize``, ``mpc`` or ``simulate`` saved (:func:`read_result`, :data:`READERS`).
-
-    :func:`cable_ocp.load_result` reads the lowering's results too.
-    """
-    return read_result(path, READERS)
 
 
 def read_result(path: str | Path, readers: Mapping[str, Callable[[Path], object]]):
