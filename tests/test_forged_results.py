@@ -132,6 +132,8 @@ def _in(group, edit):
         (_in("segment_1", _value("omega", 0.5)), r"segment_1: omega = 0\.5 m: expected the run's"),
         (_in("segment_1", _series("clearance_error", lambda e: e + 1.0)), r"omega = .* eq\. 39"),
         (_in("segment_1", _series("time", lambda t: t + 5.0)), rf"ends at 17 s: {DURATION} = 12"),
+        (_series("line_out", lambda v: v + 1.0), r"line_out: the whole-run view stored at the"),
+        (_series("top_tension", lambda v: 0 * v), r"top_tension: the whole-run view stored at "),
         (
             _scene("numerics.duration", 24.0, "segment_0"),
             r"segment_1: its scene differs from segment_0's \(numerics\.duration: 24\.0 against",

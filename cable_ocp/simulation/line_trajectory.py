@@ -22,6 +22,8 @@ from cable_ocp.simulation.slack import PhysicsChecked
 from cable_ocp.simulation.trajectory import Trajectory, check_recorded, run_summary
 
 KIND = "LineTrajectory"
+# The whole-run views that the file's root holds beside its segments.
+VIEWS = ("element_count", "line_out", "top_length", "end", "top_tension")
 
 
 def _joined(name: str, doc: str) -> property:
@@ -194,15 +196,18 @@ class LineTrajectory(PhysicsChecked):
         try:
             with xr.open_dataset(path) as root:
                 old = netcdf.KIND not in root.attrs and root.attrs.get("cable_ocp_kind") == KIND
-            attrs = root.attrs if old else netcdf.read(path, KIND).attrs
-            count, length = int(attrs["segments"]), float(attrs["element_length"])
-            names = [f"segment_{k}" for k in range(count)]
+            whole = None if old else netcdf.read(path, KIND)  # checked against its groups
+            attrs = root.attrs if old else whole.attrs
+            names = [f"segment_{k}" for k in range(int(attrs["segments"]))]
             if old:
                 datasets = [_old_segment(path, name) for name in names]
             else:  # one open of the file for every segment (100 segments: 33 s -> a few)
                 datasets = netcdf.read_groups(path, KIND, names)
+            length = float(attrs["element_length"])
             run = cls([Trajectory.from_xarray(dataset) for dataset in datasets], length)
             check_recorded(run, run.time, run.clearance_error, None)
+            if whole is not None:
+                _check_views(run, whole)
             for k, segment in enumerate(run.segments):
                 if not np.array_equal(segment.omega, run.omega, equal_nan=True):
                     raise ValueError(
@@ -213,6 +218,21 @@ class LineTrajectory(PhysicsChecked):
             where = "" if str(path) in str(error) else f"{path}: "
             raise ValueError(f"{where}not a readable line trajectory ({error})") from None
         return run
+
+
+def _check_views(run: LineTrajectory, whole: xr.Dataset) -> None:
+    """ValueError naming the first whole-run view stored at the root that its segments differ from.
+
+    The loader rebuilds the views from the segments; a root that says otherwise was edited.
+    """
+    for name in ("time", *VIEWS):
+        if name in whole.variables:
+            stored, own = whole[name].values, getattr(run, name)
+            if stored.shape != own.shape or not np.array_equal(stored, own, equal_nan=True):
+                raise ValueError(
+                    f"{name}: the whole-run view stored at the root is not its segments' "
+                    "(an edited file)"
+                )
 
 
 def _cf(units: str, long_name: str) -> dict[str, str]:
