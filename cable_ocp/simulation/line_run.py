@@ -29,7 +29,7 @@ from cable_ocp.model.line_state import merge, split
 from cable_ocp.simulation.budget import check_simulation_memory
 from cable_ocp.simulation.integrate import integrate, step_count, step_times
 from cable_ocp.simulation.line_trajectory import LineTrajectory
-from cable_ocp.simulation.outputs import run_outputs
+from cable_ocp.simulation.outputs import output_trajectory, run_outputs
 from cable_ocp.simulation.seabed import (
     check_on_grid,
     check_start,
@@ -38,7 +38,6 @@ from cable_ocp.simulation.seabed import (
     seabed_height,
 )
 from cable_ocp.simulation.statics import starting_state
-from cable_ocp.simulation.trajectory import Trajectory
 from cable_ocp.simulation.winch_input import winch_function
 
 
@@ -219,21 +218,10 @@ def _trajectory(scene, drive: Drive, segments: list) -> LineTrajectory:
     whole_error = np.concatenate([e[:-1] for e in errors[:-1]] + [errors[-1]])
     omega = rms_objective(whole_time, whole_error)
     trajectories = [
-        Trajectory(
-            time=t,
-            states=run.states,
-            inputs=run.inputs,
-            joints=joints,
-            tensions=tensions,
-            winch_angle=drive.winch_angle(t)[0],
-            clearance_error=error,
-            omega=omega,
-            scene_name=scene.name,
-            scene_record=scene.to_dict(),
-            state_names=model.state_names,
-            signed_tensions=signed,
+        output_trajectory(
+            scene, model, t, run.states, run.inputs, outputs, drive.winch_angle(t)[0], error, omega
         )
-        for (t, run, joints, tensions, signed, model), error in zip(segments, errors, strict=True)
+        for (t, run, *outputs, model), error in zip(segments, errors, strict=True)
     ]
     residual = max(run.bond_residual for _, run, *_ in segments)
     return LineTrajectory(trajectories, scene.winch.line.element_length, residual)

@@ -1,8 +1,9 @@
 """A run's outputs from its states: joint positions, bond tensions and their signs.
 
 One evaluation of the model's ``outputs`` (or, compiled, the structured loops) over many
-states, :data:`OUTPUT_BLOCK` at a time; shared by the fixed-n runs (:mod:`.run`) and the line
-runs (:mod:`.line_run`).
+states, :data:`OUTPUT_BLOCK` at a time, and the :class:`Trajectory` made of them
+(:func:`output_trajectory`); shared by the fixed-n runs (:mod:`.run`) and the line runs
+(:mod:`.line_run`).
 """
 
 from __future__ import annotations
@@ -14,6 +15,7 @@ from cable_ocp.model import structured
 from cable_ocp.model.cable import CableModel
 from cable_ocp.simulation.integrate import evaluate_into
 from cable_ocp.simulation.slack import signed_tensions
+from cable_ocp.simulation.trajectory import Trajectory
 
 # States per call of the mapped outputs: CasADi's map takes superlinear time in its count (at
 # n = 100, 0.4 s to map over 4001 states, 0.02 s over 500), the call the same time per state.
@@ -76,3 +78,49 @@ def _model_outputs(model: CableModel, count: int):
         "joints_forces_tensions", [x, u], [results[name] for name in names], ["x", "u"], names
     )
     return single.map(count)
+
+
+def output_trajectory(
+    scene,
+    model: CableModel,
+    time: np.ndarray,
+    states: np.ndarray,
+    inputs: np.ndarray,
+    outputs: tuple[np.ndarray, np.ndarray, np.ndarray],
+    winch_angle: np.ndarray,
+    clearance_error: np.ndarray,
+    omega: float,
+) -> Trajectory:
+    """The :class:`Trajectory` of a run of ``model`` on ``scene``, from its outputs.
+
+    Parameters
+    ----------
+    scene : Scene
+    model : CableModel
+    time : array (k,), s
+    states : array (k, state_size)
+    inputs : array (k, 15)
+    outputs : tuple of arrays
+        Joints (k, 3, n+2; m), tensions and signed tensions (k, n+1; N): :func:`run_outputs`.
+    winch_angle : array (k,), rad
+        The drum angle that drove the run.
+    clearance_error : array (k,), m
+        ``e(t)`` of eq. 39.
+    omega : float, m
+        ``Omega`` of eq. 39.
+    """
+    joints, tensions, signed = outputs
+    return Trajectory(
+        time=time,
+        states=states,
+        inputs=inputs,
+        joints=joints,
+        tensions=tensions,
+        winch_angle=winch_angle,
+        clearance_error=clearance_error,
+        omega=omega,
+        scene_name=scene.name,
+        scene_record=scene.to_dict(),
+        state_names=model.state_names,
+        signed_tensions=signed,
+    )

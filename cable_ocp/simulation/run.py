@@ -14,7 +14,7 @@ from cable_ocp.simulation.budget import check_simulation_memory
 from cable_ocp.simulation.integrate import TIME_BLOCK, integrate, step_times
 from cable_ocp.simulation.landing_reference import reference_error
 from cable_ocp.simulation.line_run import simulate_line
-from cable_ocp.simulation.outputs import run_outputs
+from cable_ocp.simulation.outputs import output_trajectory, run_outputs
 from cable_ocp.simulation.seabed import (
     check_on_grid,
     check_start,
@@ -236,24 +236,13 @@ def run_trajectory(
     (:mod:`~cable_ocp.simulation.landing_reference`). Raises
     :class:`~cable_ocp.simulation.seabed.OffGridError` if the end left the bathymetry grid.
     """
-    joints, tensions, signed = run_outputs(model, states, inputs, compiled)
+    outputs = run_outputs(model, states, inputs, compiled)
+    joints = outputs[0]
     check_on_grid(scene.seabed, joints[:, :, 0], time)
     error = clearance_error(scene.seabed, joints[:, :, 0])
     error = error - reference_error(scene, time, error[0])
-    return Trajectory(
-        time=time,
-        states=states,
-        inputs=inputs,
-        joints=joints,
-        tensions=tensions,
-        winch_angle=winch_angle,
-        clearance_error=error,
-        omega=rms_objective(time, error) if time.size > 1 else float("nan"),
-        scene_name=scene.name,
-        scene_record=scene.to_dict(),
-        state_names=model.state_names,
-        signed_tensions=signed,
-    )
+    omega = rms_objective(time, error) if time.size > 1 else float("nan")
+    return output_trajectory(scene, model, time, states, inputs, outputs, winch_angle, error, omega)
 
 
 def _line_simulation(scene, winch, model, initial_state, quiet, compiled):
