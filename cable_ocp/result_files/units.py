@@ -22,10 +22,11 @@ from functools import cache
 import xarray as xr
 
 DIMENSIONLESS = "1"
-# SI symbols a result's docstring may state, each with an optional power: ``m/s^2``, ``N m``.
-SYMBOLS = ("m", "s", "kg", "N", "rad", "Pa", "J", "W", "Hz")
+# Symbols a result's docstring may state, each with an optional power: ``m/s^2``, ``N m``,
+# ``1/s``, ``%``.
+SYMBOLS = ("m", "s", "ms", "us", "kg", "N", "rad", "Pa", "J", "W", "Hz", "%")
 TERM = rf"(?:{'|'.join(SYMBOLS)})(?:\^-?\d+)?"
-UNIT = re.compile(rf"^{TERM}(?:[ ·/]{TERM})*$")
+UNIT = re.compile(rf"^(?:{TERM}|1(?=/|$))(?:[ ·/]{TERM})*$")
 # Last parts of a numpydoc type that are not units: an optional field (no unit), and a unit
 # that depends on the instance (the caller gives it, ``to_dataset(units=...)``).
 NO_UNIT, PER_INSTANCE = "optional", "rad or m"
@@ -48,7 +49,7 @@ def _top_level_split(text: str) -> list[str]:
 def cf_units(unit: str) -> str:
     """A docstring unit in the udunits spelling of CF: ``m/s^2`` -> ``m s-2``, ``m^2`` -> ``m2``."""
     numerator, *denominators = unit.replace("·", " ").split("/")
-    terms = [re.sub(r"\^(-?\d+)", r"\1", t) for t in numerator.split()]
+    terms = [re.sub(r"\^(-?\d+)", r"\1", t) for t in numerator.split() if t != DIMENSIONLESS]
     for term in denominators:
         name, _, power = term.strip().partition("^")
         terms.append(f"{name}-{power or 1}")
