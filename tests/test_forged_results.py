@@ -168,3 +168,19 @@ def test_a_run_inside_another_result_is_checked_by_its_own_series(run_file):
         check_figures(replace(early, omega=0.5))
     with pytest.raises(ValueError, match=r"^time starts at 1 s: expected 0 s"):
         check_figures(replace(early, time=early.time + 1.0))
+
+
+def test_a_run_whose_scene_file_this_machine_lacks_still_loads_and_is_checked(tmp_path):
+    """A result folder moved away from its seabed grid: its scene cannot be rebuilt (the grid
+    file is gone), but it loads, its numbers checked against the recorded scene."""
+    grid = shutil.copy(MODELS / "data" / "survey_grid.nc", tmp_path / "grid.nc")
+    scene = co.load_scene(
+        MODELS / "survey.toml",
+        {"seabed.grid.file": str(grid), "numerics.duration": 2.0, "model.elements": 5},
+    )
+    path = co.simulate(scene, quiet=True).save(tmp_path / "run")
+    grid.unlink()
+    assert Trajectory.load(path).time[-1] == 2.0
+    _edit(path, _scene("numerics.duration", 4.0))
+    with pytest.raises(ValueError, match=rf"run\.nc: .*time ends at 2 s: {DURATION} = 4\.0 s"):
+        Trajectory.load(path)
