@@ -22,8 +22,8 @@ if TYPE_CHECKING:  # what __getattr__ imports (lazy_names reads it), for type ch
     from cable_ocp.control.closed_loop.result import MpcResult
     from cable_ocp.control.closed_loop.settings import MpcSettings
     from cable_ocp.control.gauss_newton import GaussNewtonSettings
+    from cable_ocp.control.ipopt import IpoptSettings
     from cable_ocp.control.nelder_mead import NelderMeadSettings
-    from cable_ocp.control.ocp import IpoptSettings
     from cable_ocp.control.optimization import OcpResult, optimize
     from cable_ocp.control.settings import GridSettings, ModelSettings, TranscriptionSettings
     from cable_ocp.control.solvers import SOLVERS

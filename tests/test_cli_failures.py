@@ -27,7 +27,7 @@ from cable_ocp.control import optimization
 from cable_ocp.control.closed_loop import loop, references
 from cable_ocp.control.closed_loop.result import MpcResult
 from cable_ocp.control.closed_loop.settings import MpcSettings
-from cable_ocp.control.ocp import IpoptSettings
+from cable_ocp.control.ipopt import IpoptSettings
 from cable_ocp.control.optimization import OcpResult
 from cable_ocp.result_files import netcdf as labelled
 from cable_ocp.scene.schema import load_scene
