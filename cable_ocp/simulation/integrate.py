@@ -226,8 +226,11 @@ class RawRun:
     Attributes
     ----------
     time : array (k,), s
+        The output times, ``0`` to the run's duration.
     states : array (k, state_size)
+        The state at each output time.
     inputs : array (k, 15)
+        The model's inputs there (:data:`cable_ocp.model.layout.INPUTS`).
     bond_residual : float, m
         Largest bond residual of the states after the first (checked as the run went).
     """
@@ -254,10 +257,15 @@ def integrate(
     Parameters
     ----------
     model : CableModel
+        The rope's model (its state layout, right-hand side and bonds).
     x0 : array (state_size,)
+        The state at t = 0.
     drive : Drive
+        The inputs over time: the top's motion, the winch, the end force.
     duration : float, s
+        How long to run; a whole number of steps.
     step : float, s
+        The RK4 step ``h``.
     output_every : int
         Keep every k-th step (the last kept time must be ``duration``).
     tolerance : float, m
