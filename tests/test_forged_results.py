@@ -184,3 +184,18 @@ def test_a_run_whose_scene_file_this_machine_lacks_still_loads_and_is_checked(tm
     _edit(path, _scene("numerics.duration", 4.0))
     with pytest.raises(ValueError, match=rf"run\.nc: .*time ends at 2 s: {DURATION} = 4\.0 s"):
         Trajectory.load(path)
+
+
+def test_a_file_of_another_version_whose_scene_no_longer_validates_still_loads(tmp_path, run_file):
+    """Old result files must load: the schema's rules may have changed since that version
+    wrote the file, so its record is checked by its numbers as recorded. The same record in a
+    file of this version is refused (a forged scene)."""
+    path = shutil.copy(run_file, tmp_path / "old.nc")
+    _edit(path, _scene("cable.density", "heavy"))
+    with pytest.raises(ValueError, match=rf"old\.nc: .*{INVALID} \(cable\.density"):
+        Trajectory.load(path)
+    _edit(path, lambda d: d.setncattr("cable_ocp_version", "0.3.0"))
+    assert Trajectory.load(path).time[-1] == 6.0
+    _edit(path, _scene("numerics.duration", 12.0))
+    with pytest.raises(ValueError, match=rf"old\.nc: .*time ends at 6 s: {DURATION} = 12\.0 s"):
+        Trajectory.load(path)

@@ -23,7 +23,7 @@ def save(result, path: str | Path) -> Path:
     return netcdf.write(result.to_xarray(), Path(path))
 
 
-def load(cls: type, path: str | Path, what: str):
+def load(cls: type, path: str | Path, what: str, check=None):
     """A ``cls`` read from the netCDF file ``path`` by ``cls.from_xarray``.
 
     Parameters
@@ -33,18 +33,24 @@ def load(cls: type, path: str | Path, what: str):
     path : path-like
     what : str
         The result in words, for the error (``"trajectory"``).
+    check : callable, optional
+        ``check(result, dataset)`` raises ValueError if the result read does not fit what the
+        file says of it (its figures, its scene).
 
     Raises
     ------
     ValueError
         Naming the file: it is missing, not a result of this kind or of a format this cable_ocp
-        reads (:func:`.netcdf.read`), or its fields do not fit (``from_xarray``).
+        reads (:func:`.netcdf.read`), or its fields do not fit (``from_xarray``, ``check``).
     """
     path = Path(path)
     dataset = netcdf.read(path, cls.__name__)
     try:
-        return cls.from_xarray(dataset)
+        result = cls.from_xarray(dataset)
+        if check is not None:
+            check(result, dataset)
     except (ValueError, KeyError, TypeError) as error:
         raise ValueError(
             f"{path}: not a readable {what} ({type(error).__name__}: {error})"
         ) from None
+    return result

@@ -73,6 +73,11 @@ def kind_of(path: Path) -> str:
     return kind
 
 
+def written_here(dataset: xr.Dataset) -> bool:
+    """Whether a Dataset read by :func:`read` was written by this version of cable_ocp."""
+    return dataset.attrs.get(WRITER) == package_version()
+
+
 def format_of(dataset: xr.Dataset) -> int:
     """The format a Dataset read by :func:`read` was written in."""
     return int(dataset.attrs[VERSION])

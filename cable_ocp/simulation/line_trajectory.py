@@ -205,7 +205,8 @@ class LineTrajectory(PhysicsChecked):
                 datasets = netcdf.read_groups(path, KIND, names)
             length = float(attrs["element_length"])
             run = cls([Trajectory.from_xarray(dataset) for dataset in datasets], length)
-            check_recorded(run, run.time, run.clearance_error, None)
+            here = whole is not None and netcdf.written_here(whole)
+            check_recorded(run, run.time, run.clearance_error, None, here)
             if whole is not None:
                 _check_views(run, whole)
             for k, segment in enumerate(run.segments):

@@ -13,6 +13,7 @@ import xarray as xr
 from cable_ocp import result_files
 from cable_ocp.model.layout import INPUT_SIZE, INPUTS
 from cable_ocp.result_files import format_1
+from cable_ocp.result_files.netcdf import written_here
 from cable_ocp.scene.axial_choice import axial_choice
 from cable_ocp.scene.records import check_run
 from cable_ocp.scene.schema import SceneError, scene_of
@@ -218,10 +219,7 @@ class Trajectory(PhysicsChecked):
         netcdf = path.with_suffix(".nc")
         if netcdf.exists() or not (path.with_suffix(".npz").exists() or
                                    path.with_suffix(".json").exists()):  # fmt: skip
-            run = result_files.load(cls, netcdf, WHAT)
-            with format_1.blame(netcdf, WHAT):
-                check_recorded(run, run.time, run.clearance_error, run.tensions.shape[1] - 1)
-            return run
+            return result_files.load(cls, netcdf, WHAT, _check_file)
         arrays_path, meta_path = path.with_suffix(".npz"), path.with_suffix(".json")
         arrays = format_1.read_arrays(arrays_path, WHAT)
         with format_1.blame(arrays_path, WHAT):
@@ -245,13 +243,25 @@ class Trajectory(PhysicsChecked):
         return True
 
 
-def check_recorded(run, time: np.ndarray, error: np.ndarray, elements: int | None) -> None:
+def _check_file(run: Trajectory, dataset: xr.Dataset) -> None:
+    """:func:`check_recorded` of a run read from its own file (``dataset``)."""
+    n = run.tensions.shape[1] - 1
+    check_recorded(run, run.time, run.clearance_error, n, written_here(dataset))
+
+
+def check_recorded(
+    run, time: np.ndarray, error: np.ndarray, elements: int | None, strict: bool = True
+) -> None:
     """Check a loaded run's figures and scene against its own series (a forged file is refused).
 
     :func:`check_figures`, and where the run holds its ``scene_record`` (none in files written
     before runs kept their scene): it validates by the scene schema, ``time`` ends at its
     ``numerics.duration``, and where ``elements`` is given (a fixed-``n`` run), the run has its
     ``model.elements`` and is sampled every ``numerics.output_every`` steps of ``numerics.step``.
+
+    A record that no longer validates because of a file of the scene's that this machine lacks
+    (a moved grid), or, unless ``strict``, by the present schema (a file written by another
+    version of cable_ocp, whose rules may differ), is checked by its numbers as recorded.
 
     Parameters
     ----------
@@ -261,6 +271,8 @@ def check_recorded(run, time: np.ndarray, error: np.ndarray, elements: int | Non
         ``e(t)`` of eq. 39.
     elements : int or None
         ``n`` of the run's model (None for a line run, whose ``n`` changes).
+    strict : bool
+        The file was written by this cable_ocp (:func:`written_here`).
 
     Raises
     ------
@@ -269,7 +281,7 @@ def check_recorded(run, time: np.ndarray, error: np.ndarray, elements: int | Non
     """
     _check_start(time)
     if run.scene_record:
-        _check_scene(run, time, elements)
+        _check_scene(run, time, elements, strict)
     _check_omega(run.omega, time, error)
 
 
@@ -304,16 +316,15 @@ def _check_omega(omega: float, time: np.ndarray, error: np.ndarray) -> None:
         )
 
 
-def _check_scene(run, time: np.ndarray, elements: int | None) -> None:
+def _check_scene(run, time: np.ndarray, elements: int | None, strict: bool) -> None:
     """The scene checks of :func:`check_recorded`."""
     try:
         scene = run.scene
         numerics, model = scene.numerics, scene.model
     except SceneError as error:
-        if not error.path.endswith(".file"):
+        if strict and not error.path.endswith(".file"):
             raise ValueError(f"scene_record: not a valid scene ({error})") from None
-        # A file of the scene's (a grid, a motion table) that this machine lacks: the run's
-        # numbers are checked against the record's as they were validated when it ran.
+        # The run's numbers are checked against the record's, as they were when it ran.
         record = run.scene_record
         numerics, model = SimpleNamespace(**record["numerics"]), SimpleNamespace(**record["model"])
     if abs(time[-1] - numerics.duration) > 1e-9 * max(numerics.duration, 1.0):
