@@ -30,7 +30,6 @@ from cable_ocp.model.line_models import line_models
 from cable_ocp.scene.schema import Scene
 from cable_ocp.simulation.line_run import pay_out_drive
 from cable_ocp.simulation.line_trajectory import LineTrajectory
-from cable_ocp.simulation.run import winch_function
 from cable_ocp.simulation.seabed import (
     OffGridError,
     clearance,
@@ -39,6 +38,7 @@ from cable_ocp.simulation.seabed import (
 )
 from cable_ocp.simulation.slack import SLACK_FRACTION, run_static, signed_tensions, top_values
 from cable_ocp.simulation.trajectory import Trajectory
+from cable_ocp.simulation.winch_input import winch_function
 
 # Drum samples per output interval for the winch's rate and acceleration between the outputs.
 DRUM_SAMPLES = 16
