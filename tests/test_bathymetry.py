@@ -200,6 +200,22 @@ def test_an_end_that_starts_under_the_seabed_is_refused_before_integrating(paper
         simulate(scene, compiled=True)
 
 
+def test_optimize_refuses_an_end_that_starts_under_the_seabed_before_solving(
+    paper_hill, tmp_path, monkeypatch
+):
+    """The API refuses it at entry (OffGridError, bad input), as simulate does: no solve starts."""
+    from cable_ocp.control import optimization
+
+    def forbidden(*args, **kwargs):
+        pytest.fail("a start under the seabed must be refused before any solve")
+
+    monkeypatch.setattr(optimization, "solve_verified", forbidden)
+    grid = hill_grid(tmp_path / "shallow.nc", level=-294.0, spacing=10.0)
+    scene = paper_hill.updated({"seabed.hills": [], "seabed.grid": {"file": str(grid)}})
+    with pytest.raises(OffGridError, match=r"seabed.grid: the end starts 6 m under the seabed"):
+        optimization.optimize(scene, quiet=True)
+
+
 # ----------------------------------------------------------------------------------------------
 # Bad grid files: one SceneError at load time, naming the field, the file and the point.
 X4, Y4 = np.arange(5.0) * 10, np.arange(4.0) * 10

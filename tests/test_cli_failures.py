@@ -61,7 +61,7 @@ def no_optimiser(monkeypatch):
     def forbidden(*args, **kwargs):
         pytest.fail("bad input must be refused before any heavy work")
 
-    monkeypatch.setattr(optimization, "optimize", forbidden)
+    monkeypatch.setattr(optimization, "solve_verified", forbidden)
     monkeypatch.setattr(loop, "mpc", forbidden)
 
 

@@ -10,7 +10,6 @@ from cable_ocp.cli.exits import SUCCESS
 from cable_ocp.cli.files import results_folder
 from cable_ocp.cli.optimiser_options import (
     add_optimiser_options,
-    check_start,
     check_step,
     elapsed,
     optimize_settings,
@@ -36,11 +35,12 @@ def run_compare_command(args: argparse.Namespace) -> int:
     from dataclasses import replace
 
     from cable_ocp.control.optimization import optimize
+    from cable_ocp.simulation.statics import check_scene_start
 
     scenes = [scene_from(args, path) for path in args.scenes]  # all checked before solving
     for scene in scenes:
         check_step(scene, args.step)
-        check_start(scene)
+        check_scene_start(scene)
     simplex_solver = solver_for(KNOTS.name, None)
     if args.solver is not None and SOLVERS[args.solver].transcription is not SHOOTING:
         shooting_solvers = [n for n, e in SOLVERS.items() if e.transcription is SHOOTING]

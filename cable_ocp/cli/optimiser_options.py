@@ -118,23 +118,6 @@ def check_step(scene, step: float | None) -> None:
         ) from None
 
 
-def check_start(scene) -> None:
-    """Refuse, as ``simulate`` does, an end that starts off the grid or under the seabed.
-
-    Only a bathymetry grid can put the start there; its statics are all it costs, before the
-    optimiser's work (``OffGridError``: exit 2, one line).
-    """
-    if not scene.seabed.absolute:
-        return
-    from cable_ocp.drive.drive import Drive
-    from cable_ocp.model.cable import CableModel
-    from cable_ocp.simulation.seabed import check_start
-    from cable_ocp.simulation.statics import starting_state
-
-    start = starting_state(CableModel.from_scene(scene), Drive.from_scene(scene))
-    check_start(scene.seabed, start[:3])
-
-
 def add_optimiser_options(parser: argparse.ArgumentParser) -> None:
     """Add the optimiser's options (each unset by default: ``optimize()``'s own) to a command."""
     # No defaults here: unset options keep optimize()'s (cable_ocp.control.solvers.SOLVERS).

@@ -17,7 +17,6 @@ from cable_ocp.cli.exits import SUCCESS, failed, one_line
 from cable_ocp.cli.files import results_folder
 from cable_ocp.cli.optimiser_options import (
     add_optimiser_options,
-    check_start,
     check_step,
     elapsed,
     optimize_settings,
@@ -66,7 +65,6 @@ def run_optimize_command(args: argparse.Namespace) -> int:
 
     scene = scene_from(args)
     check_step(scene, args.step)
-    check_start(scene)
     output = {"quiet": args.quiet, "verbose": args.verbose, "refinements": args.refinements}
     result = optimize(scene, settings=optimize_settings(args), **output)
     locked, locked_failure = _locked_reference(scene)

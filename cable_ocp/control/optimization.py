@@ -45,6 +45,7 @@ from cable_ocp.result_files.units import units_of
 from cable_ocp.scene.given import scene_given
 from cable_ocp.scene.schema import scene_of
 from cable_ocp.simulation.progress import check_verbosity
+from cable_ocp.simulation.statics import check_scene_start
 from cable_ocp.simulation.trajectory import Trajectory
 
 # Model correction stops once a solve improves the verified Omega by less than this factor.
@@ -634,11 +635,15 @@ def optimize(
         together), before any heavy work.
     TypeError
         A ``scene`` that is neither a scene nor a scene file's path or name.
+    OffGridError
+        The scene's end starts off its bathymetry grid or under its seabed (its statics, before
+        any solve; :func:`~cable_ocp.simulation.statics.check_scene_start`).
     """
     refuse_unknown("optimize", unknown, OPTIMIZE_KEYWORDS)
     check_verbosity(quiet, verbose)
     scene = scene_given(scene, "optimize")
     refuse_line_scene(scene, "optimize")
+    check_scene_start(scene)
     settings = ocp_settings(solver, settings, model, grid, transcription)
     entry = SOLVERS[settings.solver]
     chosen = entry.transcription

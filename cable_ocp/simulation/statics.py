@@ -24,6 +24,7 @@ from cable_ocp.model.current import current_values, has_current
 from cable_ocp.model.hydro import HydroCoefficients
 from cable_ocp.model.kinematics import axis_direction
 from cable_ocp.model.layout import INPUTS
+from cable_ocp.simulation.seabed import check_start
 from cable_ocp.simulation.slack import signed_tensions
 
 RESIDUAL_TOLERANCE = 1e-10  # rad/s^2, largest angular acceleration left at the equilibrium
@@ -429,3 +430,21 @@ def _newton_compiled(model, state_of, u, rotational_index, start):
                 break
         solution = solution + fraction * step
     return solution, left
+
+
+def check_scene_start(scene) -> None:
+    """Refuse a scene whose end starts off its bathymetry grid or under its seabed.
+
+    Only an absolute seabed (a grid) can put the start there; the scene's statics are all it
+    costs, so an optimiser calls it before any heavy work, as ``simulate`` and ``mpc`` check the
+    start they compute anyway.
+
+    Raises
+    ------
+    OffGridError
+        The hanging end's position off the grid or under the seabed, naming ``seabed.grid``.
+    """
+    if not scene.seabed.absolute:
+        return
+    start = starting_state(CableModel.from_scene(scene), Drive.from_scene(scene))
+    check_start(scene.seabed, start[:3])
