@@ -2,11 +2,13 @@
 
 from __future__ import annotations
 
+from dataclasses import fields
+
 import numpy as np
 
 from cable_ocp.drive.bounds import BOUND_TOLERANCE
 from cable_ocp.drive.drive import Drive
-from cable_ocp.model.cable import CableModel
+from cable_ocp.model.cable import CableModel, spec_from_scene
 from cable_ocp.model.layout import INPUTS
 from cable_ocp.scene.given import scene_given
 from cable_ocp.scene.rules import finite_array
@@ -189,6 +191,8 @@ def checked_simulation(
     if scene.winch.line is not None:
         return _line_simulation(scene, winch, model, initial_state, quiet, compiled)
     numerics = scene.numerics
+    if model is not None:
+        check_model_fits(scene, model)
     check_simulation_memory(scene, model.spec.elements if model is not None else None)
     angle = winch_function(scene, winch)
     model = model or CableModel.from_scene(scene)
@@ -243,6 +247,32 @@ def run_trajectory(
     error = error - reference_error(scene, time, error[0])
     omega = rms_objective(time, error) if time.size > 1 else float("nan")
     return output_trajectory(scene, model, time, states, inputs, outputs, winch_angle, error, omega)
+
+
+def check_model_fits(scene, model: CableModel) -> None:
+    """Refuse a model built for another scene (its rope, payload, sea or numerics differ).
+
+    A model may have another number of elements than the scene (a reduced model); everything
+    else that fixes it (:class:`~cable_ocp.model.cable.ModelSpec`) must be the scene's.
+
+    Raises
+    ------
+    TypeError
+        ``model`` is not a :class:`~cable_ocp.model.cable.CableModel`.
+    ValueError
+        Naming the fields of the model that differ from the scene's.
+    """
+    if not isinstance(model, CableModel):
+        raise TypeError(f"model: expected a CableModel, got {type(model).__name__}")
+    expected = spec_from_scene(scene, model.spec.elements)
+    differ = [
+        f.name for f in fields(expected) if getattr(model.spec, f.name) != getattr(expected, f.name)
+    ]
+    if differ:
+        raise ValueError(
+            f"model: built for another scene ({', '.join(differ)} differ from this scene's); "
+            "build it with CableModel.from_scene(scene[, elements]) or leave model out"
+        )
 
 
 def _line_simulation(scene, winch, model, initial_state, quiet, compiled):
