@@ -277,3 +277,9 @@ def test_scene_mutants_load_or_raise_scene_error(tmp_path, mutants, name, models
         loaded += 1
     assert wrong == []
     assert refused > (refused + loaded) // 2 and loaded > 0
+
+
+@pytest.mark.parametrize("overrides", [["model.elements"], "model.elements=20", 20])
+def test_overrides_that_are_no_mapping_are_a_type_error_naming_them(overrides):
+    with pytest.raises(TypeError, match=r"^overrides: expected a mapping of dotted field paths"):
+        load_scene(MODELS / "hanging.toml", overrides)

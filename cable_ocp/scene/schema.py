@@ -980,6 +980,11 @@ class Scene(_Validated):
 
 def _apply_overrides(data: Mapping[str, Any], overrides: Mapping[str, Any] | None) -> dict:
     """Copy ``data`` and set each dotted key of ``overrides`` (e.g. ``"model.elements"``)."""
+    if overrides is not None and not isinstance(overrides, Mapping):
+        raise TypeError(
+            f"overrides: expected a mapping of dotted field paths to values (e.g. "
+            f"{{'model.elements': 20}}), got {type(overrides).__name__}"
+        )
     data = copy.deepcopy(dict(data))
     for key, value in (overrides or {}).items():
         parts = str(key).split(".")
