@@ -189,7 +189,9 @@ def test_cable_ocp_replay_retimes_by_the_users_choice_and_says_so(
     printed = capsys.readouterr().out
     assert code == 0
     assert f"note: the 10 s optimum {RETIMES[retime]}, on a 25 s scene" in printed
-    assert json.loads((out / "summary.json").read_text())["saved_omega"] > 0
+    summary = json.loads((out / "summary.json").read_text())
+    assert summary["saved_omega"] > 0
+    assert summary["retimed"] == f"the 10 s optimum {RETIMES[retime]}, on a 25 s scene"
     assert co.load_result(out).time[-1] == pytest.approx(25.0)
 
 

@@ -82,7 +82,8 @@ def run_replay_command(args: argparse.Namespace) -> int:
     winch = result if args.retime is None else result.retimed(args.retime)
     with stage(f"replay {scene.name}", scene.numerics.duration, quiet=args.quiet):
         trajectory = simulate(scene, winch=winch, quiet=args.quiet, compiled=not args.interpreted)
+    saved = {"saved_omega": result.omega} if hasattr(result, "omega") else {}
     if args.retime is not None and winch.note(scene):
         print(f"note: {winch.note(scene)}")
-    saved = {"saved_omega": result.omega} if hasattr(result, "omega") else {}
+        saved["retimed"] = winch.note(scene)
     return write_run("replay", trajectory, scene, Path(args.out), args.animate, saved)

@@ -9,7 +9,7 @@ from cable_ocp.cli.files import results_folder
 from cable_ocp.scene.output import json_text
 
 # Units of the figures a command adds to a run's summary.json (the run's own: its summary()).
-EXTRA_UNITS = {"saved_omega": "m", "locked_omega": "m"}
+EXTRA_UNITS = {"saved_omega": "m", "locked_omega": "m", "retimed": "1"}
 
 
 def write_run(
