@@ -66,3 +66,10 @@ def test_a_variable_of_numbers_without_units_is_refused_before_writing(tmp_path)
     assert list(tmp_path.iterdir()) == []
     data["depth"].attrs["units"] = "m"
     assert netcdf.write(data, tmp_path / "fine.nc").is_file()
+
+
+def test_a_result_saved_into_a_new_folder_makes_it(tmp_path):
+    """Trajectory.save(path) in a folder not made yet (netCDF said "Permission denied")."""
+    data = xr.Dataset({"depth": ("time", [1.0, 2.0], {"units": "m"})})
+    path = netcdf.write(data, tmp_path / "new" / "deeper" / "run.nc")
+    assert path.is_file() and [p.name for p in path.parent.iterdir()] == ["run.nc"]

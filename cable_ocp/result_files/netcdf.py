@@ -93,7 +93,8 @@ def write(
 
     The one writer of netCDF files: every result's and a sweep's (its case files and
     ``sweep.nc``). ``groups`` are written beside it as netCDF groups by name (a line's
-    segments); ``mode`` (permission bits) is set on the file, else the process's default.
+    segments); ``mode`` (permission bits) is set on the file, else the process's default. A
+    folder of ``path`` that does not exist yet is made.
     Every variable of numbers must declare its ``units`` (CF; ``"1"`` for a count): one that
     does not is refused before anything is written (:func:`_check_units`).
 
@@ -122,6 +123,7 @@ def write(
             raise ValueError(f"{path}: a result's arrays must be in memory, not Dask arrays")
         _check_units(part, f"{group}/" if group else "", path)
     lock = combine_locks([NETCDFC_LOCK, HDF5_LOCK])  # what to_netcdf takes, less Dask's
+    path.parent.mkdir(parents=True, exist_ok=True)
     scratch = path.parent / f".{path.name}.{secrets.token_hex(4)}.tmp"
     try:
         with _interrupts_held() as interrupt_if_seen:

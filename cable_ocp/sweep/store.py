@@ -68,9 +68,9 @@ def case_path(folder: Path, index: int) -> Path:
 def _write(dataset: xr.Dataset, target: Path) -> None:
     """Write ``dataset`` to ``target`` by the one netCDF writer (atomic, without Dask).
 
-    The folder is made if new; the file gets its permissions (:func:`file_mode`).
+    The file gets its folder's permissions (:func:`file_mode`).
     """
-    target.parent.mkdir(parents=True, exist_ok=True)
+    target.parent.mkdir(parents=True, exist_ok=True)  # (its mode is read before the write)
     netcdf.write(dataset, target, mode=file_mode(target.parent))
 
 
