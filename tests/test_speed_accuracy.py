@@ -70,7 +70,7 @@ def test_failed_runs_are_recorded_not_ranked(quick):
                 assert p.message
         ranked = study.pareto() + [study.cheapest(t) for t in (0.01, 0.1)]
         assert all(p is None or p.stable for p in ranked)
-    assert result.ocp and not result.ocp[0].success  # one iteration cannot converge
+    assert result.ocp and not result.ocp[0].result.success  # one iteration cannot converge
 
 
 def test_files_are_written(quick):
@@ -81,7 +81,7 @@ def test_files_are_written(quick):
     text = (out / "speed_accuracy.md").read_text()
     for study in result.scenes:
         assert f"## {study.scene_name}" in text
-    assert result.ocp[0].status in text
+    assert result.ocp[0].result.status in text
 
 
 def test_an_ocp_setting_takes_its_settings_and_options_from_the_registry():

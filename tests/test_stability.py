@@ -126,24 +126,24 @@ def test_quick_study_writes_its_folder(models_dir, tmp_path):
     text = (out / "stability.md").read_text()
     assert "Largest stable RK4 step" in text and "Euler-angle singularity" in text
     # Capped at 2 iterations / 10 evaluations: recorded as not converged, never as a success.
-    assert not any(r.success for r in study.knots.runs)
+    assert not any(r.result.success for r in study.knots.runs)
     assert "Maximum" in text
 
 
 def test_a_knot_run_is_named_by_its_solver_and_searched_when_it_does_not_shoot():
+    from types import SimpleNamespace
+
     from cable_ocp.studies.stability.knots import KnotRun
 
-    figures = {"omega": 0.1, "omega_model": 0.09, "success": True, "status": "ok",
-               "iterations": 4, "evaluations": 5, "wall_time": 1.0}  # fmt: skip
-    corrected = KnotRun(**figures, knots=7, solver="gauss-newton", corrected=True,
-                        history=(0.3, 0.2))  # fmt: skip
-    search = KnotRun(**figures, knots=7, solver="nelder-mead", corrected=False,
-                     history=(0.5, 0.2, 0.2, 0.1))  # fmt: skip
+    def run(solver, corrected, history):
+        return KnotRun(7, corrected, SimpleNamespace(solver=solver, history=history))
+
+    corrected = run("gauss-newton", True, [0.3, 0.2])
+    search = run("nelder-mead", False, [0.5, 0.2, 0.2, 0.1])
     assert corrected.method == "gauss-newton + correction" and not corrected.searched
     assert search.method == "nelder-mead" and search.searched
     assert search.evaluations_to_within(1.0) == 2  # within 0.2 m of its last 0.1 m
-    assert not KnotRun(**figures, knots=7, solver="nelder-mead", corrected=False,
-                       history=()).searched  # fmt: skip
+    assert not run("nelder-mead", False, []).searched
 
 
 @pytest.mark.parametrize("resolution", [1.0, 0.5, float("nan")])

@@ -1,43 +1,16 @@
-"""What a study keeps of one ``optimize`` run: its figures, without the trajectory."""
+"""What a study keeps of one ``optimize`` run: its result without the verified trajectory."""
 
 from __future__ import annotations
 
-from dataclasses import dataclass, fields
+from dataclasses import replace
 
 from cable_ocp.control.optimization import OcpResult
 
 
-@dataclass(frozen=True)
-class SolveRecord:
-    """The figures of one :class:`~cable_ocp.control.optimization.OcpResult`.
+def kept(result: OcpResult) -> OcpResult:
+    """``result`` without its trajectory: its figures, profile and settings, not the whole run.
 
-    A study's run record derives from it and adds what it varied.
-
-    Attributes
-    ----------
-    omega : float, m
-        Verified on the scene's own model (NaN when the last iterate could not be simulated).
-    omega_model : float, m
-        On the optimisation model.
-    success : bool
-        The solver converged and its profile passed verification.
-    status : str
-        The solver's own status message, or ``"verification failed: <reason>"``.
-    iterations, evaluations : int
-        The solver's iterations and objective evaluations (each a simulation for Nelder-Mead).
-    wall_time : float, s
-        The whole ``optimize`` call, verification included.
+    A study holds many runs; its tables and charts read the result's figures (``omega``,
+    ``success``, ``status``, ``iterations``, ``wall_time``, ...), which the result declares once.
     """
-
-    omega: float
-    omega_model: float
-    success: bool
-    status: str
-    iterations: int
-    evaluations: int
-    wall_time: float
-
-
-def solve_figures(result: OcpResult) -> dict:
-    """The fields of :class:`SolveRecord` taken from an ``optimize`` result, by name."""
-    return {f.name: getattr(result, f.name) for f in fields(SolveRecord)}
+    return replace(result, trajectory=None)

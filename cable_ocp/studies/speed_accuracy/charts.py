@@ -77,14 +77,15 @@ def ocp_chart(points: Sequence[OcpPoint], scene_name: str, path: Path) -> None:
     ax.set_yscale("log")
     top_edge = blended_transform_factory(ax.transData, ax.transAxes)
     for k, p in enumerate(points):
-        state = "" if p.success else f" - FAILED: {p.status}"
-        style = dict(color=f"C{k % 10}", marker="o" if p.success else "x", ms=9, mew=2, ls="")
-        if np.isfinite(p.omega):
-            ax.plot(p.wall_time, p.omega, label=f"{p.setting.label}{state}", **style)
+        r = p.result
+        state = "" if r.success else f" - FAILED: {r.status}"
+        style = dict(color=f"C{k % 10}", marker="o" if r.success else "x", ms=9, mew=2, ls="")
+        if np.isfinite(r.omega):
+            ax.plot(r.wall_time, r.omega, label=f"{p.setting.label}{state}", **style)
         else:
-            ax.plot(p.wall_time, 0.97, transform=top_edge, clip_on=False,
+            ax.plot(r.wall_time, 0.97, transform=top_edge, clip_on=False,
                     label=f"{p.setting.label}{state}", **style)  # fmt: skip
-            ax.annotate("last iterate not simulable: no Omega", (p.wall_time, 0.97),
+            ax.annotate("last iterate not simulable: no Omega", (r.wall_time, 0.97),
                         xycoords=top_edge, xytext=(-8, -4), textcoords="offset points",
                         ha="right", va="top", fontsize=7)  # fmt: skip
     ax.set_xlabel("wall time of the whole optimisation, verification included [s]")

@@ -84,9 +84,10 @@ def ocp_report(points: Sequence[OcpPoint], scene_name: str, duration: float) -> 
         "|---|---:|---:|---|---|---:|---:|---:|---:|",
     ]
     for p in points:
+        r = p.result
         lines.append(
-            f"| {p.setting.label} | {_number(p.omega, '.3g')} | {_number(p.omega_model, '.3g')} | "
-            f"{p.success} | {p.status} | {p.iterations} | {p.evaluations} | {p.wall_time:.1f} | "
+            f"| {p.setting.label} | {_number(r.omega, '.3g')} | {_number(r.omega_model, '.3g')} | "
+            f"{r.success} | {r.status} | {r.iterations} | {r.evaluations} | {r.wall_time:.1f} | "
             f"{p.cpu_time:.1f} |"
         )
     return "\n".join(lines)

@@ -4,17 +4,15 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
-from cable_ocp.control.optimization import optimize
-from cable_ocp.studies.solve_record import SolveRecord, solve_figures
+from cable_ocp.control.optimization import OcpResult, optimize
+from cable_ocp.studies.solve_record import kept
 from cable_ocp.studies.speed_accuracy.plan import OcpSetting, StudyPlan
 from cable_ocp.studies.speed_accuracy.timing import timed
 
 
 @dataclass(frozen=True)
-class OcpPoint(SolveRecord):
-    """One optimiser run on the OCP scene, its setting beside the run's figures.
-
-    A :class:`~cable_ocp.studies.solve_record.SolveRecord` verified on the scene's own model.
+class OcpPoint:
+    """One optimiser run on the OCP scene, Omega verified on the scene's own model.
 
     Attributes
     ----------
@@ -22,17 +20,21 @@ class OcpPoint(SolveRecord):
         The optimiser setting that ran.
     cpu_time : float, s
         Of the whole ``optimize`` call, verification included.
+    result : OcpResult
+        What ``optimize`` returned, its figures (``omega``, ``success``, ``wall_time``, ...)
+        without the verified trajectory (:func:`~cable_ocp.studies.solve_record.kept`).
     """
 
     setting: OcpSetting
     cpu_time: float
+    result: OcpResult
 
 
 def ocp_point(scene, setting: OcpSetting, intervals: int, quiet: bool = True) -> OcpPoint:
     """Solve the OCP with one setting; Omega is verified on the scene's own model."""
     settings, options = setting.settings(intervals), setting.options
     result, cpu, _ = timed(lambda: optimize(scene, settings=settings, quiet=quiet, **options))
-    return OcpPoint(setting=setting, cpu_time=cpu, **solve_figures(result))
+    return OcpPoint(setting=setting, cpu_time=cpu, result=kept(result))
 
 
 def ocp_study(scene, plan: StudyPlan, quiet: bool = True) -> tuple[OcpPoint, ...]:

@@ -10,51 +10,49 @@ import numpy as np
 
 from cable_ocp.control.ipopt import IpoptSettings
 from cable_ocp.control.nelder_mead import NelderMeadSettings
-from cable_ocp.control.optimization import optimize
+from cable_ocp.control.optimization import OcpResult, optimize
 from cable_ocp.control.settings import GridSettings, ModelSettings, TranscriptionSettings
 from cable_ocp.control.solvers import ocp_settings, solver_named
 from cable_ocp.studies.figures import finished_chart
-from cable_ocp.studies.solve_record import SolveRecord, solve_figures
+from cable_ocp.studies.solve_record import kept
 from cable_ocp.studies.stability.markdown import table_cell
 
 
 @dataclass(frozen=True)
-class KnotRun(SolveRecord):
-    """One optimisation of the knots study: its knots and solver beside the run's figures.
-
-    The figures are a :class:`~cable_ocp.studies.solve_record.SolveRecord`'s.
+class KnotRun:
+    """One optimisation of the knots study.
 
     Attributes
     ----------
     knots : int
         The spline's number of knots p.
-    solver : str
-        The solver of the registry that ran (:data:`cable_ocp.control.solvers.SOLVERS`).
     corrected : bool
         Whether model-correction solves against the scene's model followed the first solve.
-    history : tuple of float, m
-        The result's ``history``: Nelder-Mead's best Omega after each evaluation, IPOPT's Omega
-        per iteration.
+    result : OcpResult
+        What ``optimize`` returned, its figures (``omega``, ``success``, ``history``, ...)
+        without the verified trajectory (:func:`~cable_ocp.studies.solve_record.kept`): the
+        solver's ``history`` is Nelder-Mead's best Omega after each evaluation, IPOPT's Omega
+        per iteration (m).
     """
 
     knots: int
-    solver: str
     corrected: bool
-    history: tuple[float, ...]
+    result: OcpResult
 
     @property
     def method(self) -> str:
         """The run as the table names it: the solver, ``+ correction`` when corrected."""
-        return f"{self.solver} + correction" if self.corrected else self.solver
+        solver = self.result.solver
+        return f"{solver} + correction" if self.corrected else solver
 
     @property
     def searched(self) -> bool:
         """Its history is a best Omega per evaluation: the knots' search, which does not shoot."""
-        return bool(self.history) and not solver_named(self.solver).shootings
+        return bool(self.result.history) and not solver_named(self.result.solver).shootings
 
     def evaluations_to_within(self, fraction: float) -> int:
         """Evaluations until the best Omega came within ``fraction`` of its last value."""
-        history = np.asarray(self.history)
+        history = np.asarray(self.result.history)
         return int(np.argmax(history <= history[-1] * (1 + fraction))) + 1
 
 
@@ -111,10 +109,11 @@ class KnotsComparison:
             f"| iterations | evaluations | evaluations to within {percent} of final | wall [s] |",
             "|---:|---|---:|---:|---|---|---:|---:|---:|---:|",
         ]
-        for r in self.runs:
-            within = r.evaluations_to_within(self.progress_fraction) if r.searched else "-"
+        for run in self.runs:
+            within = run.evaluations_to_within(self.progress_fraction) if run.searched else "-"
+            r = run.result
             lines.append(
-                f"| {r.knots} | {r.method} | {r.omega:.3g} | {r.omega_model:.3g} | {r.success} "
+                f"| {run.knots} | {run.method} | {r.omega:.3g} | {r.omega_model:.3g} | {r.success} "
                 f"| {table_cell(r.status)} | {r.iterations} | {r.evaluations} | {within} "
                 f"| {r.wall_time:.1f} |"
             )
@@ -128,22 +127,23 @@ class KnotsComparison:
         fig, (history, quality, cost) = plt.subplots(1, 3, figsize=(15, 4.5))
         knots = sorted({r.knots for r in self.runs})
         colours = dict(zip(knots, plt.cm.viridis(np.linspace(0, 0.85, len(knots))), strict=True))
-        for r in self.runs:
+        for run in self.runs:
+            r = run.result
             entry = solver_named(r.solver)
-            if r.searched:
+            if run.searched:
                 history.semilogy(
                     np.arange(1, len(r.history) + 1),
                     r.history,
-                    color=colours[r.knots],
-                    label=f"{entry.label}, p = {r.knots}",
+                    color=colours[run.knots],
+                    label=f"{entry.label}, p = {run.knots}",
                 )
-            elif entry.shootings and not r.corrected and math.isfinite(r.omega_model):
+            elif entry.shootings and not run.corrected and math.isfinite(r.omega_model):
                 history.axhline(
                     r.omega_model,
-                    color=colours[r.knots],
+                    color=colours[run.knots],
                     ls="--",
                     lw=1,
-                    label=f"{entry.label}, p = {r.knots} (final)",
+                    label=f"{entry.label}, p = {run.knots} (final)",
                 )
         history.set_xlabel("objective evaluations")
         history.set_ylabel("best Omega on the optimisation model [m]")
@@ -158,18 +158,18 @@ class KnotsComparison:
         )
         for method, marker, colour in styles:
             chosen = [r for r in self.runs if r.method == method]
-            failed = [r for r in chosen if not r.success]
+            failed = [r for r in chosen if not r.result.success]
             for axis, value in ((quality, "omega"), (cost, "wall_time")):
                 axis.plot(
                     [r.knots for r in chosen],
-                    [getattr(r, value) for r in chosen],
+                    [getattr(r.result, value) for r in chosen],
                     marker + "-",
                     color=colour,
                     label=method,
                 )
                 axis.plot(
                     [r.knots for r in failed],
-                    [getattr(r, value) for r in failed],
+                    [getattr(r.result, value) for r in failed],
                     marker,
                     ls="none",
                     mfc="white",
@@ -192,14 +192,8 @@ class KnotsComparison:
         return finished_chart(fig, path)
 
 
-def _knot_run(knots: int, corrected: bool, result) -> KnotRun:
-    return KnotRun(
-        knots=knots,
-        solver=result.solver,
-        corrected=corrected,
-        history=tuple(result.history),
-        **solve_figures(result),
-    )
+def _knot_run(knots: int, corrected: bool, result: OcpResult) -> KnotRun:
+    return KnotRun(knots=knots, corrected=corrected, result=kept(result))
 
 
 @dataclass(frozen=True)
