@@ -165,7 +165,8 @@ def simulate_line(scene, winch=None, quiet: bool = True, compiled: bool = True) 
     times = np.arange(count // numerics.output_every + 1) * interval
     lines = scene.cable.length + drive.inputs(times)[INPUTS.top_length]
     counts = mesh.schedule(lines, mesh.starting_elements(scene.cable.length))
-    check_simulation_memory(scene, int(counts.max()))  # as if every output had the most
+    # As if every output had the most elements.
+    check_simulation_memory(scene, int(counts.max()), compiled=compiled)
     models = line_models(spec_from_scene(scene), mesh.element_length, compiled)
     changes = [0, *np.flatnonzero(np.diff(counts)) + 1, len(times) - 1]
     changes = sorted(set(changes))

@@ -193,7 +193,9 @@ def checked_simulation(
     numerics = scene.numerics
     if model is not None:
         check_model_fits(scene, model)
-    check_simulation_memory(scene, model.spec.elements if model is not None else None)
+    check_simulation_memory(
+        scene, model.spec.elements if model is not None else None, compiled=compiled
+    )
     angle = winch_function(scene, winch)
     model = model or CableModel.from_scene(scene)
     drive = Drive.from_scene(scene, angle, elements=model.spec.elements)
