@@ -17,6 +17,7 @@ from __future__ import annotations
 import time
 from dataclasses import dataclass, field, fields, replace
 from pathlib import Path
+from types import MappingProxyType
 
 import numpy as np
 import xarray as xr
@@ -140,6 +141,15 @@ class OcpResult:
         ``optimize(result.scene, settings=...)`` solves the same problem again. Empty in files
         written before it was kept, and when the settings could not be resolved.
     """
+
+    # CF units of the fields kept as variables (result_files.units).
+    UNITS = MappingProxyType({
+        "omega": "m", "omega_model": "m", "success": "1", "iterations": "1", "evaluations": "1",
+        "wall_time": "s", "build_time": "s", "solve_time": "s", "function_time": "s",
+        "history": "m", "refinements": "m", "compile_time": "s", "verification_time": "s",
+        "bound_time": "s", "bond_residual": "m", "verified_step": "s", "heave_feedforward": "1",
+        "minimum_clearance": "m", "minimum_clearance_time": "s",
+    })  # fmt: skip
 
     method: str
     parameters: np.ndarray

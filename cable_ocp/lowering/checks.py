@@ -16,6 +16,7 @@ recomputed from the saved states and inputs by the model's outputs.
 from __future__ import annotations
 
 from dataclasses import dataclass
+from types import MappingProxyType
 
 import numpy as np
 
@@ -116,6 +117,13 @@ class LandingReport(Flat):
     least_static_share : float
         The least top tension over its static value (DNV's slack criterion: above 0.1).
     """
+
+    # CF units of the fields kept as variables (result_files.units).
+    UNITS = MappingProxyType({
+        "landing_error": "m", "landing_speed": "m s-1", "least_tension": "N", "peak_tension": "N",
+        "least_bond_tension": "N", "hold_deviation": "m", "dynamic_amplification": "1",
+        "least_static_share": "1",
+    })  # fmt: skip
 
     checks: tuple[Check, ...]
     landing_error: float

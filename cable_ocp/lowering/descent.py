@@ -13,6 +13,7 @@ rate limit lets them be (``t_r = T/2``, a single S-curve, without one).
 from __future__ import annotations
 
 from dataclasses import dataclass
+from types import MappingProxyType
 
 import numpy as np
 
@@ -51,6 +52,11 @@ class ReferenceDescent(Flat):
         Length ``t_r`` of each C2 ramp of the pay-out rate.
     drum_radius : float, m
     """
+
+    # CF units of the fields kept as variables (result_files.units).
+    UNITS = MappingProxyType({
+        "start_line": "m", "landing_line": "m", "land_time": "s", "ramp": "s", "drum_radius": "m",
+    })  # fmt: skip
 
     start_line: float
     landing_line: float

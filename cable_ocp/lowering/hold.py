@@ -64,8 +64,11 @@ class HoldResult(WithParts):
         (NaN in a calm, where the vessel does not heave).
     heave_std, load_std : float, m
         The standard deviations of the top's and the end's heights over the hold.
-    peak_rate, peak_acceleration : float, rad/s, rad/s^2
-        The drum's, from the plant's inputs at its output times (heave payout included).
+    peak_rate : float, rad/s
+        The drum's largest rate, from the plant's inputs at its output times (heave payout
+        included).
+    peak_acceleration : float, rad/s^2
+        The drum's largest acceleration, likewise.
     drum : tuple of Check
         Those peaks against the winch's limits (:func:`~.checks.drum_checks`).
     """

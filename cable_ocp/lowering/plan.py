@@ -21,6 +21,7 @@ from __future__ import annotations
 
 import time
 from dataclasses import dataclass, replace
+from types import MappingProxyType
 
 import numpy as np
 
@@ -67,6 +68,11 @@ class LandingPlan(WithParts):
     hold : HoldCorrection or None
         The line paid out after the landing, learnt from the runs before the last.
     """
+
+    # CF units of the fields kept as variables (result_files.units).
+    UNITS = MappingProxyType({
+        "heave_feedforward": "1", "landing_errors": "m", "wall_time": "s",
+    })  # fmt: skip
 
     PARTS = ("descent", "run", "report", "hold")
     DIMS = {"landing_errors": ("run_index",)}
@@ -160,6 +166,11 @@ class HoldCorrection(Flat):
     values : array (k,), m
         The line paid out at each knot (``g``).
     """
+
+    # CF units of the fields kept as variables (result_files.units).
+    UNITS = MappingProxyType({
+        "land_time": "s", "times": "s", "values": "m",
+    })  # fmt: skip
 
     DIMS = {"times": ("hold_knot",), "values": ("hold_knot",)}
 

@@ -5,9 +5,9 @@ fields: a ``UNITS`` mapping (a ``ClassVar``) from field name to the unit in the 
 of CF (``"m s-1"``, ``"1"`` for a count or a ratio). :func:`field_units` reads it, and
 :func:`unit_of` refuses a field that has none: a result with an undeclared unit is not written.
 
-A class that declares no ``UNITS`` (yet) states its units in the numpydoc ``Attributes`` section
-of its docstring, ``omega : float, m``; :func:`docstring_units` reads those, and a unit there
-that is not a unit (``metres a second``) is an error, never a silent ``"1"``.
+The numpydoc ``Attributes`` section states the same units for the reader (``omega : float,
+m``); :func:`docstring_units` reads them so that a test keeps the two equal, and a unit there that
+is not a unit (``metres a second``) is an error.
 
 Long names (CF ``long_name``) are the first sentence of each field's description in that
 section (:func:`long_names`); a field without one is named by its name.
@@ -47,8 +47,11 @@ def _top_level_split(text: str) -> list[str]:
 
 
 def cf_units(unit: str) -> str:
-    """A docstring unit in the udunits spelling of CF: ``m/s^2`` -> ``m s-2``, ``m^2`` -> ``m2``."""
-    numerator, *denominators = unit.replace("·", " ").split("/")
+    """A docstring unit in the udunits spelling of CF: ``m/s^2`` -> ``m s-2``, ``m^2`` -> ``m2``.
+
+    ``%`` is ``percent``, the name udunits gives it.
+    """
+    numerator, *denominators = unit.replace("·", " ").replace("%", "percent").split("/")
     terms = [re.sub(r"\^(-?\d+)", r"\1", t) for t in numerator.split() if t != DIMENSIONLESS]
     for term in denominators:
         name, _, power = term.strip().partition("^")
@@ -96,15 +99,20 @@ def long_names(cls: type) -> dict[str, str]:
 
 @cache
 def field_units(cls: type) -> dict[str, str]:
-    """``{field: units}`` (CF spelling) that ``cls`` declares: its ``UNITS``, else its docstring's.
+    """``{field: units}`` (CF spelling) that ``cls`` declares in its ``UNITS``.
 
     Raises
     ------
     ValueError
-        As :func:`docstring_units`, for a class without ``UNITS``.
+        ``cls`` declares no ``UNITS``, naming it.
     """
     declared = getattr(cls, "UNITS", None)
-    return dict(declared) if declared is not None else docstring_units(cls)
+    if declared is None:
+        raise ValueError(
+            f"{cls.__name__} declares no UNITS: a result class names the CF unit of every field "
+            "it stores as a variable in a UNITS mapping beside its fields (result_files.units)"
+        )
+    return dict(declared)
 
 
 @cache

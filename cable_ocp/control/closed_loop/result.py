@@ -9,6 +9,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass, field, fields
 from pathlib import Path
+from types import MappingProxyType
 
 import numpy as np
 import xarray as xr
@@ -45,6 +46,11 @@ class SolveLog:
     status : list of str
         The solver's status of each solve.
     """
+
+    # CF units of the fields kept as variables (result_files.units).
+    UNITS = MappingProxyType({
+        "sample_time": "s", "solve_time": "s", "iterations": "1",
+    })  # fmt: skip
 
     sample_time: np.ndarray
     solve_time: np.ndarray
@@ -121,6 +127,14 @@ class MpcResult:
         ``plant_step`` (s). Files written before the settings were split keep their units in
         the keys (``sample_s``).
     """
+
+    # CF units of the fields kept as variables (result_files.units).
+    UNITS = MappingProxyType({
+        "planned_angle": "rad", "success": "1", "iterations": "1", "solve_time": "s",
+        "worst_solve_time": "s", "limited_steps": "1", "projected_samples": "1",
+        "angle_range": "rad", "real_time_factor": "1", "wall_time": "s", "build_time": "s",
+        "saturated_steps": "1",
+    })  # fmt: skip
 
     trajectory: Trajectory
     planned_angle: np.ndarray
