@@ -199,3 +199,28 @@ def test_a_file_of_another_version_whose_scene_no_longer_validates_still_loads(t
     _edit(path, _scene("numerics.duration", 12.0))
     with pytest.raises(ValueError, match=rf"old\.nc: .*time ends at 6 s: {DURATION} = 12\.0 s"):
         Trajectory.load(path)
+
+
+def test_a_forged_omega_in_an_optimum_or_a_closed_loop_is_refused(tmp_path):
+    """result.nc's Omega is its verified run's, and the run's own Omega is eq. 39's."""
+    from cable_ocp.control.optimization import OcpResult
+    from cable_ocp.result_files import netcdf
+
+    scene = co.load_scene("hanging").updated({"numerics.duration": 2.0})
+    run = co.simulate(scene)
+    optimum = OcpResult(
+        method="shooting", parameters=np.zeros(2), control="hermite(2)", trajectory=run,
+        omega=run.omega, omega_model=run.omega, success=True, status="made here",
+        iterations=0, evaluations=0, wall_time=0.0, build_time=0.0, solve_time=0.0,
+        function_time=0.0, history=[], refinements=[],
+    )  # fmt: skip
+    data = optimum.to_xarray()
+    data["omega"] = data["omega"] + 0.5
+    path = netcdf.write(data, tmp_path / "forged" / "result.nc")
+    with pytest.raises(ValueError, match=r"omega = .*expected the verified run's Omega"):
+        co.load_result(path)
+    assert OcpResult.from_xarray(optimum.to_xarray()).omega == run.omega
+    inner = optimum.to_xarray()
+    inner["clearance_error"] = inner["clearance_error"] + 1.0
+    with pytest.raises(ValueError, match=r"[Oo]mega"):
+        OcpResult.from_xarray(inner)

@@ -46,7 +46,8 @@ def _trajectory() -> Trajectory:
 def _result(trajectory=None) -> OcpResult:
     return OcpResult(
         method="ipopt", parameters=np.linspace(0, 1, 84), control="hermite(84)",
-        trajectory=trajectory, omega=0.01 if trajectory else float("nan"), omega_model=0.02,
+        trajectory=trajectory, omega=trajectory.omega if trajectory else float("nan"),
+        omega_model=0.02,
         success=True, status="Solve_Succeeded", iterations=12, evaluations=15, wall_time=3.0,
         build_time=1.0, solve_time=1.5, function_time=0.5, history=[1.0, float("nan")],
         refinements=[0.01],

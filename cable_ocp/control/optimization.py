@@ -47,7 +47,7 @@ from cable_ocp.scene.given import scene_given
 from cable_ocp.scene.schema import scene_of
 from cable_ocp.simulation.progress import check_verbosity
 from cable_ocp.simulation.statics import check_scene_start
-from cable_ocp.simulation.trajectory import Trajectory
+from cable_ocp.simulation.trajectory import OMEGA_RTOL, Trajectory, check_figures
 
 # Model correction stops once a solve improves the verified Omega by less than this factor.
 SMALL_GAIN = 0.5
@@ -289,6 +289,14 @@ class OcpResult:
         control_parameters(values["parameters"], values["control"])
         if "history" in data.variables and data["history"].attrs.get("units") == "m2":
             values["history"] = omega_history(values["history"])
+        run = values["trajectory"]
+        if run is not None:
+            check_figures(run)
+            if not np.isclose(values["omega"], run.omega, rtol=OMEGA_RTOL, atol=0.0):
+                raise ValueError(
+                    f"omega = {values['omega']:.9g} m: expected the verified run's Omega, "
+                    f"{run.omega:.9g} m"
+                )
         return cls(**values)
 
     def save(self, folder: str | Path) -> Path:

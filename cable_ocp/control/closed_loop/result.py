@@ -25,7 +25,7 @@ from cable_ocp.drive.winch import (
 from cable_ocp.result_files import dataset, format_1, netcdf
 from cable_ocp.result_files.units import units_of
 from cable_ocp.scene.records import check_run
-from cable_ocp.simulation.trajectory import Trajectory
+from cable_ocp.simulation.trajectory import Trajectory, check_figures
 
 MPC_FILE = "mpc.nc"
 WHAT = "closed-loop result"
@@ -332,6 +332,7 @@ class MpcResult:
         if netcdf.format_of(data) == 2:
             return _format_2(cls, data)
         values = dataset.from_dataset(cls, data)
+        check_figures(values["trajectory"])
         _check_plan(values["planned_angle"], values["trajectory"].time)
         return cls(**values)
 
