@@ -1,4 +1,4 @@
-"""``cable-ocp compare SCENE ... --out DIR``: a shooting solver against Nelder-Mead in one table."""
+"""``cable-ocp compare SCENES --out DIR``: a shooting solver against Nelder-Mead in one table."""
 
 from __future__ import annotations
 
