@@ -90,12 +90,15 @@ class FrontDoor(SphinxDirective):
     def run(self):
         """The autosummary of the callables and classes, then the data in a line."""
         import inspect
+        from pathlib import Path
 
         import cable_ocp
+        from cable_ocp.lazy import declared
 
+        sources = declared(Path(cable_ocp.__file__), "cable_ocp")  # each name's module, once
         lines, data = [".. autosummary::", "   :nosignatures:", ""], []
         for name in cable_ocp.__all__:
-            source = cable_ocp._SOURCES[name]
+            source = sources[name]
             value = getattr(cable_ocp, name)
             if not (inspect.ismodule(value) or inspect.isclass(value) or callable(value)):
                 data.append(f"``{name}`` = ``{value!r}`` (:mod:`{source}`)")
