@@ -299,25 +299,28 @@ class OcpResult:
                 )
         return cls(**values)
 
-    def save(self, folder: str | Path) -> Path:
-        """Write the result to netCDF, ``folder/result.nc`` (see :meth:`to_xarray`)."""
-        folder = Path(folder)
-        folder.mkdir(parents=True, exist_ok=True)
-        return result_files.save(self, folder / RESULT_FILE)
+    def save(self, path: str | Path) -> Path:
+        """Write the result to netCDF (:meth:`to_xarray`); returns the file's path.
+
+        ``path`` is the file if it ends in ``.nc``, else a results folder that gets ``result.nc``.
+        """
+        return result_files.save(self, result_files.result_file(path, RESULT_FILE))
 
     @classmethod
-    def load(cls, folder: str | Path) -> OcpResult:
-        """Read a result written by :meth:`save` (``folder/result.nc``, or format 1).
+    def load(cls, path: str | Path) -> OcpResult:
+        """Read a result written by :meth:`save`, from its file or its results folder.
+
+        A folder holds ``result.nc``, or the format-1 files of cable_ocp 0.1.
 
         Raises
         ------
         ValueError
             Naming the file, if a file of the result is missing, truncated or garbled.
         """
-        folder = Path(folder)
-        if (folder / RESULT_FILE).exists() or not (folder / "result.json").exists():
-            return result_files.load(cls, folder / RESULT_FILE, WHAT)
-        return _from_format_1(cls, folder)
+        file = result_files.result_file(path, RESULT_FILE)
+        if file.exists() or not (file.parent / "result.json").exists():
+            return result_files.load(cls, file, WHAT)
+        return _from_format_1(cls, file.parent)
 
 
 @dataclass(frozen=True)

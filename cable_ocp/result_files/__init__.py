@@ -23,6 +23,15 @@ def save(result, path: str | Path) -> Path:
     return netcdf.write(result.to_xarray(), Path(path))
 
 
+def result_file(path: str | Path, name: str) -> Path:
+    """The file that a result's ``save(path)`` and ``load(path)`` mean.
+
+    ``path`` itself if it names a ``.nc`` file, else the file ``name`` in the folder ``path``.
+    """
+    path = Path(path)
+    return path if path.suffix == ".nc" else path / name
+
+
 def load(cls: type, path: str | Path, what: str, check=None):
     """A ``cls`` read from the netCDF file ``path`` by ``cls.from_xarray``.
 

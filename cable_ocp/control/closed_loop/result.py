@@ -234,13 +234,7 @@ class MpcResult:
 
     @property
     def scene(self):
-        """The plant's scene (a validated ``Scene``), its overrides applied.
-
-        Raises
-        ------
-        ValueError
-            If the run holds no scene (a file written before scenes were kept).
-        """
+        """The plant's scene, its overrides applied (:attr:`Trajectory.scene`, which may raise)."""
         return self.trajectory.scene
 
     def setting(self, name: str):
@@ -336,25 +330,28 @@ class MpcResult:
         _check_plan(values["planned_angle"], values["trajectory"].time)
         return cls(**values)
 
-    def save(self, folder: str | Path) -> Path:
-        """Write the run to netCDF, ``folder/mpc.nc`` (see :meth:`to_xarray`)."""
-        folder = Path(folder)
-        folder.mkdir(parents=True, exist_ok=True)
-        return result_files.save(self, folder / MPC_FILE)
+    def save(self, path: str | Path) -> Path:
+        """Write the run to netCDF (:meth:`to_xarray`); returns the file's path.
+
+        ``path`` is the file if it ends in ``.nc``, else a results folder that gets ``mpc.nc``.
+        """
+        return result_files.save(self, result_files.result_file(path, MPC_FILE))
 
     @classmethod
-    def load(cls, folder: str | Path) -> MpcResult:
-        """Read a run written by :meth:`save` (or ``mpc.json`` + ``mpc.npz`` of cable_ocp 0.1).
+    def load(cls, path: str | Path) -> MpcResult:
+        """Read a run written by :meth:`save`, from its file or its results folder.
+
+        A folder holds ``mpc.nc``, or ``mpc.json`` + ``mpc.npz`` of cable_ocp 0.1.
 
         Raises
         ------
         ValueError
             Naming the file, if it is missing, truncated, garbled or of a newer format.
         """
-        folder = Path(folder)
-        if not (folder / MPC_FILE).exists() and (folder / "mpc.json").exists():
-            return _format_1(cls, folder)
-        return result_files.load(cls, folder / MPC_FILE, WHAT)
+        file = result_files.result_file(path, MPC_FILE)
+        if not file.exists() and (file.parent / "mpc.json").exists():
+            return _format_1(cls, file.parent)
+        return result_files.load(cls, file, WHAT)
 
 
 def _check_plan(planned: np.ndarray, time: np.ndarray) -> None:
