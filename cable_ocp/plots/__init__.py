@@ -30,6 +30,7 @@ import numpy as np
 from matplotlib.figure import Figure
 
 from cable_ocp.plots.animation import animate as animate  # a GIF of the run
+from cable_ocp.plots.figure import finish_figure as finish_figure  # lay out, save, close
 from cable_ocp.plots.line import line_run as line_run  # a line paid out by elements
 from cable_ocp.scene.schema import Seabed
 from cable_ocp.simulation.line_trajectory import LineTrajectory
@@ -42,18 +43,6 @@ if TYPE_CHECKING:  # the results are told by what they hold, so that figures loa
 
     # What a figure draws: a run, or a result that carries one (module docstring).
     Run = Trajectory | LineTrajectory | OcpResult | MpcResult
-
-
-def finish_figure(fig: Figure, path: str | Path | None) -> Figure:
-    """Lay out ``fig``; with a ``path``, save it there and close it (the module's rule)."""
-    fig.tight_layout()
-    # tight_layout leaves a placeholder layout engine, for which savefig lays the figure out in
-    # a draw of its own before drawing it; without an engine the same pixels take one draw.
-    fig.set_layout_engine(None)
-    if path is not None:
-        fig.savefig(path, dpi=120)
-        plt.close(fig)
-    return fig
 
 
 def significant(value: float, digits: int = 3) -> str:

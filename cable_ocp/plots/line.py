@@ -7,6 +7,8 @@ from pathlib import Path
 import matplotlib.pyplot as plt
 from matplotlib.figure import Figure
 
+from cable_ocp.plots.figure import finish_figure
+
 
 def line_run(trajectory, path: str | Path | None = None) -> Figure:
     """Line out and ``n``, the top element within its range, the top tension, the end's depth.
@@ -18,8 +20,6 @@ def line_run(trajectory, path: str | Path | None = None) -> Figure:
     path : str or Path, optional
         Where to save the figure (then it is closed; see :mod:`cable_ocp.plots`).
     """
-    from cable_ocp.plots import finish_figure  # it imports this module
-
     mesh = trajectory.scene.winch.line.mesh
     time = trajectory.time
     fig, axes = plt.subplots(2, 2, figsize=(11, 6.5), sharex=True)
