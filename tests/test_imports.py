@@ -19,9 +19,9 @@ def test_a_module_importing_from_above_is_reported(tmp_path):
     for folder in (root, root / "model", root / "control"):
         (folder / "__init__.py").write_text('"""Package."""\n')
     (root / "control" / "ocp.py").write_text("from cable_ocp.model import cable\n")
-    (root / "model" / "cable.py").write_text("from cable_ocp.control import ocp\n")
+    (root / "model" / "cable.py").write_text("from cable_ocp.control import shooting\n")
     assert imports.violations(root) == [
-        "cable_ocp.model.cable (model) -> cable_ocp.control.ocp (control)"
+        "cable_ocp.model.cable (model) -> cable_ocp.control.shooting (control)"
     ]
 
 
