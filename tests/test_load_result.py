@@ -61,9 +61,7 @@ def test_what_is_not_a_result_is_named(tmp_path):
     with pytest.raises(ValueError, match=r"nothing: no such file or folder"):
         co.load_result(tmp_path / "nothing")
     (tmp_path / "sweep.nc").write_bytes(b"")
-    with pytest.raises(
-        ValueError, match=r"a sweep's folder; read it with cable_ocp.sweep.open_sweep"
-    ):
+    with pytest.raises(ValueError, match=r"sweep\.nc: not a sweep's cases"):
         co.load_result(tmp_path)
     (tmp_path / "notes.nc").write_text("not netCDF")
     with pytest.raises(ValueError, match=r"notes\.nc: not a readable netCDF file"):

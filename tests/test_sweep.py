@@ -224,6 +224,17 @@ def test_sweep_dataset_matches_a_direct_simulation(grid_run):
     assert len(set(np.round(ds["omega"].values, 9))) == 4
 
 
+def test_load_result_reads_a_sweep_as_open_sweep_does(grid_run):
+    """The sweep's dataset is in the result family: its folder or its file, by its kind."""
+    import cable_ocp as co
+    from cable_ocp.result_files import SWEEP_KIND, netcdf
+
+    out = grid_run[2]
+    assert netcdf.kind_of(out / "sweep.nc") == SWEEP_KIND
+    for path in (out, out / "sweep.nc"):
+        assert co.load_result(path).identical(open_sweep(out))
+
+
 def test_open_sweep_indexes_the_swept_keys(grid_run):
     ds = open_sweep(grid_run[2], index=True)
     picked = ds.sel({"top.tow.surge_speed": 1.0, "environment.current[0]": 0.3})

@@ -78,16 +78,16 @@ def read_result(path: str | Path, readers: Mapping[str, Callable[[Path], object]
             return OcpResult.load(path)
         if not found and (path / "mpc.json").is_file():
             return MpcResult.load(path)
-        if not found and (path / "sweep.nc").is_file():  # the sweep layer is above this one
-            raise ValueError(
-                f"{path}: a sweep's folder; read it with cable_ocp.sweep.open_sweep({str(path)!r})"
-            )
+        if not found and (path / result_files.SWEEP_FILE).is_file():
+            return result_files.read_sweep(path / result_files.SWEEP_FILE)
         if not found:
             raise ValueError(
                 f"{path}: no cable_ocp result there (expected a folder holding one of "
                 f"{', '.join(FOLDER_FILES)}, or a result file)"
             )
         path = path / found[0]
+    if path.name == result_files.SWEEP_FILE:  # a sweep's, of any version
+        return result_files.read_sweep(path)
     kind = netcdf.kind_of(path)
     if kind not in readers:
         raise ValueError(

@@ -15,7 +15,12 @@ from __future__ import annotations
 
 from pathlib import Path
 
+import xarray as xr
+
 from cable_ocp.result_files import netcdf
+
+SWEEP_FILE = "sweep.nc"  # a sweep folder's assembled cases (cable_ocp.sweep.store)
+SWEEP_KIND = "SweepDataset"  # its kind, as the file declares it
 
 
 def save(result, path: str | Path) -> Path:
@@ -63,3 +68,33 @@ def load(cls: type, path: str | Path, what: str, check=None):
             f"{path}: not a readable {what} ({type(error).__name__}: {error})"
         ) from None
     return result
+
+
+def read_sweep(path: str | Path) -> xr.Dataset:
+    """A sweep's Dataset, every case along ``case``, from its ``sweep.nc`` (loaded, file closed).
+
+    A file that declares its kind is read and checked as every result is (:func:`.netcdf.read`);
+    a sweep written before sweeps declared it (it carries the ``sweep_text`` attribute) is read
+    as it is.
+
+    Raises
+    ------
+    ValueError
+        Naming the file: missing, unreadable, or not a sweep's.
+    """
+    path = Path(path)
+    try:
+        kind = netcdf.kind_of(path)
+    except ValueError:
+        kind = None
+    if kind == SWEEP_KIND:
+        return netcdf.read(path, SWEEP_KIND)
+    if kind is not None:
+        raise ValueError(f"{path}: holds a {kind}, not a sweep's cases")
+    try:
+        with xr.open_dataset(path) as dataset:
+            if "sweep_text" not in dataset.attrs:
+                raise ValueError("no attribute sweep_text")
+            return dataset.load()
+    except (OSError, ValueError) as error:
+        raise ValueError(f"{path}: not a sweep's cases ({error})") from None

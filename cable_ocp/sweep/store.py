@@ -37,7 +37,8 @@ from typing import Any
 import numpy as np
 import xarray as xr
 
-from cable_ocp.result_files import netcdf
+from cable_ocp import result_files
+from cable_ocp.result_files import SWEEP_FILE, netcdf
 from cable_ocp.scene.output import MARKER, FolderInUse, check_target, file_mode, write_atomic
 from cable_ocp.scene.output import folder_lock as output_lock
 from cable_ocp.sweep.execute import SERIES
@@ -48,7 +49,7 @@ OPTIMIZE_SCALARS = ("omega_model", "iterations", "evaluations")
 TEXT = ("status", "reason")
 LOCK = ".sweep.lock"  # the lock inside the folder of cable_ocp up to 0.3: removed when free
 # What a sweep writes in its folder: a folder holding anything else is not a sweep's.
-SWEEP_NAMES = {MARKER, LOCK, "sweep.json", "sweep.toml", "cases", "sweep.nc"}
+SWEEP_NAMES = {MARKER, LOCK, "sweep.json", "sweep.toml", "cases", SWEEP_FILE}
 RECOVER = "rerun the same command with --retry-failed to compute it again"
 TIME_DECIMALS = 9  # output times rounded to 1 ns so equal times of different cases coincide
 # The units of every variable of numbers that a case file and sweep.nc hold (CF spelling; the
@@ -386,6 +387,7 @@ def assemble(folder: Path, spec: SweepSpec) -> xr.Dataset:
     coords = {"case": np.arange(count), "time": time, **_coordinates(spec)}
     settings = asdict(spec.settings) if spec.settings is not None else None
     attrs = {
+        **netcdf.file_attributes(result_files.SWEEP_KIND),
         "sweep_file": str(spec.path),
         "sweep_text": spec.text,
         "scene": str(spec.scene_path),
@@ -401,7 +403,7 @@ def assemble(folder: Path, spec: SweepSpec) -> xr.Dataset:
 
 def save_dataset(folder: Path, dataset: xr.Dataset) -> Path:
     """Write the assembled Dataset to ``folder/sweep.nc`` atomically."""
-    path = Path(folder) / "sweep.nc"
+    path = Path(folder) / SWEEP_FILE
     _write(dataset, path)
     return path
 
@@ -418,10 +420,7 @@ def open_sweep(path: str | Path, index: bool = False) -> xr.Dataset:
         ``ds.sel({"top.tow.surge_speed": 0.8})`` works.
     """
     path = Path(path)
-    if path.is_dir():
-        path = path / "sweep.nc"
-    with xr.open_dataset(path) as dataset:
-        dataset = dataset.load()
+    dataset = result_files.read_sweep(path / SWEEP_FILE if path.is_dir() else path)
     if index:
         swept = [n for n in dataset.coords if n not in ("case", "time")]
         if swept:
