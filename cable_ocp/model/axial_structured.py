@@ -16,15 +16,17 @@ from dataclasses import dataclass
 import casadi as ca
 
 from cable_ocp.model.axial_element import elastic_element_functions
-from cable_ocp.model.joints import (
-    Kernels,
-    baumgarte,
-    bending_energies,
-    top_bond_kernel,
-)
+from cable_ocp.model.joints import Kernels, baumgarte, bending_energies
 from cable_ocp.model.kinematics import axis_direction
 from cable_ocp.model.kkt import cholesky_solve, inverse_3x3
-from cable_ocp.model.layout import INPUT_SIZE, INPUTS, top_inputs
+from cable_ocp.model.layout import INPUTS, top_inputs
+from cable_ocp.model.structured_parts import (
+    backward_sweep,
+    column,
+    graph_inputs,
+    joint_springs,
+    shared_kernels,
+)
 
 DOFS = 5  # an elastic rope's elements are 5-DOF
 COLUMNS = 2  # right-hand sides: the chain's forces (A), a unit strain acceleration (B)
@@ -156,19 +158,16 @@ class ElasticKernels(Kernels):
 
 def elastic_kernels_of(model) -> ElasticKernels:
     """The elastic loops' Functions of ``model`` itself (a parametric model with a strain)."""
-    matrix = ca.SX.sym("m", 3, 3)
     spec = model.spec
     return ElasticKernels(
         joint=_joint_forces(model),
         element=_element_solve(model, end=False),
         element_end=_element_solve(model, end=True),
         bond=_bond_blocks(model),
-        top_bond=top_bond_kernel(model),
         forward=_forward_sweep(),
         backward=_backward_sweep(),
         accelerations=_accelerations(),
-        inverse=ca.Function("inverse", [matrix], [inverse_3x3(matrix)]),
-        segment_length=ca.Function("segment_length", [model.p], [spec.segment_length]),
+        **shared_kernels(model),
         axial=ca.Function("axial", [model.p], [spec.axial_stiffness, spec.axial_damping]),
     )
 
@@ -190,8 +189,7 @@ def elastic_structured_graph(model, kernels: ElasticKernels) -> tuple[ca.MX, ...
     """
     count = model.element_count
     size = DOFS * count
-    x, u = ca.MX.sym("x", model.state_size), ca.MX.sym("u", INPUT_SIZE)
-    p = ca.MX.sym("p", model.p.numel())
+    x, u, p = graph_inputs(model)
     q = ca.reshape(x[:size], DOFS, count)
     strain, strain_rate = x[size], x[2 * size + 1]
     qd = ca.reshape(x[size + 1 : 2 * size + 1], DOFS, count)
@@ -199,12 +197,7 @@ def elastic_structured_graph(model, kernels: ElasticKernels) -> tuple[ca.MX, ...
     delta = kernels.segment_length(p)
     axial_stiffness, damping_ratio = kernels.axial(p)
     p_kernel = kernels.parameters(p)
-
-    lower_forces, upper_forces = kernels.map("joint", count - 1)(
-        q[:, :-1], q[:, 1:], qd[:, :-1], qd[:, 1:], p_kernel
-    )
-    zero = ca.MX.zeros(DOFS, 1)
-    spring = ca.horzcat(lower_forces, zero) + ca.horzcat(zero, upper_forces)
+    spring = joint_springs(kernels, q, qd, p_kernel)
 
     lengths = ca.horzcat(ca.repmat(delta, 1, count - 2), top_length)
     strains = ca.repmat(strain, 1, count - 1)
@@ -219,9 +212,6 @@ def elastic_structured_graph(model, kernels: ElasticKernels) -> tuple[ca.MX, ...
     blocks = [ca.horzcat(a, b) for a, b in zip(first, rest, strict=True)]
     free, along_p, along_d, top_jac, strain_jac, coupling = blocks[:6]
     strain_mass, strain_force, point, rate, quad, axis, axis_rate = blocks[6:]
-
-    def column(matrix, k, width=1):
-        return matrix[:, k * width : (k + 1) * width]
 
     last = count - 1
     interior = kernels.map("bond", count - 1)(
@@ -256,11 +246,7 @@ def elastic_structured_graph(model, kernels: ElasticKernels) -> tuple[ca.MX, ...
     final = ca.vec(
         ca.reshape(packed[:9, last], 3, 3) @ ca.reshape(packed[9:packed_size, last], 3, COLUMNS)
     )
-    backwards = list(range(last - 1, -1, -1))
-    reverse_upper = ca.horzcat(*[upper[:, 3 * j : 3 * j + 3] for j in backwards])
-    reverse_packed = ca.horzcat(*[packed[:, j] for j in backwards])
-    solved = kernels.mapaccum("backward", last)(final, reverse_packed, reverse_upper)
-    forces = ca.horzcat(*[solved[:, k] for k in range(last - 1, -1, -1)], final)  # 6 x count
+    forces = backward_sweep(kernels, final, packed, upper)  # 6 x count
     forces_a, forces_b = forces[:3, :], forces[3:, :]
     below = ca.horzcat(ca.MX.zeros(3 * COLUMNS, 1), forces[:, :-1])
     qdd = kernels.map("accelerations", count)(

@@ -46,10 +46,15 @@ class Payload:
     Attributes
     ----------
     mass : float, kg
+        Its mass in air.
     volume : float, m^3
+        The water it displaces (its buoyancy).
     drag_area : float, m^2
+        The area across the flow that its drag acts on.
     drag_coefficient : float
+        ``C_D`` of that area (its drag in the current at the end).
     added_mass_coefficient : float
+        ``C_a``: the displaced water's mass it drags along, as a share of ``water * volume``.
     """
 
     mass: float = 0.0
@@ -68,10 +73,12 @@ class ModelSpec:
     elements : int
         ``n``; the model has ``n + 1`` rigid elements.
     cable_length : float, m
+        ``L``, the line out at ``phi = 0``.
     top_length : float, m
         The top element at ``phi = 0`` (the scene's graded mesh, ``Scene.mesh``); the elements
         below share the rest of the line.
     element : ElementProperties
+        The material data every element shares (:class:`~cable_ocp.model.rfe.ElementProperties`).
     bending_stiffness : float, N m^2
         ``EI``; the spring between two elements is ``k = EI / Delta``. 0 switches bending off.
     torsional_stiffness : float, N m^2
@@ -79,11 +86,13 @@ class ModelSpec:
     bending_damping, torsion_damping : float, s
         Rayleigh time constants: damping = constant * spring stiffness.
     gravity : float, m/s^2
+        ``g``.
     water_density : float, kg/m^3
         0 in air.
     baumgarte_alpha, baumgarte_beta : float, 1/s
         Gains of ``Phi'' + 2 alpha Phi' + beta^2 Phi = 0``.
     payload : Payload
+        The point mass at the free end (none: all zero).
     axial_stiffness : float, N
         ``EA`` of an elastic rope (:mod:`cable_ocp.model.axial`); 0: rigid, the paper's rope.
     axial_damping : float

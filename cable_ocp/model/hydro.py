@@ -31,7 +31,9 @@ class HydroCoefficients:
     Attributes
     ----------
     water_density : float, kg/m^3
+        Of the water around the rope.
     diameter : float, m
+        The rope's, across which the drag acts.
     area : float, m^2
         Cross-section area used for the added mass.
     drag_normal, drag_axial : float

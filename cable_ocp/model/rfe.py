@@ -29,7 +29,9 @@ class ElementProperties:
     Attributes
     ----------
     mass_per_length : float, kg/m
+        The rope's own mass per metre (without added mass).
     diameter : float, m
+        Its outer diameter.
     submerged_weight_per_length : float, N/m
         Weight less buoyancy per unit length (eq. 13, 23-24).
     torsion : bool

@@ -28,18 +28,20 @@ from cable_ocp.model.axial_structured import (
 )
 from cable_ocp.model.cable import CableModel
 from cable_ocp.model.compile import CompileReport, compile_in_background, compiled_from
-from cable_ocp.model.joints import (
-    Kernels,
-    baumgarte,
-    bending_energies,
-    top_bond_kernel,
-)
+from cable_ocp.model.joints import Kernels, baumgarte, bending_energies
 from cable_ocp.model.kinematics import POSITION
 from cable_ocp.model.kkt import cholesky_solve, inverse_3x3
-from cable_ocp.model.layout import INPUT_SIZE, INPUTS, top_inputs
+from cable_ocp.model.layout import INPUTS, top_inputs
 from cable_ocp.model.parametric import ModelLayout, ParametricModel
 from cable_ocp.model.rfe import element_functions
 from cable_ocp.model.rk4 import parametric_rk4_step
+from cable_ocp.model.structured_parts import (
+    backward_sweep,
+    column,
+    graph_inputs,
+    joint_springs,
+    shared_kernels,
+)
 
 
 def supports(model: ModelLayout) -> bool:
@@ -341,18 +343,15 @@ def kernels_of(model: ParametricModel) -> Kernels | ElasticKernels:
     """The structured loops' Functions of ``model`` itself (SX, interpreted until compiled)."""
     if model.axial:
         return elastic_kernels_of(model)
-    matrix = ca.SX.sym("m", 3, 3)
     return Kernels(
         joint=_joint_forces(model),
         element=_element_solve(model, end=False),
         element_end=_element_solve(model, end=True),
         bond=_bond_blocks(model),
-        top_bond=top_bond_kernel(model),
         forward=_forward_sweep(),
         backward=_backward_sweep(),
         accelerations=_accelerations(model.dofs),
-        inverse=ca.Function("inverse", [matrix], [inverse_3x3(matrix)]),
-        segment_length=ca.Function("segment_length", [model.p], [model.spec.segment_length]),
+        **shared_kernels(model),
     )
 
 
@@ -368,19 +367,13 @@ def structured_graph(model: ModelLayout, kernels: Kernels | ElasticKernels) -> t
         return elastic_structured_graph(model, kernels)
     dofs, count = model.dofs, model.element_count
     size = dofs * count
-    x, u = ca.MX.sym("x", model.state_size), ca.MX.sym("u", INPUT_SIZE)
-    p = ca.MX.sym("p", model.p.numel())
+    x, u, p = graph_inputs(model)
     q = ca.reshape(x[:size], dofs, count)
     qd = ca.reshape(x[size:], dofs, count)
     top, top_velocity, top_acceleration, top_length, top_length_rate, top_length_acc = top_inputs(u)
     delta = kernels.segment_length(p)
     p_kernel = kernels.parameters(p)
-
-    lower_forces, upper_forces = kernels.map("joint", count - 1)(
-        q[:, :-1], q[:, 1:], qd[:, :-1], qd[:, 1:], p_kernel
-    )
-    zero = ca.MX.zeros(dofs, 1)
-    spring = ca.horzcat(lower_forces, zero) + ca.horzcat(zero, upper_forces)
+    spring = joint_springs(kernels, q, qd, p_kernel)
 
     lengths = ca.horzcat(ca.repmat(delta, 1, count - 2), top_length)
     rest = kernels.map("element", count - 1)(q[:, 1:], qd[:, 1:], lengths, spring[:, 1:], p_kernel)
@@ -390,9 +383,6 @@ def structured_graph(model: ModelLayout, kernels: Kernels | ElasticKernels) -> t
     free, along_p, along_d, top_jac, point, rate, quad, axis, axis_rate = (
         ca.horzcat(a, b) for a, b in zip(first, rest, strict=True)
     )
-
-    def column(matrix, k, width=1):
-        return matrix[:, k * width : (k + 1) * width]
 
     interior = kernels.map("bond", count - 1)(
         free[:, :-1], along_d[:, : 3 * (count - 1)], top_jac[:, : dofs * (count - 1)],
@@ -419,11 +409,7 @@ def structured_graph(model: ModelLayout, kernels: Kernels | ElasticKernels) -> t
     sweep = kernels.mapaccum("forward", count - 1)(start, lower, upper, diag[:, 3:], rhs[:, 1:])
     packed = ca.horzcat(start, sweep)
     final = ca.reshape(packed[:9, last], 3, 3) @ packed[9:, last]
-    backwards = list(range(last - 1, -1, -1))
-    reverse_upper = ca.horzcat(*[upper[:, 3 * j : 3 * j + 3] for j in backwards])
-    reverse_packed = ca.horzcat(*[packed[:, j] for j in backwards])
-    solved = kernels.mapaccum("backward", last)(final, reverse_packed, reverse_upper)
-    forces = ca.horzcat(*[solved[:, k] for k in range(last - 1, -1, -1)], final)
+    forces = backward_sweep(kernels, final, packed, upper)
     below = ca.horzcat(ca.MX.zeros(3, 1), forces[:, :-1])
     qdd = kernels.map("accelerations", count)(free, along_p, along_d, forces, below)
     joints = ca.horzcat(q[0:3, :], column(point, last))
