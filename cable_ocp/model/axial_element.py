@@ -27,7 +27,7 @@ import casadi as ca
 from cable_ocp.model.current import current_at
 from cable_ocp.model.hydro import drag_force_density, gauss_points
 from cable_ocp.model.kinematics import POSITION, axis_direction
-from cable_ocp.model.rfe import ElementProperties, added_mass_per_length
+from cable_ocp.model.rfe import ElementProperties, added_mass_per_length, element_function_pair
 
 STRAIN = 5  # index of the strain in an elastic element's local coordinates
 
@@ -108,21 +108,14 @@ def elastic_element_functions(
     top_point = q[POSITION] + stretch * rest_length * axis
     top_jacobian = ca.jacobian(top_point, q)
     top_quadratic = ca.jtimes(top_jacobian @ qd, q, qd)
-    inputs, names = [q, qd, rest_length], ["q", "qd", "length"]
-    if parameters is not None:
-        inputs, names = [*inputs, parameters], [*names, "p"]
-    return ca.Function(
-        "elastic_element",
-        inputs,
-        [
-            ca.densify(mass_matrix),
-            force,
-            axis,
-            ca.jtimes(axis, q, qd),
-            top_point,
-            top_jacobian,
-            top_quadratic,
-        ],
-        names,
-        ["mass_matrix", "force", "axis", "axis_rate", "top_point", "top_jacobian", "top_quadratic"],
-    ), ca.Function("elastic_element_energy", inputs, [kinetic + potential], names, ["energy"])
+    terms = {
+        "mass_matrix": ca.densify(mass_matrix),
+        "force": force,
+        "axis": axis,
+        "axis_rate": ca.jtimes(axis, q, qd),
+        "top_point": top_point,
+        "top_jacobian": top_jacobian,
+        "top_quadratic": top_quadratic,
+    }
+    energy = kinetic + potential
+    return element_function_pair("elastic_element", [q, qd, rest_length], parameters, terms, energy)

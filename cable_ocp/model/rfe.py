@@ -201,13 +201,43 @@ def element_functions(
     axis_rate = ca.jtimes(axis, q, qd)
     axis_quadratic = ca.jtimes(axis_rate, q, qd)
     top_jacobian = ca.jacobian(q[POSITION] + length * axis, q)
-    inputs, names = [q, qd, length], ["q", "qd", "length"]
+    terms = {
+        "mass_matrix": ca.densify(mass_matrix),
+        "force": force,
+        "axis": axis,
+        "axis_rate": axis_rate,
+        "axis_quadratic": axis_quadratic,
+        "top_jacobian": top_jacobian,
+    }
+    return element_function_pair("element", [q, qd, length], parameters, terms, kinetic + potential)
+
+
+def element_function_pair(
+    name: str,
+    inputs: list[ca.SX],
+    parameters: ca.SX | None,
+    terms: dict[str, ca.SX],
+    energy: ca.SX,
+) -> tuple[ca.Function, ca.Function]:
+    """An element's terms and its energy as two Functions of the same named inputs.
+
+    Parameters
+    ----------
+    name : str
+        The terms' Function; the energy's is ``<name>_energy``.
+    inputs : list of SX
+        ``q``, ``qd`` and ``length`` (m), named so.
+    parameters : SX or None
+        The parameter vector the terms hold symbols of, the last input ``p``; none if None.
+    terms : dict of str to SX
+        The outputs of the first Function, by name, in order.
+    energy : SX, J
+        The output ``energy`` of the second.
+    """
+    names = ["q", "qd", "length"]
     if parameters is not None:
         inputs, names = [*inputs, parameters], [*names, "p"]
-    return ca.Function(
-        "element",
-        inputs,
-        [ca.densify(mass_matrix), force, axis, axis_rate, axis_quadratic, top_jacobian],
-        names,
-        ["mass_matrix", "force", "axis", "axis_rate", "axis_quadratic", "top_jacobian"],
-    ), ca.Function("element_energy", inputs, [kinetic + potential], names, ["energy"])
+    return (
+        ca.Function(name, inputs, list(terms.values()), names, list(terms)),
+        ca.Function(f"{name}_energy", inputs, [energy], names, ["energy"]),
+    )
