@@ -325,17 +325,17 @@ def test_a_background_compile_is_waited_for_and_then_loaded(tmp_path, monkeypatc
         return functions
 
     names = ["tiny_sine", "tiny_square"]
-    arguments = (build, names, "background test", True)
-    compile_module.compile_in_background(*arguments)
+    arguments = compile_module.Library(build, names, "background test", True)
+    compile_module.compile_in_background(arguments)
     assert len(built) == 1
-    compile_module.compile_in_background(*arguments)  # already under way: nothing new
+    compile_module.compile_in_background(arguments)  # already under way: nothing new
     assert len(built) == 1
-    loaded, report = compile_module.compiled_from(*arguments)
+    loaded, report = compile_module.compiled_from(arguments)
     assert not report.cache_hit and report.library.is_file()
     assert len(built) == 1  # built once, for the background compile
     assert np.allclose(np.array(loaded[0](TINY_POINT)).ravel(), TINY_VALUE, rtol=1e-14, atol=0)
     assert np.allclose(np.array(loaded[1](TINY_POINT)).ravel(), np.square(TINY_POINT) + 1)
-    again, second = compile_module.compiled_from(*arguments)
+    again, second = compile_module.compiled_from(arguments)
     assert second.cache_hit and second.library == report.library and len(built) == 1
     assert not list(tmp_path.glob("tmp*"))  # no scratch folder left behind
 
@@ -352,10 +352,12 @@ def test_a_failed_background_compile_is_reported_by_the_foreground(tmp_path, mon
     monkeypatch.setenv("CC", str(compiler))
     x = ca.SX.sym("x", 3)
     tiny = ca.Function("tiny_failing", [x], [ca.sin(x) * x**2])
-    arguments = (lambda: [tiny], ["tiny_failing"], "failing background test", True)
-    compile_module.compile_in_background(*arguments)
+    arguments = compile_module.Library(
+        lambda: [tiny], ["tiny_failing"], "failing background test", True
+    )
+    compile_module.compile_in_background(arguments)
     with pytest.warns(RuntimeWarning, match="broken: no code today"):
-        functions, report = compile_module.compiled_from(*arguments)
+        functions, report = compile_module.compiled_from(arguments)
     assert functions[0] is tiny and report.library is None
 
 

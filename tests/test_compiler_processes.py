@@ -35,7 +35,7 @@ CHILD = textwrap.dedent(
     record, how = Path(sys.argv[1]), sys.argv[2]
     x = ca.SX.sym("x", 2)
     tiny = ca.Function("tiny_process", [x], [ca.sin(x)])
-    arguments = (lambda: [tiny], ["tiny_process"], "process test " + how, True)
+    library = compile_module.Library(lambda: [tiny], ["tiny_process"], "process test " + how, True)
 
     def wait_until_running():
         while not record.is_file() or not record.read_text().strip():
@@ -47,14 +47,14 @@ CHILD = textwrap.dedent(
         os.kill(os.getpid(), signal.SIGINT)  # to the process: its main thread takes it
 
     if how == "exit":  # exits while the compiler runs, without waiting for it
-        compile_module.compile_in_background(*arguments)
+        compile_module.compile_in_background(library)
         wait_until_running()
     else:  # interrupted while compiling, or while waiting for the background compile
         threading.Thread(target=interrupt_once_running, daemon=True).start()
         if how == "background":
-            compile_module.compile_in_background(*arguments)
+            compile_module.compile_in_background(library)
         try:
-            compile_module.compiled_from(*arguments)
+            compile_module.compiled_from(library)
         except KeyboardInterrupt:
             print("interrupted", flush=True)
     print("exiting", flush=True)
@@ -105,14 +105,16 @@ def test_background_compiles_still_finish_and_load(tmp_path, monkeypatch):
     monkeypatch.setenv("CABLE_OCP_CACHE", str(tmp_path))
     x = ca.SX.sym("x", 2)
     arguments = [
-        (lambda k=k: [ca.Function(f"tiny_many_{k}", [x], [x * k])], [f"tiny_many_{k}"],
-         "many background compiles", True)
+        compile_module.Library(
+            lambda k=k: [ca.Function(f"tiny_many_{k}", [x], [x * k])], [f"tiny_many_{k}"],
+            "many background compiles", True,
+        )
         for k in range(1, 5)
     ]  # fmt: skip
     for each in arguments:
-        compile_module.compile_in_background(*each)
+        compile_module.compile_in_background(each)
     for k, each in enumerate(arguments, start=1):
-        functions, report = compile_module.compiled_from(*each)
+        functions, report = compile_module.compiled_from(each)
         assert report.library is not None and not report.cache_hit
         assert float(functions[0]([1.0, 2.0])[1]) == 2.0 * k
     assert not [p for p in tmp_path.iterdir() if p.name.startswith(".")]

@@ -40,7 +40,12 @@ import numpy as np
 from cable_ocp.control.parameters import ProblemParameters
 from cable_ocp.control.step_end_tangent import StepEndTangent, step_end_kernel
 from cable_ocp.model.cable import CableModel
-from cable_ocp.model.compile import CompileReport, compile_in_background, compiled_from
+from cable_ocp.model.compile import (
+    CompileReport,
+    Library,
+    compile_in_background,
+    compiled_from,
+)
 from cable_ocp.model.layout import INPUTS
 from cable_ocp.model.parametric import ParametricModel
 from cable_ocp.simulation.integrate import evaluate_into, step_function
@@ -58,18 +63,18 @@ def rhs_jacobian(model: CableModel) -> tuple[ca.Function, CompileReport]:
     One library per model structure, the model's numbers bound as inputs.
     """
     functions, report = model.parametric.memo(
-        ("rhs_jacobian",), lambda: compiled_from(*_jacobian_arguments(model.parametric))
+        ("rhs_jacobian",), lambda: compiled_from(_jacobian_library(model.parametric))
     )
     return model.memo(("rhs_jacobian",), lambda: model.bind(functions[0])), report
 
 
 def compile_rhs_jacobian_in_background(model: CableModel) -> None:
     """Start compiling the library of :func:`rhs_jacobian` if it is not in the cache."""
-    compile_in_background(*_jacobian_arguments(model.parametric))
+    compile_in_background(_jacobian_library(model.parametric))
 
 
-def _jacobian_arguments(parametric: ParametricModel) -> tuple:
-    """What :func:`~cable_ocp.model.compile.compiled_from` takes for the Jacobian's library."""
+def _jacobian_library(parametric: ParametricModel) -> Library:
+    """The Jacobian's library of :func:`~cable_ocp.model.compile.compiled_from`."""
 
     def derive() -> ca.Function:
         x, u, p = parametric.x, parametric.u, parametric.p
@@ -86,7 +91,7 @@ def _jacobian_arguments(parametric: ParametricModel) -> tuple:
 
     # Keyed by the code that derives it: a cache hit builds no right-hand side.
     description = f"{parametric.structure!r}|columns of d xdot / d [x; winch inputs]"
-    return lambda: [derive()], ["rhs_jacobian"], description, True, (__file__,)
+    return Library(lambda: [derive()], ["rhs_jacobian"], description, True, (__file__,))
 
 
 def sweep_step_function(model: CableModel, step: float) -> ca.Function:

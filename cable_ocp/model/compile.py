@@ -41,6 +41,7 @@ from collections.abc import Callable
 from concurrent.futures import Future
 from functools import cache
 from pathlib import Path
+from typing import NamedTuple
 
 import casadi as ca
 
@@ -448,14 +449,31 @@ def _source_digest(sources: tuple[str, ...]) -> str:
     return digest.hexdigest()
 
 
-def compiled_from(
-    build: Callable[[], list[ca.Function]],
-    names: list[str],
-    description: str,
-    flat: bool,
-    sources: tuple[str, ...] = (),
-    quiet: bool = True,
-) -> tuple[list[ca.Function], CompileReport]:
+class Library(NamedTuple):
+    """What builds the Functions of one library and keys it in the cache (:func:`compiled_from`).
+
+    Attributes
+    ----------
+    build : callable
+        Builds the Functions ``names``, in that order; called only on a cache miss.
+    names : list of str
+        The Functions' names, as the library exports them.
+    description : str
+        Everything else that built them: the model's structure, the derivation.
+    flat : bool
+        Whether ``build`` gives SX Functions (it sets the flags, :func:`optimisation_flags`).
+    sources : tuple of str
+        Paths of the modules outside the model package whose code builds them.
+    """
+
+    build: Callable[[], list[ca.Function]]
+    names: list[str]
+    description: str
+    flat: bool
+    sources: tuple[str, ...] = ()
+
+
+def compiled_from(library: Library, quiet: bool = True) -> tuple[list[ca.Function], CompileReport]:
     """Functions compiled into one library (no derivatives), keyed by the code that builds them.
 
     For Functions that the model package's code (and the modules ``sources``) build
@@ -469,16 +487,10 @@ def compiled_from(
 
     Parameters
     ----------
-    build : callable
-        Builds the Functions ``names``, in that order; called only on a cache miss.
-    names : list of str
-    description : str
-        Everything else that built them: the model's structure, the derivation.
-    flat : bool
-        Whether ``build`` gives SX Functions (it sets the flags, :func:`optimisation_flags`).
-    sources : tuple of str
-        Paths of the modules outside the model package whose code builds them.
+    library : Library
+        What builds the Functions and keys them.
     quiet : bool
+        No compiler messages.
 
     Returns
     -------
@@ -486,21 +498,21 @@ def compiled_from(
         The external (compiled) Functions, or the interpreted ones after a warning.
     report : CompileReport
     """
-    key, library = _source_key(names, description, flat, sources)
-    pending = _BACKGROUND.pop(library, None)
+    key, path = _source_key(library)
+    pending = _BACKGROUND.pop(path, None)
     waited = 0.0
     if pending is not None:  # compiling in the background (compile_in_background): wait for it
         begun = time.perf_counter()
         pending.result()
         waited = time.perf_counter() - begun
-    if library.is_file() and damage(library) is None:
+    if path.is_file() and damage(path) is None:
         try:
             # A background compile counts for the time the caller waited for it.
-            report = CompileReport(pending is None, waited, library)
-            return _loaded(names, library), report
+            report = CompileReport(pending is None, waited, path)
+            return _loaded(library.names, path), report
         except RuntimeError:
             pass  # _compiled_together reports and rebuilds it
-    return _compiled_together(build(), key, derivatives=False, quiet=quiet)
+    return _compiled_together(library.build(), key, derivatives=False, quiet=quiet)
 
 
 # Libraries being compiled in the background, by path (compile_in_background).
@@ -513,13 +525,7 @@ _WORKERS: list[threading.Thread] = []
 STOP_TIMEOUT = 10.0  # s that the exit waits for a killed compile to remove its scratch folder
 
 
-def compile_in_background(
-    build: Callable[[], list[ca.Function]],
-    names: list[str],
-    description: str,
-    flat: bool,
-    sources: tuple[str, ...] = (),
-) -> None:
+def compile_in_background(library: Library) -> None:
     """Start compiling a library of :func:`compiled_from` while the caller goes on.
 
     Nothing happens when the library is in the cache, is being compiled already or there is no
@@ -530,17 +536,17 @@ def compile_in_background(
     and drops those not started (:func:`_stop_compilers`): it waits for none, and leaves no
     half-written library.
     """
-    _, library = _source_key(names, description, flat, sources)
+    _, path = _source_key(library)
     compiler = find_compiler()
-    if library in _BACKGROUND or compiler is None or library.is_file():
+    if path in _BACKGROUND or compiler is None or path.is_file():
         return
     try:
-        scratch, command = _generate(build(), compiler, library, derivatives=False)
+        scratch, command = _generate(library.build(), compiler, path, derivatives=False)
     except OSError:
         return  # compiled_from reports the unwritable cache
     future: Future = Future()
-    _BACKGROUND[library] = future
-    _QUEUE.put((future, command, library, scratch))
+    _BACKGROUND[path] = future
+    _QUEUE.put((future, command, path, scratch))
     _WORKERS[:] = [worker for worker in _WORKERS if worker.is_alive()]  # none survives a fork
     if len(_WORKERS) < (os.cpu_count() or 1):
         worker = threading.Thread(target=_serve, name="compile", daemon=True)
@@ -579,14 +585,12 @@ def _stop_compilers() -> None:
         worker.join(STOP_TIMEOUT)
 
 
-def _source_key(
-    names: list[str], description: str, flat: bool, sources: tuple[str, ...]
-) -> tuple[str, Path]:
+def _source_key(library: Library) -> tuple[str, Path]:
     """The cache key of a library of :func:`compiled_from` and its path."""
-    flags = [*_flags(flat), *COMPILER_FLAGS]
-    text = "|".join(
-        [description, *names, source_digest(sources), ca.__version__, _processor(), *flags]
-    )
+    names = library.names
+    flags = [*_flags(library.flat), *COMPILER_FLAGS]
+    digest = source_digest(library.sources)
+    text = "|".join([library.description, *names, digest, ca.__version__, _processor(), *flags])
     key = hashlib.sha256(text.encode()).hexdigest()[:20]
     return key, cache_dir() / f"{names[0]}_{key}.so"
 

@@ -24,7 +24,7 @@ import casadi as ca
 
 from cable_ocp.model import structured
 from cable_ocp.model.cable import CableModel, ModelSpec
-from cable_ocp.model.compile import CompileReport, compiled_from
+from cable_ocp.model.compile import CompileReport, Library, compiled_from
 from cable_ocp.model.joints import Kernels
 from cable_ocp.model.parameters import parameter_names, structure_of
 from cable_ocp.model.parametric import ParametricModel
@@ -149,12 +149,13 @@ def compiled_kernels(
     names = [f"{name}_{size}" for name in loops for size in BLOCKS if size > 1]
     functions = [loops[name][size] for name in loops for size in BLOCKS if size > 1]
     if compiled:
-        compiled_functions, report = compiled_from(
+        library = Library(
             lambda: [getattr(kernels, name) for name in KERNEL_FIELDS] + functions,
             list(KERNEL_NAMES) + names,
             f"{reference.structure!r}|structured kernels for every n, blocks {BLOCKS}",
             False,
         )
+        compiled_functions, report = compiled_from(library)
         singles = dict(zip(KERNEL_FIELDS, compiled_functions, strict=False))
         kernels = replace(kernels, **singles)
         built = iter(compiled_functions[len(KERNEL_FIELDS) :])

@@ -27,7 +27,12 @@ from cable_ocp.model.axial_structured import (
     elastic_structured_graph,
 )
 from cable_ocp.model.cable import CableModel
-from cable_ocp.model.compile import CompileReport, compile_in_background, compiled_from
+from cable_ocp.model.compile import (
+    CompileReport,
+    Library,
+    compile_in_background,
+    compiled_from,
+)
 from cable_ocp.model.joints import Kernels, baumgarte, bending_energies
 from cable_ocp.model.kinematics import POSITION
 from cable_ocp.model.kkt import cholesky_solve, inverse_3x3
@@ -270,7 +275,7 @@ def compiled_library(model: ParametricModel, which: str) -> tuple[ca.Function, C
     """
 
     def compile_library() -> tuple[dict[str, ca.Function], CompileReport]:
-        functions, report = compiled_from(*_library_arguments(model))
+        functions, report = compiled_from(_library(model))
         return dict(zip(LIBRARY, functions, strict=True)), report
 
     functions, report = model.memo(("structured", "compiled"), compile_library)
@@ -285,12 +290,12 @@ def compile_library_in_background(model: ParametricModel) -> None:
     not support is left alone.
     """
     if supports(model):
-        compile_in_background(*_library_arguments(model))
+        compile_in_background(_library(model))
 
 
-def _library_arguments(model: ParametricModel) -> tuple:
-    """What :func:`~cable_ocp.model.compile.compiled_from` takes for the structure's library."""
-    return (
+def _library(model: ParametricModel) -> Library:
+    """The structure's library of :func:`~cable_ocp.model.compile.compiled_from`."""
+    return Library(
         lambda: [build(model) for _, build in LIBRARY.values()],
         [name for name, _ in LIBRARY.values()],
         f"{model.structure!r}|structured right-hand side, outputs and bond check",
