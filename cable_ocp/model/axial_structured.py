@@ -18,7 +18,7 @@ import casadi as ca
 from cable_ocp.model.axial_element import elastic_element_functions
 from cable_ocp.model.joints import Kernels, baumgarte, bending_energies
 from cable_ocp.model.kinematics import axis_direction
-from cable_ocp.model.kkt import cholesky_solve, inverse_3x3
+from cable_ocp.model.kkt import cholesky_solve
 from cable_ocp.model.layout import INPUTS, top_inputs
 from cable_ocp.model.structured_parts import (
     backward_sweep,
@@ -109,42 +109,6 @@ def _bond_blocks(model) -> ca.Function:
     return ca.Function("elastic_bond", inputs, outputs, {"cse": True})
 
 
-def _forward_sweep() -> ca.Function:
-    """One forward step of the elimination; accumulator ``[vec(S^-1); vec(reduced)]`` (15)."""
-    previous = ca.SX.sym("previous", 9 + 3 * COLUMNS)
-    inverse, reduced = ca.reshape(previous[:9], 3, 3), ca.reshape(previous[9:], 3, COLUMNS)
-    lower, upper = ca.SX.sym("lower", 3, 3), ca.SX.sym("upper", 3, 3)
-    diag, rhs = ca.SX.sym("diag", 3, 3), ca.SX.sym("rhs", 3, COLUMNS)
-    factor = lower @ inverse
-    new_inverse = inverse_3x3(diag - factor @ upper)
-    new_reduced = rhs - factor @ reduced
-    return ca.Function(
-        "elastic_forward",
-        [previous, lower, upper, diag, rhs],
-        [ca.vertcat(ca.vec(new_inverse), ca.vec(new_reduced))],
-    )
-
-
-def _backward_sweep() -> ca.Function:
-    """One back substitution: ``lambda_j = S_j^-1 (reduced_j - U_j lambda_{j+1})`` (vec, 6)."""
-    above = ca.SX.sym("above", 3 * COLUMNS)
-    packed, upper = ca.SX.sym("packed", 9 + 3 * COLUMNS), ca.SX.sym("upper", 3, 3)
-    inverse, reduced = ca.reshape(packed[:9], 3, 3), ca.reshape(packed[9:], 3, COLUMNS)
-    solved = inverse @ (reduced - upper @ ca.reshape(above, 3, COLUMNS))
-    return ca.Function("elastic_backward", [above, packed, upper], [ca.vec(solved)])
-
-
-def _accelerations() -> ca.Function:
-    free, along_p = ca.SX.sym("free", DOFS, COLUMNS), ca.SX.sym("p", DOFS, 3)
-    along_d = ca.SX.sym("d", DOFS, 3)
-    own, below = ca.SX.sym("own", 3, COLUMNS), ca.SX.sym("below", 3, COLUMNS)
-    return ca.Function(
-        "elastic_acc",
-        [free, along_p, along_d, own, below],
-        [free - along_d @ own + along_p @ below],
-    )
-
-
 @dataclass(frozen=True)
 class ElasticKernels(Kernels):
     """The kernels of the elastic loops, with ``axial``: ``p`` -> ``EA`` (N), damping ratio.
@@ -164,10 +128,7 @@ def elastic_kernels_of(model) -> ElasticKernels:
         element=_element_solve(model, end=False),
         element_end=_element_solve(model, end=True),
         bond=_bond_blocks(model),
-        forward=_forward_sweep(),
-        backward=_backward_sweep(),
-        accelerations=_accelerations(),
-        **shared_kernels(model),
+        **shared_kernels(model, DOFS, COLUMNS, prefix="elastic_"),
         axial=ca.Function("axial", [model.p], [spec.axial_stiffness, spec.axial_damping]),
     )
 

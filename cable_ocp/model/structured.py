@@ -35,7 +35,7 @@ from cable_ocp.model.compile import (
 )
 from cable_ocp.model.joints import Kernels, baumgarte, bending_energies
 from cable_ocp.model.kinematics import POSITION
-from cable_ocp.model.kkt import cholesky_solve, inverse_3x3
+from cable_ocp.model.kkt import cholesky_solve
 from cable_ocp.model.layout import INPUTS, top_inputs
 from cable_ocp.model.parametric import ModelLayout, ParametricModel
 from cable_ocp.model.rfe import element_functions
@@ -124,42 +124,6 @@ def _bond_blocks(model: ParametricModel) -> ca.Function:
         -top_a @ along_p_a,
     ]
     return ca.Function("bond", inputs, outputs, {"cse": True})
-
-
-def _forward_sweep() -> ca.Function:
-    """One forward step of the block Thomas elimination; accumulator ``[vec(S^-1); reduced]``."""
-    previous = ca.SX.sym("previous", 12)
-    inverse, reduced = ca.reshape(previous[:9], 3, 3), previous[9:]
-    lower, upper = ca.SX.sym("lower", 3, 3), ca.SX.sym("upper", 3, 3)
-    diag, rhs = ca.SX.sym("diag", 3, 3), ca.SX.sym("rhs", 3)
-    factor = lower @ inverse
-    new_inverse = inverse_3x3(diag - factor @ upper)
-    new_reduced = rhs - factor @ reduced
-    return ca.Function(
-        "forward",
-        [previous, lower, upper, diag, rhs],
-        [ca.vertcat(ca.vec(new_inverse), new_reduced)],
-    )
-
-
-def _backward_sweep() -> ca.Function:
-    """One back substitution: ``lambda_j = S_j^-1 (reduced_j - U_j lambda_{j+1})``."""
-    above = ca.SX.sym("above", 3)
-    packed, upper = ca.SX.sym("packed", 12), ca.SX.sym("upper", 3, 3)
-    inverse, reduced = ca.reshape(packed[:9], 3, 3), packed[9:]
-    return ca.Function("backward", [above, packed, upper], [inverse @ (reduced - upper @ above)])
-
-
-def _accelerations(dofs: int) -> ca.Function:
-    free, along_p, along_d = (
-        ca.SX.sym("free", dofs),
-        ca.SX.sym("p", dofs, 3),
-        ca.SX.sym("d", dofs, 3),
-    )
-    own, below = ca.SX.sym("own", 3), ca.SX.sym("below", 3)
-    return ca.Function(
-        "acc", [free, along_p, along_d, own, below], [free - along_d @ own + along_p @ below]
-    )
 
 
 def structured_rhs(model: ParametricModel) -> ca.Function:
@@ -353,10 +317,7 @@ def kernels_of(model: ParametricModel) -> Kernels | ElasticKernels:
         element=_element_solve(model, end=False),
         element_end=_element_solve(model, end=True),
         bond=_bond_blocks(model),
-        forward=_forward_sweep(),
-        backward=_backward_sweep(),
-        accelerations=_accelerations(model.dofs),
-        **shared_kernels(model),
+        **shared_kernels(model, model.dofs, 1),
     )
 
 

@@ -71,15 +71,65 @@ def backward_sweep(kernels, final: ca.MX, packed: ca.MX, upper: ca.MX) -> ca.MX:
     return ca.horzcat(*[solved[:, k] for k in range(last - 1, -1, -1)], final)
 
 
-def shared_kernels(model) -> dict[str, ca.Function]:
+def shared_kernels(model, dofs: int, columns: int, prefix: str = "") -> dict[str, ca.Function]:
     """The kernels the rigid and the elastic loops build alike, by their field of ``Kernels``.
 
-    The top bond's (:func:`~cable_ocp.model.joints.top_bond_kernel`), a 3 x 3 inverse and the
+    The top bond's (:func:`~cable_ocp.model.joints.top_bond_kernel`), one step of each sweep of
+    the block Thomas solve, the accelerations from the bond forces, a 3 x 3 inverse and the
     segment length ``Delta`` (m) from ``p``.
+
+    Parameters
+    ----------
+    model : ParametricModel
+    dofs : int
+        Coordinates per element.
+    columns : int
+        Right-hand sides the solve carries: 1 (rigid), 2 (elastic: the chain's forces and its
+        answer to a unit strain acceleration).
+    prefix : str
+        Put before the sweeps' and the accelerations' Function names.
     """
     matrix = ca.SX.sym("m", 3, 3)
     return {
         "top_bond": top_bond_kernel(model),
+        "forward": _forward_sweep(f"{prefix}forward", columns),
+        "backward": _backward_sweep(f"{prefix}backward", columns),
+        "accelerations": _accelerations(f"{prefix}acc", dofs, columns),
         "inverse": ca.Function("inverse", [matrix], [inverse_3x3(matrix)]),
         "segment_length": ca.Function("segment_length", [model.p], [model.spec.segment_length]),
     }
+
+
+def _forward_sweep(name: str, columns: int) -> ca.Function:
+    """One forward step of the block Thomas solve; accumulator ``[vec(S^-1); vec(reduced)]``."""
+    previous = ca.SX.sym("previous", 9 + 3 * columns)
+    inverse, reduced = ca.reshape(previous[:9], 3, 3), ca.reshape(previous[9:], 3, columns)
+    lower, upper = ca.SX.sym("lower", 3, 3), ca.SX.sym("upper", 3, 3)
+    diag, rhs = ca.SX.sym("diag", 3, 3), ca.SX.sym("rhs", 3, columns)
+    factor = lower @ inverse
+    new_inverse = inverse_3x3(diag - factor @ upper)
+    new_reduced = rhs - factor @ reduced
+    return ca.Function(
+        name,
+        [previous, lower, upper, diag, rhs],
+        [ca.vertcat(ca.vec(new_inverse), ca.vec(new_reduced))],
+    )
+
+
+def _backward_sweep(name: str, columns: int) -> ca.Function:
+    """One back substitution: ``lambda_j = S_j^-1 (reduced_j - U_j lambda_{j+1})`` (vec)."""
+    above = ca.SX.sym("above", 3 * columns)
+    packed, upper = ca.SX.sym("packed", 9 + 3 * columns), ca.SX.sym("upper", 3, 3)
+    inverse, reduced = ca.reshape(packed[:9], 3, 3), ca.reshape(packed[9:], 3, columns)
+    solved = inverse @ (reduced - upper @ ca.reshape(above, 3, columns))
+    return ca.Function(name, [above, packed, upper], [ca.vec(solved)])
+
+
+def _accelerations(name: str, dofs: int, columns: int) -> ca.Function:
+    """Each element's accelerations from its free ones and the bond forces at its two ends."""
+    free, along_p = ca.SX.sym("free", dofs, columns), ca.SX.sym("p", dofs, 3)
+    along_d = ca.SX.sym("d", dofs, 3)
+    own, below = ca.SX.sym("own", 3, columns), ca.SX.sym("below", 3, columns)
+    return ca.Function(
+        name, [free, along_p, along_d, own, below], [free - along_d @ own + along_p @ below]
+    )
