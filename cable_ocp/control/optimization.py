@@ -33,7 +33,7 @@ from cable_ocp.control.settings import (
 )
 from cable_ocp.control.shooting import control_of, full_model_scene
 from cable_ocp.control.solvers import SHOOTING, SOLVERS, Solver, ocp_settings, transcription_named
-from cable_ocp.control.verification import Verification, correction_step
+from cable_ocp.control.verification import Verification, correction_step, verify_profile
 from cable_ocp.drive.drive import Drive
 from cable_ocp.drive.winch import (
     RETIMES,
@@ -54,7 +54,7 @@ SMALL_GAIN = 0.5
 
 
 @dataclass(frozen=True, eq=False)
-class OcpResult:
+class OcpResult(result_files.KeptInFolder):
     """An optimised winch profile, verified on the scene's full model.
 
     Attributes
@@ -142,6 +142,8 @@ class OcpResult:
         written before it was kept, and when the settings could not be resolved.
     """
 
+    FILE, WHAT, FORMAT_1 = "result.nc", "optimisation result", "result.json"  # save/load
+
     # CF units of the fields kept as variables (result_files.units).
     UNITS = MappingProxyType({
         "omega": "m", "omega_model": "m", "success": "1", "iterations": "1", "evaluations": "1",
@@ -150,7 +152,6 @@ class OcpResult:
         "bound_time": "s", "bond_residual": "m", "verified_step": "s", "heave_feedforward": "1",
         "minimum_clearance": "m", "minimum_clearance_time": "s",
     })  # fmt: skip
-
     method: str
     parameters: np.ndarray
     control: str
@@ -299,28 +300,10 @@ class OcpResult:
                 )
         return cls(**values)
 
-    def save(self, path: str | Path) -> Path:
-        """Write the result to netCDF (:meth:`to_xarray`); returns the file's path.
-
-        ``path`` is the file if it ends in ``.nc``, else a results folder that gets ``result.nc``.
-        """
-        return result_files.save(self, result_files.result_file(path, RESULT_FILE))
-
     @classmethod
-    def load(cls, path: str | Path) -> OcpResult:
-        """Read a result written by :meth:`save`, from its file or its results folder.
-
-        A folder holds ``result.nc``, or the format-1 files of cable_ocp 0.1.
-
-        Raises
-        ------
-        ValueError
-            Naming the file, if a file of the result is missing, truncated or garbled.
-        """
-        file = result_files.result_file(path, RESULT_FILE)
-        if file.exists() or not (file.parent / "result.json").exists():
-            return result_files.load(cls, file, WHAT)
-        return _from_format_1(cls, file.parent)
+    def read_format_1(cls, folder: Path) -> OcpResult:
+        """The result of cable_ocp 0.1's ``result.json`` and ``result.npz`` in ``folder``."""
+        return _from_format_1(cls, folder)
 
 
 @dataclass(frozen=True)
@@ -346,8 +329,7 @@ class RetimedOptimum:
         return f"the {own:g} s optimum {RETIMES[self.retime]}, on a {duration:g} s scene"
 
 
-RESULT_FILE = "result.nc"
-WHAT = "optimisation result"
+RESULT_FILE, WHAT = OcpResult.FILE, OcpResult.WHAT
 RESULT_DIMS = {"parameters": ("parameter",), "history": ("iteration",), "refinements": ("solve",)}
 # What the docstring cannot state: the parameters' units depend on the control.
 PARAMETER_UNITS = {"spline": "rad", "hermite": "rad, then rad s-1 (angles, then rates)"}
@@ -393,12 +375,17 @@ def _from_format_1(cls, folder: Path) -> OcpResult:
 
 
 def _timed_verify(problem: WinchProblem, quiet: bool, compiled: bool):
-    """``problem.verify`` that adds up its wall time: returns (verify, elapsed) callables."""
+    """:func:`verify_profile` on the problem's scene and control that adds up its wall time.
+
+    Returns (verify, elapsed) callables.
+    """
     elapsed = [0.0]
 
     def verify(parameters: np.ndarray, step: float | None = None) -> Verification:
         begun = time.perf_counter()
-        checked = problem.verify(parameters, quiet=quiet, compiled=compiled, step=step)
+        checked = verify_profile(
+            problem.scene, problem.control, parameters, quiet=quiet, compiled=compiled, step=step
+        )
         elapsed[0] += time.perf_counter() - begun
         return checked
 

@@ -16,7 +16,6 @@ from dataclasses import dataclass, replace
 import numpy as np
 
 from cable_ocp.control.parameters import ProblemParameters
-from cable_ocp.control.verification import Verification, verify_profile
 from cable_ocp.drive import winch
 from cable_ocp.drive.bounds import LinearBounds, angle_bounds
 from cable_ocp.drive.controls import HermiteIntervals, KnotSpline
@@ -254,20 +253,6 @@ class WinchProblem:
         basis = self.control.basis(self.grid)[0]
         guess, *_ = np.linalg.lstsq(basis, target, rcond=None)
         return guess
-
-    def verify(
-        self,
-        parameters: np.ndarray,
-        quiet: bool = True,
-        compiled: bool = False,
-        step: float | None = None,
-    ) -> Verification:
-        """Check the winch bounds and simulate the scene's own model under the profile.
-
-        See :func:`cable_ocp.control.verification.verify_profile` (``step``: a model-correction
-        run's): it never raises.
-        """
-        return verify_profile(self.scene, self.control, parameters, quiet, compiled, step)
 
 
 @dataclass(frozen=True)

@@ -13,7 +13,9 @@
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from pathlib import Path
+from typing import ClassVar
 
 import xarray as xr
 
@@ -98,3 +100,40 @@ def read_sweep(path: str | Path) -> xr.Dataset:
             return dataset.load()
     except (OSError, ValueError) as error:
         raise ValueError(f"{path}: not a sweep's cases ({error})") from None
+
+
+class KeptInFolder:
+    """``save(path)`` and ``load(path)`` of a result kept as one file in a results folder.
+
+    A result class sets ``FILE`` (its file's name in a folder, ``"result.nc"``), ``WHAT`` (the
+    result in words, for errors) and ``FORMAT_1`` (the JSON file of cable_ocp 0.1 in a folder,
+    with ``read_format_1(folder)``, its reader).
+    """
+
+    FILE: ClassVar[str]
+    WHAT: ClassVar[str]
+    FORMAT_1: ClassVar[str]
+    read_format_1: ClassVar[Callable]
+
+    def save(self, path: str | Path) -> Path:
+        """Write the result to netCDF (``to_xarray``); returns the file's path.
+
+        ``path`` is the file if it ends in ``.nc``, else a results folder that gets ``FILE``.
+        """
+        return save(self, result_file(path, self.FILE))
+
+    @classmethod
+    def load(cls, path: str | Path):
+        """Read a result written by :meth:`save`, from its file or its results folder.
+
+        A folder holds ``FILE``, or the files of cable_ocp 0.1 (``FORMAT_1`` beside them).
+
+        Raises
+        ------
+        ValueError
+            Naming the file, if a file of the result is missing, truncated or garbled.
+        """
+        file = result_file(path, cls.FILE)
+        if not file.exists() and (file.parent / cls.FORMAT_1).exists():
+            return cls.read_format_1(file.parent)
+        return load(cls, file, cls.WHAT)

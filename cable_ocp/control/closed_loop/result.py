@@ -27,9 +27,6 @@ from cable_ocp.result_files.units import units_of
 from cable_ocp.scene.records import check_run
 from cable_ocp.simulation.trajectory import Trajectory, check_figures
 
-MPC_FILE = "mpc.nc"
-WHAT = "closed-loop result"
-
 
 @dataclass(frozen=True, eq=False)
 class SolveLog:
@@ -73,7 +70,7 @@ class SolveLog:
 
 
 @dataclass(frozen=True, eq=False)
-class MpcResult:
+class MpcResult(result_files.KeptInFolder):
     """A closed-loop run: the plant under the receding-horizon controller.
 
     Attributes
@@ -128,6 +125,8 @@ class MpcResult:
         the keys (``sample_s``).
     """
 
+    FILE, WHAT, FORMAT_1 = "mpc.nc", "closed-loop result", "mpc.json"  # save/load
+
     # CF units of the fields kept as variables (result_files.units).
     UNITS = MappingProxyType({
         "planned_angle": "rad", "success": "1", "iterations": "1", "solve_time": "s",
@@ -135,7 +134,6 @@ class MpcResult:
         "angle_range": "rad", "real_time_factor": "1", "wall_time": "s", "build_time": "s",
         "saturated_steps": "1",
     })  # fmt: skip
-
     trajectory: Trajectory
     planned_angle: np.ndarray
     solves: SolveLog
@@ -330,28 +328,13 @@ class MpcResult:
         _check_plan(values["planned_angle"], values["trajectory"].time)
         return cls(**values)
 
-    def save(self, path: str | Path) -> Path:
-        """Write the run to netCDF (:meth:`to_xarray`); returns the file's path.
-
-        ``path`` is the file if it ends in ``.nc``, else a results folder that gets ``mpc.nc``.
-        """
-        return result_files.save(self, result_files.result_file(path, MPC_FILE))
-
     @classmethod
-    def load(cls, path: str | Path) -> MpcResult:
-        """Read a run written by :meth:`save`, from its file or its results folder.
+    def read_format_1(cls, folder: Path) -> MpcResult:
+        """The run of cable_ocp 0.1's ``mpc.json`` + ``mpc.npz`` in ``folder``."""
+        return _format_1(cls, folder)
 
-        A folder holds ``mpc.nc``, or ``mpc.json`` + ``mpc.npz`` of cable_ocp 0.1.
 
-        Raises
-        ------
-        ValueError
-            Naming the file, if it is missing, truncated, garbled or of a newer format.
-        """
-        file = result_files.result_file(path, MPC_FILE)
-        if not file.exists() and (file.parent / "mpc.json").exists():
-            return _format_1(cls, file.parent)
-        return result_files.load(cls, file, WHAT)
+MPC_FILE, WHAT = MpcResult.FILE, MpcResult.WHAT
 
 
 def _check_plan(planned: np.ndarray, time: np.ndarray) -> None:
