@@ -292,8 +292,9 @@ def hold(
 
     Parameters
     ----------
-    scene : Scene
-        With ``[lowering]`` and ``[winch.line]`` (see :func:`hold_scene`).
+    scene : Scene, str or path-like
+        With ``[lowering]`` and ``[winch.line]`` (see :func:`hold_scene`); a scene file's path
+        or a bundled scene's name too.
     line_out, duration
         As for :func:`hold_scene`.
     quiet : bool
@@ -310,6 +311,7 @@ def hold(
     own = MpcSettings.__dataclass_fields__
     unknown = {name: value for name, value in settings.items() if name not in own}
     refuse_unknown("hold", unknown, ("scene", "line_out", "duration", "quiet", *own))
+    scene = scene_given(scene, "hold")
     held = hold_scene(scene, line_out, duration)
     result = mpc(held, quiet=quiet, **settings)
     run = result.trajectory

@@ -86,8 +86,9 @@ def landing(
     middle.set_ylim(-scale, scale)
     heave = run.top[:, 2]
     on_top = middle  # the axes drawn last, which holds the legend so that nothing covers it
-    if np.ptp(heave[near]) > HEAVE_SHOWN:  # the vessel's heave on its own scale: what the load
-        # is spared (the top joint's bond residual, 1e-6 m, is no heave)
+    # The vessel's heave on its own scale: what the load is spared (the top joint's bond
+    # residual, 1e-6 m, is no heave); none where a closed loop stopped before the landing.
+    if heave[near].size and np.ptp(heave[near]) > HEAVE_SHOWN:
         on_top = middle.twinx()
         swell = heave[near] - heave[near].mean()
         on_top.plot(time[near], swell, color="0.6", lw=0.8, label="vessel heave (right axis)")
