@@ -74,3 +74,45 @@ def test_the_command_line_writes_the_run_and_exits_3(tmp_path, capsys):
     summary = json.loads((out / "summary.json").read_text())
     assert summary["success"] is False and "winch.angle_max" in summary["status"]
     assert (out / "trajectory.nc").exists()
+
+
+def test_a_drum_faster_than_rate_max_fails_naming_the_field_rate_and_time(short_hanging):
+    """0.2 rad/s of pay-out on a winch of 0.1 rad/s: the run fails on winch.rate_max."""
+    scene = short_hanging.updated({"winch.angle_max": 10.0, "winch.rate_max": 0.1})
+    run = co.simulate(scene, winch=[0.2, 0.4, 0.6, 0.8], compiled=True)
+    assert not run.success
+    assert run.status.startswith("the drum turned at ")
+    assert "beyond winch.rate_max = 0.1 rad/s" in run.status
+    rate = float(run.status.split("turned at ")[1].split(" rad/s")[0])
+    steepest = np.max(np.abs(np.gradient(run.winch_angle, run.time)))
+    assert rate > 0.1 and rate == pytest.approx(steepest, rel=0.05)
+    assert "acceleration_max" not in run.status
+
+
+def test_a_drum_harder_than_acceleration_max_fails(short_hanging):
+    scene = short_hanging.updated({"winch.angle_max": 10.0, "winch.acceleration_max": 1e-3})
+    run = co.simulate(scene, winch=[0.2, 0.4, 0.6, 0.8], compiled=True)
+    assert not run.success
+    assert "beyond winch.acceleration_max = 0.001 rad/s^2" in run.status
+    assert "rad/s^2 at t = " in run.status
+
+
+def test_a_profile_within_rate_and_acceleration_limits_passes(short_hanging):
+    scene = short_hanging.updated(
+        {"winch.angle_max": 10.0, "winch.rate_max": 1.0, "winch.acceleration_max": 10.0}
+    )
+    run = co.simulate(scene, winch=[0.2, 0.4, 0.6, 0.8], compiled=True)
+    assert run.success, run.status
+    assert run.status.endswith("the drum within its range")
+
+
+def test_heave_compensation_counts_on_top_of_the_rate_limit():
+    """A locked profile compensating a 1 m, 6 s heave: the drum turns ~1 rad/s, yet the
+    commanded profile is at rest, so a rate limit of 0.01 rad/s holds (as for the optimiser)."""
+    scene = co.load_scene(f"{MODELS}/hanging.toml").updated(
+        {"numerics.duration": 3.0, "top.heave.amplitude": 1.0, "top.heave.period": 6.0,
+         "top.heave.compensation": True, "winch.rate_max": 0.01, "winch.acceleration_max": 0.01}
+    )  # fmt: skip
+    run = co.simulate(scene, compiled=True)
+    assert np.max(np.abs(np.gradient(run.winch_angle, run.time))) > 0.1  # the drum does turn
+    assert run.physics.rate_failures == ()

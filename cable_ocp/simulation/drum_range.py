@@ -1,10 +1,12 @@
-"""The drum's range after a run: the winch angle within ``[winch.angle_min, winch.angle_max]``.
+"""The drum's limits after a run: its angle, rate and acceleration within the winch's bounds.
 
 ``winch.angle_min`` and ``winch.angle_max`` bound the angle the drum can turn to (for a line on
-the drum, ``-haul_in_max / r_D`` and ``pay_out_max / r_D``). A run driven beyond them (a
-profile written by hand, an optimum replayed on a narrower winch) shows a drum the scene does
-not have: it fails its physics check (:mod:`cable_ocp.simulation.slack`), with the field, the
-angle reached and the time. An angle outside by at most
+the drum, ``-haul_in_max / r_D`` and ``pay_out_max / r_D``); ``winch.rate_max`` and
+``winch.acceleration_max``, when set, bound ``|phi'|`` and ``|phi''|`` of the commanded profile
+(heave compensation comes on top, as for the optimiser: :mod:`cable_ocp.drive.bounds`). A run
+driven beyond them (a profile written by hand, an optimum replayed on a narrower winch) shows a
+drum the scene does not have: it fails its physics check (:mod:`cable_ocp.simulation.slack`),
+with the field, the value reached and the time. A value outside by at most
 :data:`~cable_ocp.drive.bounds.BOUND_TOLERANCE` counts as within, as for the optimiser's
 solutions.
 """
@@ -14,10 +16,30 @@ from __future__ import annotations
 import numpy as np
 
 from cable_ocp.drive.bounds import BOUND_TOLERANCE
+from cable_ocp.drive.drive import Drive
+from cable_ocp.model.layout import INPUTS
+
+
+def _beyond(time, values, low, high, what, unit, fields) -> str | None:
+    """The sample of ``values`` furthest outside ``[low, high]`` (beyond the tolerance), or None.
+
+    ``fields`` names the lower and the upper bound's scene field.
+    """
+    excess = np.maximum(low - values, values - high)
+    outside = excess > BOUND_TOLERANCE
+    if not outside.any():
+        return None
+    k = int(np.argmax(np.where(outside, excess, -np.inf)))
+    field, bound = (fields[1], high) if values[k] > high else (fields[0], low)
+    return (
+        f"the drum {what} {values[k]:.4g} {unit} at t = {time[k]:g} s, beyond winch.{field} = "
+        f"{bound:g} {unit} (outside from t = {time[int(np.argmax(outside))]:g} s, "
+        f"{np.count_nonzero(outside)} of {time.size} samples): the scene's drum cannot turn so"
+    )
 
 
 def drum_failure(winch, time: np.ndarray, angle: np.ndarray) -> str | None:
-    """Where a run's drum went furthest beyond its range, or None if it never did.
+    """Where a run's drum went furthest beyond its angle range, or None if it never did.
 
     Parameters
     ----------
@@ -34,18 +56,53 @@ def drum_failure(winch, time: np.ndarray, angle: np.ndarray) -> str | None:
         sample furthest outside, with how long the drum stayed outside.
     """
     angle = np.asarray(angle, dtype=float)
-    excess = np.maximum(winch.angle_min - angle, angle - winch.angle_max)
-    outside = excess > BOUND_TOLERANCE
-    if not outside.any():
-        return None
-    k = int(np.argmax(np.where(outside, excess, -np.inf)))
-    field, bound = (
-        ("angle_max", winch.angle_max)
-        if angle[k] > winch.angle_max
-        else ("angle_min", winch.angle_min)
+    return _beyond(
+        time, angle, winch.angle_min, winch.angle_max, "turned to", "rad",
+        ("angle_min", "angle_max"),
+    )  # fmt: skip
+
+
+def profile_rates(scene, time: np.ndarray, inputs: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """The commanded profile's ``phi'`` (rad/s) and ``phi''`` (rad/s^2) at a run's samples.
+
+    The drive's top-length rates (``inputs``, (k, 15)) over ``winch.drum_radius``, less the heave
+    compensation's part when the scene has one.
+    """
+    radius = scene.winch.drum_radius
+    rate = inputs[:, INPUTS.top_length_rate] / radius
+    acceleration = inputs[:, INPUTS.top_length_acceleration] / radius
+    if scene.top.heave_compensated:
+        _, heave_rate, heave_acceleration = Drive.from_scene(scene).winch_angle(time)
+        rate, acceleration = rate - heave_rate, acceleration - heave_acceleration
+    return rate, acceleration
+
+
+def rate_failures(scene, time: np.ndarray, inputs: np.ndarray) -> list[str]:
+    """Where a run's drum turned faster or accelerated harder than its winch allows.
+
+    Parameters
+    ----------
+    scene : Scene
+        ``winch.rate_max`` (rad/s) and ``winch.acceleration_max`` (rad/s^2); None: unbounded.
+    time : array (k,), s
+    inputs : array (k, 15)
+        The run's inputs (``INPUT_NAMES``) at ``time``.
+
+    Returns
+    -------
+    list of str
+        One line per bound exceeded (``the drum turned at 0.31 rad/s at t = 4 s, beyond
+        winch.rate_max = 0.2 rad/s ...``); empty when the run kept within both.
+    """
+    winch = scene.winch
+    rate, acceleration = profile_rates(scene, time, inputs)
+    checks = (
+        (rate, winch.rate_max, "turned at", "rad/s", "rate_max"),
+        (acceleration, winch.acceleration_max, "accelerated at", "rad/s^2", "acceleration_max"),
     )
-    return (
-        f"the drum turned to {angle[k]:.4g} rad at t = {time[k]:g} s, beyond winch.{field} = "
-        f"{bound:g} rad (outside from t = {time[int(np.argmax(outside))]:g} s, "
-        f"{np.count_nonzero(outside)} of {time.size} samples): the scene's drum cannot turn there"
+    found = (
+        _beyond(time, values, -bound, bound, what, unit, (field, field))
+        for values, bound, what, unit, field in checks
+        if bound is not None
     )
+    return [text for text in found if text]

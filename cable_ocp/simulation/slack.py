@@ -28,7 +28,7 @@ import numpy as np
 
 from cable_ocp.model.cable import spec_from_scene
 from cable_ocp.model.layout import INPUTS
-from cable_ocp.simulation.drum_range import drum_failure
+from cable_ocp.simulation.drum_range import drum_failure, rate_failures
 from cable_ocp.simulation.seabed import seabed_findings
 
 # DNV-RP-H103 §5 (deepwater lowering): the minimum tension must stay above 10 % of the static.
@@ -283,6 +283,9 @@ class PhysicsCheck:
     drum_failure : str or None
         Where the drum turned beyond ``[winch.angle_min, winch.angle_max]``
         (:func:`~cable_ocp.simulation.drum_range.drum_failure`).
+    rate_failures : tuple of str
+        Where the drum turned faster than ``winch.rate_max`` or accelerated harder than
+        ``winch.acceleration_max`` (:func:`~cable_ocp.simulation.drum_range.rate_failures`).
     """
 
     slack: SlackReport
@@ -290,16 +293,17 @@ class PhysicsCheck:
     seabed_notes: tuple[str, ...] = ()
     end_under_seabed: bool = False
     drum_failure: str | None = None
+    rate_failures: tuple[str, ...] = ()
 
     @property
     def success(self) -> bool:
-        """No bond pushed, the end stayed above an absolute seabed and the drum in its range."""
+        """No bond pushed, the end stayed above an absolute seabed, the drum within its limits."""
         return not self.failures
 
     @property
     def failures(self) -> list[str]:
         """Why the run fails, one line per cause (empty when it succeeds)."""
-        causes = (self.slack.reason, self.seabed_failure, self.drum_failure)
+        causes = (self.slack.reason, self.seabed_failure, self.drum_failure, *self.rate_failures)
         return [text for text in causes if text]
 
     @property
@@ -342,7 +346,7 @@ class PhysicsCheck:
 
 
 def check_physics(run) -> PhysicsCheck:
-    """The slack, the seabed and the drum range of a run (Trajectory or LineTrajectory).
+    """The slack, the seabed and the drum limits of a run (Trajectory or LineTrajectory).
 
     A run that kept no signed tensions (a file written before them) is checked on the norms,
     and its report says that compression is unknown.
@@ -363,6 +367,7 @@ def check_physics(run) -> PhysicsCheck:
         seabed_notes=tuple(notes),
         end_under_seabed=under,
         drum_failure=drum_failure(scene.winch, run.time, run.winch_angle),
+        rate_failures=tuple(rate_failures(scene, run.time, run.joined(lambda s: s.inputs))),
     )
 
 
