@@ -224,3 +224,77 @@ def test_a_forged_omega_in_an_optimum_or_a_closed_loop_is_refused(tmp_path):
     inner["clearance_error"] = inner["clearance_error"] + 1.0
     with pytest.raises(ValueError, match=r"[Oo]mega"):
         OcpResult.from_xarray(inner)
+
+
+def _hanging_optimum(tmp_path):
+    """A genuine result.nc of a 2 s hanging run on the default elements (no solve)."""
+    from cable_ocp.control.optimization import OcpResult
+
+    scene = co.load_scene("hanging").updated({"numerics.duration": 2.0})
+    run = co.simulate(scene)
+    optimum = OcpResult(
+        method="shooting", parameters=np.zeros(2), control="hermite(2)", trajectory=run,
+        omega=run.omega, omega_model=run.omega, success=True, status="made here",
+        iterations=0, evaluations=0, wall_time=0.0, build_time=0.0, solve_time=0.0,
+        function_time=0.0, history=[], refinements=[], scene_record=run.scene_record,
+    )  # fmt: skip
+    return optimum.save(tmp_path / "optimum"), run
+
+
+def _records(key, value, names=("scene_record", "trajectory_scene_record")):
+    """An edit of the scene records ``names`` (an optimum's and its verified run's) alike."""
+
+    def edit(dataset):
+        for name in names:
+            record = json.loads(dataset.getncattr(name))
+            section, _, field = key.partition(".")
+            record[section][field] = value
+            dataset.setncattr(name, json.dumps(record))
+
+    return edit
+
+
+@pytest.mark.parametrize(
+    ("change", "message"),
+    [
+        (_scene("model.elements", 7), r"scene_record: not the verified run's"),
+        (_records("numerics.duration", 3.0), rf"time ends at 2 s: {DURATION} = 3\.0 s"),
+        (_records("model.elements", 7), r"expected its scene's model\.elements = 7"),
+    ],
+)
+def test_an_optimum_whose_scene_record_is_edited_is_refused(tmp_path, change, message):
+    """Issue 45 (r5 J1): result.nc's scene_record is its verified run's, and that run is
+    checked against its own record (its end, its elements), as a run's own file is."""
+    folder, run = _hanging_optimum(tmp_path)
+    path = folder / "result.nc" if folder.is_dir() else folder
+    assert co.load_result(path).scene_record == run.scene_record
+    _edit(path, change)
+    with pytest.raises(ValueError, match=r"result\.nc: .*" + message):
+        co.load_result(path)
+
+
+def test_a_closed_loop_whose_plant_scene_is_edited_is_refused(tmp_path):
+    """Issue 45 (r5 J2): mpc.nc's plant is checked against its own scene record: its elements
+    always, its end where the loop claims it ran to the end (a success)."""
+    from cable_ocp.control.closed_loop.result import MpcResult, SolveLog
+
+    run = co.simulate(co.load_scene("hanging").updated({"numerics.duration": 2.0}))
+    loop = MpcResult(
+        trajectory=run, planned_angle=np.zeros(run.time.size),
+        solves=SolveLog(np.zeros(1), np.full(1, 0.01), np.array([3]), ["Solve_Succeeded"]),
+        failures=[], success=True, status="every solve succeeded", iterations=3,
+        solve_time=0.01, worst_solve_time=0.01, limited_steps=0, projected_samples=0,
+        angle_range=(-1.0, 1.0), real_time_factor=2.0, wall_time=0.5, build_time=0.2,
+        settings={"horizon": 2.0},
+    )  # fmt: skip
+    path = loop.save(tmp_path / "loop")
+    assert co.load_result(path).success
+    elements = run.scene_record["model"]["elements"]
+    forged = shutil.copy(path, tmp_path / "elements.nc")
+    _edit(forged, _scene("model.elements", elements + 6))
+    with pytest.raises(ValueError, match=rf"elements\.nc: .*model\.elements = {elements + 6}"):
+        MpcResult.load(forged)
+    longer = shutil.copy(path, tmp_path / "longer.nc")
+    _edit(longer, _scene("numerics.duration", 4.0))
+    with pytest.raises(ValueError, match=rf"longer\.nc: .*time ends at 2 s: {DURATION} = 4\.0 s"):
+        MpcResult.load(longer)

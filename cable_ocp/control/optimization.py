@@ -41,13 +41,13 @@ from cable_ocp.drive.winch import (
     played_then_resting,
     replayed_duration,
 )
-from cable_ocp.result_files import dataset, format_1
+from cable_ocp.result_files import dataset, format_1, netcdf
 from cable_ocp.result_files.units import units_of
 from cable_ocp.scene.given import scene_given
 from cable_ocp.scene.schema import scene_of
 from cable_ocp.simulation.progress import check_verbosity
 from cable_ocp.simulation.statics import check_scene_start
-from cable_ocp.simulation.trajectory import OMEGA_RTOL, Trajectory, check_figures
+from cable_ocp.simulation.trajectory import OMEGA_RTOL, Trajectory, check_kept
 
 # Model correction stops once a solve improves the verified Omega by less than this factor.
 SMALL_GAIN = 0.5
@@ -281,7 +281,9 @@ class OcpResult(result_files.KeptInFolder):
         Raises
         ------
         ValueError, KeyError, TypeError
-            A field is missing or does not fit.
+            A field is missing or does not fit, or the verified run does not fit its own
+            series and scene, or the result's ``scene_record`` is not the run's
+            (:func:`~cable_ocp.simulation.trajectory.check_kept`: a forged file).
         """
         from cable_ocp.scene.records import control_parameters
 
@@ -292,7 +294,13 @@ class OcpResult(result_files.KeptInFolder):
             values["history"] = omega_history(values["history"])
         run = values["trajectory"]
         if run is not None:
-            check_figures(run)
+            check_kept(run, netcdf.written_here(data))
+            record = values.get("scene_record")
+            if record and run.scene_record and record != run.scene_record:
+                raise ValueError(
+                    "scene_record: not the verified run's (trajectory_scene_record); the "
+                    "optimum holds the scene its profile was verified on"
+                )
             if not np.isclose(values["omega"], run.omega, rtol=OMEGA_RTOL, atol=0.0):
                 raise ValueError(
                     f"omega = {values['omega']:.9g} m: expected the verified run's Omega, "

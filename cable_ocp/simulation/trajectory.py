@@ -301,6 +301,33 @@ def check_figures(run: Trajectory) -> None:
     _check_omega(run.omega, run.time, run.clearance_error)
 
 
+def check_kept(run, strict: bool, whole: bool = True) -> None:
+    """Check a run kept inside another result against its own series and scene record.
+
+    :func:`check_figures`, and where the run holds its ``scene_record``: it validates by the
+    scene schema (as :func:`check_recorded` says), a fixed-``n`` run has its ``model.elements``,
+    and, if ``whole``, its time ends at ``numerics.duration``. Its output grid is not checked
+    (an optimum's verified run may have taken a finer step than its scene's).
+
+    Parameters
+    ----------
+    run : Trajectory or LineTrajectory
+    strict : bool
+        The file holding it was written by this cable_ocp (:func:`written_here`).
+    whole : bool
+        The run went to its scene's end (False for a closed loop's plant, which may stop early).
+
+    Raises
+    ------
+    ValueError
+        Naming the variable, its value and what was expected (the caller adds the file).
+    """
+    check_figures(run)
+    if run.scene_record:
+        elements = run.tensions.shape[1] - 1 if isinstance(run, Trajectory) else None
+        _check_scene(run, run.time, elements, strict, whole=whole, grid=False)
+
+
 def _check_start(time: np.ndarray) -> None:
     if abs(time[0]) > 1e-9 * max(abs(float(time[-1])), 1.0):
         raise ValueError(f"time starts at {time[0]:.9g} s: expected 0 s")
@@ -316,8 +343,11 @@ def _check_omega(omega: float, time: np.ndarray, error: np.ndarray) -> None:
         )
 
 
-def _check_scene(run, time: np.ndarray, elements: int | None, strict: bool) -> None:
-    """The scene checks of :func:`check_recorded`."""
+def _check_scene(
+    run, time: np.ndarray, elements: int | None, strict: bool, whole: bool = True,
+    grid: bool = True,
+) -> None:  # fmt: skip
+    """The scene checks of :func:`check_recorded` (of :func:`check_kept`: ``whole``, ``grid``)."""
     try:
         scene = run.scene
         numerics, model = scene.numerics, scene.model
@@ -327,7 +357,7 @@ def _check_scene(run, time: np.ndarray, elements: int | None, strict: bool) -> N
         # The run's numbers are checked against the record's, as they were when it ran.
         record = run.scene_record
         numerics, model = SimpleNamespace(**record["numerics"]), SimpleNamespace(**record["model"])
-    if abs(time[-1] - numerics.duration) > 1e-9 * max(numerics.duration, 1.0):
+    if whole and abs(time[-1] - numerics.duration) > 1e-9 * max(numerics.duration, 1.0):
         raise ValueError(
             f"time ends at {time[-1]:.9g} s: expected its scene's numerics.duration = "
             f"{numerics.duration!r} s"
@@ -339,6 +369,8 @@ def _check_scene(run, time: np.ndarray, elements: int | None, strict: bool) -> N
             f"element: {elements + 1} elements (n = {elements}): expected its scene's "
             f"model.elements = {model.elements} (n + 1 = {model.elements + 1})"
         )
+    if not grid:
+        return
     every = numerics.output_every * numerics.step
     grid = np.arange(time.size) * every
     if time.size != round(numerics.duration / every) + 1 or not np.allclose(

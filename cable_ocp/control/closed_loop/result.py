@@ -25,7 +25,7 @@ from cable_ocp.drive.winch import (
 from cable_ocp.result_files import dataset, format_1, netcdf
 from cable_ocp.result_files.units import units_of
 from cable_ocp.scene.records import check_run
-from cable_ocp.simulation.trajectory import Trajectory, check_figures
+from cable_ocp.simulation.trajectory import Trajectory, check_kept
 
 
 @dataclass(frozen=True, eq=False)
@@ -319,12 +319,15 @@ class MpcResult(result_files.KeptInFolder):
         Raises
         ------
         ValueError, KeyError, TypeError
-            A field is missing or does not fit.
+            A field is missing or does not fit, or the plant's run does not fit its own series
+            and scene (:func:`~cable_ocp.simulation.trajectory.check_kept`; a success ends at
+            its scene's ``numerics.duration``): a forged file.
         """
         if netcdf.format_of(data) == 2:
             return _format_2(cls, data)
         values = dataset.from_dataset(cls, data)
-        check_figures(values["trajectory"])
+        # A plant that stopped early ends before its scene's end; a success ran to it.
+        check_kept(values["trajectory"], netcdf.written_here(data), whole=values["success"])
         _check_plan(values["planned_angle"], values["trajectory"].time)
         return cls(**values)
 
