@@ -14,6 +14,7 @@ before integrating).
 
 from __future__ import annotations
 
+import re
 from dataclasses import dataclass
 
 import numpy as np
@@ -27,7 +28,7 @@ from cable_ocp.model.layout import INPUTS
 from cable_ocp.model.line_models import line_models
 from cable_ocp.model.line_state import merge, split
 from cable_ocp.simulation.budget import check_simulation_memory
-from cable_ocp.simulation.integrate import integrate, step_count, step_times
+from cable_ocp.simulation.integrate import SimulationError, integrate, step_count, step_times
 from cable_ocp.simulation.line_trajectory import LineTrajectory
 from cable_ocp.simulation.outputs import output_trajectory, run_outputs
 from cable_ocp.simulation.seabed import (
@@ -178,15 +179,31 @@ def simulate_line(scene, winch=None, quiet: bool = True, compiled: bool = True) 
         if state is None:
             state = starting_state(model, local, compiled=True)
             check_start(scene.seabed, state[:3])
-        run = integrate(
-            model, state, local, (last - first) * interval, numerics.step,
-            output_every=numerics.output_every, tolerance=numerics.constraint_tolerance,
-            quiet=quiet, compiled=True,
-        )  # fmt: skip
+        try:
+            run = integrate(
+                model, state, local, (last - first) * interval, numerics.step,
+                output_every=numerics.output_every, tolerance=numerics.constraint_tolerance,
+                quiet=quiet, compiled=True,
+            )  # fmt: skip
+        except SimulationError as error:
+            raise SimulationError(in_run_time(str(error), local.start, n)) from error
         outputs = run_outputs(model, run.states, run.inputs, True)
         segments.append((run.time + times[first], run, *outputs, model))
         state = _mapped(run.states[-1], run.inputs[-1], n, int(counts[last]), mesh)
     return _trajectory(scene, drive, segments)
+
+
+# A time in a message of integrate (its health check): ``t = 0.05 s`` or ``t <= 0.05 s``.
+_SEGMENT_TIME = re.compile(r"\bt (=|<=) ([-+]?\d[\d.]*(?:e[-+]?\d+)?) s\b")
+
+
+def in_run_time(message: str, start: float, elements: int) -> str:
+    """A segment's error ``message`` with its times (segment time, s) made the run's.
+
+    ``integrate`` counts time from its segment's start; the run's time is ``start`` (s) more.
+    """
+    text = _SEGMENT_TIME.sub(lambda m: f"t {m[1]} {float(m[2]) + start:.6g} s", message)
+    return f"in the segment of {elements} elements from t = {start:g} s: {text}"
 
 
 def _mapped(state: np.ndarray, u: np.ndarray, elements: int, wanted: int, mesh) -> np.ndarray:
