@@ -9,6 +9,7 @@ as :func:`cable_ocp.scene.output.atomic_directory` does and turns that error int
 from __future__ import annotations
 
 import os
+import re
 import shutil
 from collections.abc import Iterator
 from contextlib import contextmanager
@@ -23,6 +24,8 @@ except ImportError:  # Windows: no file-size limit to ask about
     resource = None
 
 FULL_DISK = 1 << 20  # bytes free below which a failed write is put down to a full disk
+# This process's mounts, one a line, the mount point in the fifth field (Linux, proc(5)).
+MOUNTINFO = Path("/proc/self/mountinfo")
 
 
 def _size_limit() -> int | None:
@@ -89,12 +92,31 @@ def results_folder(target: str | os.PathLike) -> Iterator[Path]:
         ) from error
 
 
+def mount_points() -> set[Path]:
+    """The mount points of this process, bind mounts included (empty without :data:`MOUNTINFO`).
+
+    ``os.path.ismount`` compares devices, so it misses a folder bind-mounted from the same
+    file system; the kernel's mount table names every one.
+    """
+    try:
+        lines = MOUNTINFO.read_text().splitlines()
+    except OSError:
+        return set()
+    # Spaces, tabs, newlines and backslashes in a mount point are octal escapes (\040).
+    return {
+        Path(re.sub(r"\\([0-7]{3})", lambda m: chr(int(m[1], 8)), line.split()[4]))
+        for line in lines
+        if len(line.split()) > 4
+    }
+
+
 def check_replaceable(target: str | os.PathLike) -> None:
     """Refuse a results folder that cannot be replaced as a whole: a mount point.
 
     A results folder is written beside its target and renamed onto it
-    (:func:`~cable_ocp.scene.output.atomic_directory`); a mount point cannot be renamed (EBUSY),
-    so a run into one would end after all its work with its results in a hidden folder.
+    (:func:`~cable_ocp.scene.output.atomic_directory`); a mount point (a bind mount of a folder
+    included, :func:`mount_points`) cannot be renamed (EBUSY), so a run into one would end after
+    all its work with its results in a hidden folder.
 
     Raises
     ------
@@ -105,7 +127,7 @@ def check_replaceable(target: str | os.PathLike) -> None:
         path = Path(target).expanduser().resolve()  # a link to a mount point is one too
     except (OSError, RuntimeError):  # a loop: check_target names it
         return
-    if path.is_dir() and os.path.ismount(path):
+    if path.is_dir() and (os.path.ismount(path) or path in mount_points()):
         raise ValueError(
             f"results folder {str(target)!r}: is a mount point, which cannot be replaced as a "
             "whole (results are written beside it and renamed onto it): give a new subfolder "
