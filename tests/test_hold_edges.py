@@ -60,3 +60,29 @@ def test_a_hold_takes_a_scene_files_path_and_a_line_out_equal_to_rounding(tmp_pa
     assert held.success, held.status
     assert held.deviation < 1e-6
     assert co.hold(path, line_out=50.0).success
+
+
+def test_lower_writes_everything_when_a_closed_loop_stops_before_its_landing(tmp_path, capsys):
+    """A plant that fails at its first sample leaves no samples near the landing: the figure is
+    drawn on what ran, every file is written, and the command exits 3 (it raised on np.ptp)."""
+    from cable_ocp import cli
+
+    axis = np.arange(-200.0, 201.0, 5.0)
+    deep = np.full((axis.size, axis.size), -100.0)
+    xr.Dataset({"elevation": (("x", "y"), deep)}, coords={"x": axis, "y": axis}).to_netcdf(
+        tmp_path / "flat100.nc"
+    )
+    scene = SCENE.replace('"flat50.nc"', '"flat100.nc"').replace(
+        "pay_out_max = 30.0", "pay_out_max = 80.0"
+    )
+    scene = scene.replace("land_time = 60.0", "land_time = 100.0").replace(
+        "duration = 80.0", "duration = 130.0"
+    )
+    path = tmp_path / "lw2.toml"
+    path.write_text(scene)
+    out = tmp_path / "out"
+    code = cli.main(["lower", str(path), "--set", "numerics.constraint_tolerance=1e-12",
+                     "--out", str(out), "--quiet"])  # fmt: skip
+    assert code == 3
+    assert "the closed-loop landing from the hover failed" in capsys.readouterr().err
+    assert (out / "hover_closed_loop.png").stat().st_size > 0 and (out / "summary.json").is_file()

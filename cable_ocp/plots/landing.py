@@ -71,8 +71,9 @@ def landing(
         ax.axvline(lowering.land_time, color="0.5", ls=":", lw=1)
     upper.plot([], [], color="0.5", ls=":", lw=1,
                label=f"landing time {significant(lowering.land_time)} s")  # fmt: skip
-    # The last tenth of the descent and the hold, to the scale of the landing's tolerances.
-    near = time >= 0.9 * lowering.land_time
+    # The last tenth of the descent and the hold, to the scale of the landing's tolerances (of
+    # the run, where a closed loop stopped before the landing).
+    near = time >= min(0.9 * lowering.land_time, time[0] + 0.9 * (time[-1] - time[0]))
     hold = time >= lowering.land_time
     middle.plot(time[near], height[near] - lowering.height, label=label)
     middle.fill_between(
@@ -87,8 +88,8 @@ def landing(
     heave = run.top[:, 2]
     on_top = middle  # the axes drawn last, which holds the legend so that nothing covers it
     # The vessel's heave on its own scale: what the load is spared (the top joint's bond
-    # residual, 1e-6 m, is no heave); none where a closed loop stopped before the landing.
-    if heave[near].size and np.ptp(heave[near]) > HEAVE_SHOWN:
+    # residual, 1e-6 m, is no heave).
+    if np.ptp(heave[near]) > HEAVE_SHOWN:
         on_top = middle.twinx()
         swell = heave[near] - heave[near].mean()
         on_top.plot(time[near], swell, color="0.6", lw=0.8, label="vessel heave (right axis)")
@@ -96,7 +97,8 @@ def landing(
         on_top.set_ylim(-1.1 * reach, 3.3 * reach)  # the lower half: the legend keeps the upper
         on_top.set_ylabel("vessel heave at the winch [m]", color="0.4")
     middle.set_ylabel("end above the target [m]")
-    middle.set_xlim(time[near][0], time[-1])
+    if time[-1] > time[near][0]:  # a plant that failed in its first step has one sample
+        middle.set_xlim(time[near][0], time[-1])
     middle.set_xlabel("t [s]")
     shown = [middle] if on_top is middle else [middle, on_top]
     handles = [h for ax in shown for h in ax.get_legend_handles_labels()[0]]
@@ -123,5 +125,6 @@ def landing(
         else ", failed: " + ", ".join(check.name for check in report.failures)
     )  # fmt: skip
     fig.suptitle(run_title(f"landing{verdict}", [run.scene_name], [label]), fontsize=10)
-    upper.set_xlim(time[0], time[-1])
+    if time[-1] > time[0]:
+        upper.set_xlim(time[0], time[-1])
     return finish_figure(fig, path)
