@@ -12,6 +12,8 @@ from __future__ import annotations
 import asyncio
 import logging
 import os
+import signal
+import threading
 import time
 from contextlib import contextmanager
 from dataclasses import dataclass, field
@@ -128,14 +130,35 @@ def _client(scheduler: str | None, workers: int | None, processes: bool):
                 f"--scheduler {scheduler}: cannot reach a Dask scheduler there "
                 f"({type(error).__name__}: {' '.join(str(error).split())[:200]}); nothing ran"
             ) from None
-    cluster = LocalCluster(
-        n_workers=workers or usable_cores(),
-        threads_per_worker=1,
-        processes=processes,
-        dashboard_address=None,
-        silence_logs=logging.ERROR,
-    )
+    with _interrupt_ignored():
+        cluster = LocalCluster(
+            n_workers=workers or usable_cores(),
+            threads_per_worker=1,
+            processes=processes,
+            dashboard_address=None,
+            silence_logs=logging.ERROR,
+        )
     return Client(cluster, set_as_default=False), cluster
+
+
+@contextmanager
+def _interrupt_ignored():
+    """Ignore SIGINT while a LocalCluster starts its worker processes.
+
+    A worker process inherits the ignored SIGINT (Python keeps an ignored SIGINT at start), so the
+    terminal's Ctrl-C reaches only this process, which cancels the cases and closes the cluster,
+    instead of also interrupting each worker mid-task (a traceback per worker). A Ctrl-C in the
+    few seconds the cluster takes to start is ignored. Only the main thread can set a handler:
+    elsewhere (a sweep run from a thread) nothing changes.
+    """
+    if threading.current_thread() is not threading.main_thread():
+        yield
+        return
+    before = signal.signal(signal.SIGINT, signal.SIG_IGN)
+    try:
+        yield
+    finally:
+        signal.signal(signal.SIGINT, before)
 
 
 def _lost(error: BaseException) -> dict:
