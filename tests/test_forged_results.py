@@ -298,3 +298,83 @@ def test_a_closed_loop_whose_plant_scene_is_edited_is_refused(tmp_path):
     _edit(longer, _scene("numerics.duration", 4.0))
     with pytest.raises(ValueError, match=rf"longer\.nc: .*time ends at 2 s: {DURATION} = 4\.0 s"):
         MpcResult.load(longer)
+
+
+@pytest.fixture(scope="module")
+def landing_file(tmp_path_factory):
+    """A LandingResult of test_lowering's landing scene run on the scene's own winch (no solve),
+    its report and compensation ratio measured as co.land measures them."""
+    from test_lowering import lowering_scene
+
+    from cable_ocp.control.optimization import OcpResult
+    from cable_ocp.lowering.landing import LandingResult, _measured, landing_scene
+
+    scene = landing_scene(lowering_scene())
+    run = co.simulate(scene, quiet=True)
+    optimum = OcpResult(
+        method="shooting", parameters=np.zeros(2), control="hermite(2)", trajectory=run,
+        omega=run.omega, omega_model=run.omega, success=True, status="made here",
+        iterations=0, evaluations=0, wall_time=0.0, build_time=0.0, solve_time=0.0,
+        function_time=0.0, history=[], refinements=[], scene_record=run.scene_record,
+    )  # fmt: skip
+    report, ratio = _measured(scene, optimum)
+    assert report is not None
+    landing = LandingResult(scene, False, optimum, report, ratio, 1.0)
+    return landing.save(tmp_path_factory.mktemp("landing") / "landing.nc")
+
+
+def _root_scene(name):
+    """An edit of a lowering result's root scene record: the bundled scene ``name``'s."""
+    record = json.dumps(co.load_scene(name).to_dict())
+    return lambda dataset: dataset.setncattr("scene_record", record)
+
+
+@pytest.mark.parametrize(
+    ("change", "message"),
+    [
+        (_in("report", _value("landing_error", 3.0)), r"report\.landing_error = 3\.0: its run"),
+        (_in("report", _value("hold_deviation", 0.0)), r"report\.hold_deviation = 0\.0: its run"),
+        (_in("report", _value("peak_tension", np.nan)), r"report\.peak_tension = nan: its run"),
+        (_value("compensation_ratio", 99.0), r"compensation_ratio = 99\.0: its run gives nan"),
+        (_root_scene("hanging"), r"scene_record: scene 'hanging' has no \[lowering\]"),
+        (_scene("lowering.height", 9.0), r"scene_record: scene .* not the scene its result ran"),
+    ],
+)
+def test_a_landing_whose_figures_its_run_does_not_give_is_refused(
+    tmp_path, landing_file, change, message
+):
+    """Issue 45 (r5 J3): a saved landing's report is what its run gives, on its own scene."""
+    assert co.load_result(landing_file).report is not None
+    path = shutil.copy(landing_file, tmp_path / "forged.nc")
+    _edit(path, change)
+    with pytest.raises(ValueError, match=r"forged\.nc: not a readable landing .*" + message):
+        co.load_result(path)
+
+
+def test_a_landing_plan_whose_report_or_scene_is_forged_is_refused(tmp_path):
+    """Issue 45 (r5 J3): a saved plan's report is what its verified run gives under the angle
+    flown, its last landing error the report's, and its scene a [lowering] one, its run's."""
+    from test_lowering import lowering_scene
+
+    scene = lowering_scene(**{"numerics.duration": 200.0, "lowering.land_time": 170.0})
+    genuine = co.plan_landing(scene).save(tmp_path / "plan.nc")
+    assert co.load_result(genuine).run is not None
+    for name, change, message in (
+        ("error", _in("report", _value("landing_error", 3.0)), r"report\.landing_error = 3\.0"),
+        ("errors", _series("landing_errors", lambda v: v + 1.0), r"landing_errors\[-1\] = "),
+        ("check", _in("report", _halved_last_check), r"report\.checks\[\d+\]\.value = "),
+        ("scene", _root_scene("hanging"), r"scene 'hanging' has no \[lowering\]"),
+    ):
+        path = shutil.copy(genuine, tmp_path / f"{name}.nc")
+        _edit(path, change)
+        with pytest.raises(
+            ValueError, match=rf"{name}\.nc: not a readable landing plan .*{message}"
+        ):
+            co.load_result(path)
+
+
+def _halved_last_check(group):
+    """An edit of a report's table of checks (a JSON attribute): the last check's value halved."""
+    checks = json.loads(group.getncattr("checks"))
+    checks[-1]["value"] = 0.5 * checks[-1]["value"]
+    group.setncattr("checks", json.dumps(checks))

@@ -139,8 +139,9 @@ def load(cls: type, path: str | Path, what: str):
     Raises
     ------
     ValueError
-        Naming the file: missing, not a ``cls``, of a newer format, or a field or part that does
-        not fit (a part of another kind than its field allows included).
+        Naming the file: missing, not a ``cls``, of a newer format, a field or part that does
+        not fit (a part of another kind than its field allows included), or figures its runs do
+        not give (``cls.check_file``: a forged file).
     """
     path = Path(path)
     kind = cls.__name__
@@ -157,7 +158,9 @@ def load(cls: type, path: str | Path, what: str):
         values["scene"] = scene_of(parse_json(root.attrs[SCENE]), f"the {what}'s")
         for name in parts:
             values[name] = _part(name, groups, hints[name]) if name in names else None
-        return cls(**values)
+        result = cls(**values)
+        result.check_file()
+        return result
     except (ValueError, KeyError, TypeError) as error:
         detail = str(error).removeprefix(f"{path}: ")
         raise ValueError(f"{path}: not a readable {what} ({detail})") from None
@@ -227,6 +230,51 @@ def _classes(hint) -> tuple[type, ...]:
     )
 
 
+def check_scene_of(scene, record: dict, part: str) -> None:
+    """Check that a result's ``scene`` is the one its part ``part`` ran on (its ``record``).
+
+    Raises
+    ------
+    ValueError
+        Naming ``scene_record`` and the part.
+    """
+    if record and scene.to_dict() != record:
+        raise ValueError(f"{SCENE}: scene {scene.name!r} is not the scene its {part} ran on")
+
+
+def check_recomputed(name: str, stored, recomputed) -> None:
+    """Check a stored figure (a number, a record, a table of them) against what its run gives.
+
+    Numbers agree to a relative ``1e-9`` (or ``1e-12`` in their unit), NaN with NaN; text and
+    flags exactly; records and tables field by field.
+
+    Raises
+    ------
+    ValueError
+        Naming the first field (``name.field[k]...``) that differs, its value and the run's.
+    """
+    if is_dataclass(stored) and type(stored) is type(recomputed):
+        for f in fields(stored):
+            check_recomputed(
+                f"{name}.{f.name}", getattr(stored, f.name), getattr(recomputed, f.name)
+            )
+        return
+    if isinstance(stored, tuple) and isinstance(recomputed, tuple):
+        if len(stored) != len(recomputed):
+            raise ValueError(f"{name}: {len(stored)} entries: its run gives {len(recomputed)}")
+        for k, (a, b) in enumerate(zip(stored, recomputed, strict=True)):
+            check_recomputed(f"{name}[{k}]", a, b)
+        return
+    if isinstance(stored, float | np.floating) and not isinstance(recomputed, bool):
+        same = np.isclose(stored, recomputed, rtol=1e-9, atol=1e-12) or (
+            np.isnan(stored) and np.isnan(recomputed)
+        )
+    else:
+        same = stored == recomputed
+    if not same:
+        raise ValueError(f"{name} = {stored!r}: its run gives {recomputed!r}")
+
+
 class Flat:
     """``to_xarray`` and ``from_xarray`` of a small result: numbers, arrays and tables of records.
 
@@ -266,6 +314,18 @@ class WithParts:
     def save(self, path: str | Path) -> Path:
         """Write the result and its parts to the netCDF file ``path``; returns the path."""
         return save(self, path)
+
+    def check_file(self) -> None:
+        """Check a result read by :meth:`load` against the runs it holds (none here).
+
+        A kind whose figures its runs give (its scene, its report) checks them here
+        (:func:`check_scene_of`, :func:`check_recomputed`).
+
+        Raises
+        ------
+        ValueError
+            Naming the field that its runs do not give (a forged file).
+        """
 
     @classmethod
     def load(cls, path: str | Path):

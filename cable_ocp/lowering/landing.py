@@ -41,7 +41,7 @@ from cable_ocp.drive.vessel import top_motion
 from cable_ocp.lowering.arguments import real_number
 from cable_ocp.lowering.checks import LandingReport, check_landing
 from cable_ocp.lowering.descent import landing_line
-from cable_ocp.lowering.files import WithParts
+from cable_ocp.lowering.files import WithParts, check_recomputed, check_scene_of
 from cable_ocp.lowering.hold import (
     HOLD_RANGE,
     compensation_ratio,
@@ -316,6 +316,26 @@ class LandingResult(WithParts):
         """
         return self.result.winch_profile(scene if scene is not None else self.scene, retime)
 
+    def check_file(self) -> None:
+        """Check a landing read from a file against the run its result holds.
+
+        Its scene has ``[lowering]`` and is the scene its result ran on; its report and
+        compensation ratio are what that run gives (:func:`_measured`, as :func:`land` made them).
+
+        Raises
+        ------
+        ValueError
+            Naming the field (a forged file).
+        """
+        if self.scene.lowering is None:
+            raise ValueError(
+                f"scene_record: scene {self.scene.name!r} has no [lowering] table: not a landing's"
+            )
+        check_scene_of(self.scene, self.result.scene_record, "result")
+        report, ratio = _measured(self.scene, self.result)
+        check_recomputed("report", self.report, report)
+        check_recomputed("compensation_ratio", self.compensation_ratio, ratio)
+
     @property
     def success(self) -> bool:
         """Whether the solver or the loop succeeded and every check passed on its run."""
@@ -403,20 +423,28 @@ def land(
         result = mpc(landing, settings=mpc_settings, quiet=quiet)
     else:
         result = optimize(landing, quiet=quiet, **options)
-    run = result.trajectory
-    report = ratio = None
-    if run is not None and run.time[-1] >= landing.lowering.land_time:
-        report = check_landing(run, result)
-        after = run.time >= landing.lowering.land_time
-        ratio = compensation_ratio(vessel_heights(run)[after], run.end[after, 2])[0]
+    report, ratio = _measured(landing, result)
     return LandingResult(
         scene=landing,
         closed_loop=closed_loop,
         result=result,
         report=report,
-        compensation_ratio=float("nan") if ratio is None else ratio,
+        compensation_ratio=ratio,
         wall_time=time.perf_counter() - started,
     )
+
+
+def _measured(landing: Scene, result: OcpResult | MpcResult) -> tuple[LandingReport | None, float]:
+    """The checks of a landing's run and its compensation ratio (%; NaN without a report).
+
+    None and NaN when the run is missing or ends before ``lowering.land_time``.
+    """
+    run = result.trajectory
+    if run is None or run.time[-1] < landing.lowering.land_time:
+        return None, float("nan")
+    after = run.time >= landing.lowering.land_time
+    ratio = compensation_ratio(vessel_heights(run)[after], run.end[after, 2])[0]
+    return check_landing(run, result), ratio
 
 
 def _land_arguments(closed_loop, solver, optimize_options, mpc_settings, unknown) -> dict:

@@ -28,7 +28,7 @@ import numpy as np
 from cable_ocp.drive.vessel import smoothstep, smoothstep_curvature, top_motion
 from cable_ocp.lowering.checks import LandingReport, check_landing
 from cable_ocp.lowering.descent import ReferenceDescent, reference_descent
-from cable_ocp.lowering.files import Flat, WithParts
+from cable_ocp.lowering.files import Flat, WithParts, check_recomputed, check_scene_of
 from cable_ocp.scene.given import scene_given
 from cable_ocp.scene.schema import Scene
 from cable_ocp.simulation.integrate import SimulationError
@@ -87,6 +87,32 @@ class LandingPlan(WithParts):
     wall_time: float
     failure: str = ""
     hold: HoldCorrection | None = None
+
+    def check_file(self) -> None:
+        """Check a plan read from a file against its verified run.
+
+        Its scene has ``[lowering]`` and is the scene its run ran on; its report is what that
+        run gives under the angle flown (:func:`~.checks.check_landing`, as :func:`plan_landing`
+        made it), and the last of ``landing_errors`` is its landing error.
+
+        Raises
+        ------
+        ValueError
+            Naming the field (a forged file).
+        """
+        if self.scene.lowering is None:
+            raise ValueError(
+                f"scene_record: scene {self.scene.name!r} has no [lowering] table: not a plan's"
+            )
+        if (self.run is None) != (self.report is None):
+            raise ValueError("report: kept without its run, or a run kept without its report")
+        if self.run is None:
+            return
+        check_scene_of(self.scene, self.run.scene_record, "run")
+        check_recomputed("report", self.report, check_landing(self.run, self.angle))
+        errors = self.landing_errors
+        check_recomputed("landing_errors[-1]", errors[-1] if errors else None,
+                         self.report.landing_error)  # fmt: skip
 
     @property
     def success(self) -> bool:
@@ -288,7 +314,8 @@ def plan_landing(scene, quiet: bool = True) -> LandingPlan:
         report = check_landing(run, angle)
         errors.append(report.landing_error)
         landed = abs(report.landing_error) <= CORRECTION_SHARE * lowering.height_tolerance
-        if landed and report.hold_deviation <= HOLD_SHARE * lowering.hold_band:
+        held = landed and report.hold_deviation <= HOLD_SHARE * lowering.hold_band
+        if held or attempt > CORRECTIONS:  # the plan keeps the descent its run flew
             break
         # Too high by the error: pay out as much more (the end falls by what is paid out).
         descent = replace(descent, landing_line=descent.landing_line + report.landing_error)
