@@ -30,6 +30,7 @@ from cable_ocp.model.parameters import parameter_names, parameter_values, struct
 from cable_ocp.model.parametric import ModelLayout, ParametricModel, parametric_model
 from cable_ocp.model.rfe import ElementProperties
 from cable_ocp.scene.axial_choice import axial_choice
+from cable_ocp.scene.schema import Scene
 
 __all__ = ["INPUT_NAMES", "INPUT_SIZE", "CableModel", "ModelSpec", "Payload", "spec_from_scene"]
 # Models kept per process by CableModel.from_scene (each holds its symbolic graph and compiled
@@ -262,7 +263,13 @@ class CableModel(ModelLayout):
 
         Models are kept per :class:`ModelSpec` (:func:`cached_model`), so repeated simulations
         and optimisations of one scene reuse the symbolic model and its compiled Functions.
+        Raises TypeError when ``scene`` is not a :class:`~cable_ocp.scene.schema.Scene`.
         """
+        if not isinstance(scene, Scene):
+            raise TypeError(
+                f"CableModel.from_scene: scene must be a Scene (co.load_scene(...)); got "
+                f"{type(scene).__name__}"
+            )
         return cached_model(spec_from_scene(scene, elements))
 
     # ----------------------------------------------------------------------------------------

@@ -13,6 +13,7 @@ import matplotlib.pyplot as plt
 import numpy as np
 from matplotlib.animation import FuncAnimation, PillowWriter
 
+from cable_ocp.simulation.line_trajectory import LineTrajectory
 from cable_ocp.simulation.trajectory import Trajectory
 
 FRAMES = 40
@@ -20,7 +21,7 @@ FPS = 12
 
 
 def animate(
-    trajectory: Trajectory,
+    trajectory: Trajectory | LineTrajectory,
     path: str | Path | None = None,
     clearance_depth: float = 5.0,
     frames: int = FRAMES,
@@ -47,7 +48,19 @@ def animate(
     Returns
     -------
     matplotlib.animation.FuncAnimation
+
+    Raises
+    ------
+    TypeError
+        ``trajectory`` is neither a Trajectory nor a LineTrajectory.
+    ValueError
+        ``frames`` or ``fps`` below 1.
     """
+    if not isinstance(trajectory, Trajectory | LineTrajectory):
+        raise TypeError(
+            f"animate: trajectory must be a Trajectory or a LineTrajectory (a run, e.g. "
+            f"co.simulate(scene)); got {type(trajectory).__name__}"
+        )
     if frames < 1 or fps < 1:
         raise ValueError(f"frames = {frames}, fps = {fps}: both must be >= 1")
     joints, end, time = trajectory.joints, trajectory.end, trajectory.time

@@ -8,6 +8,7 @@ import matplotlib.pyplot as plt
 from matplotlib.figure import Figure
 
 from cable_ocp.plots.figure import finish_figure
+from cable_ocp.simulation.line_trajectory import LineTrajectory
 
 
 def line_run(trajectory, path: str | Path | None = None) -> Figure:
@@ -19,7 +20,17 @@ def line_run(trajectory, path: str | Path | None = None) -> Figure:
         A run of a scene with ``[winch.line]``.
     path : str or Path, optional
         Where to save the figure (then it is closed; see :mod:`cable_ocp.plots`).
+
+    Raises
+    ------
+    TypeError
+        ``trajectory`` is not a :class:`LineTrajectory`.
     """
+    if not isinstance(trajectory, LineTrajectory):
+        raise TypeError(
+            f"line_run: trajectory must be a LineTrajectory (a run of a scene with "
+            f"[winch.line]); got {type(trajectory).__name__}"
+        )
     mesh = trajectory.scene.winch.line.mesh
     time = trajectory.time
     fig, axes = plt.subplots(2, 2, figsize=(11, 6.5), sharex=True)

@@ -99,8 +99,14 @@ def loop_parts(scene, settings: MpcSettings) -> LoopParts:
             angle = parts.command.make_step(now, solve, estimate, lag)
             measured = parts.plant.make_step(angle, now + parts.settings.sample)
 
-    Raises ValueError for a setting that does not fit the scene, before any heavy work.
+    Raises TypeError when ``settings`` is not an :class:`MpcSettings`, ValueError for a setting
+    that does not fit the scene, before any heavy work.
     """
+    if not isinstance(settings, MpcSettings):
+        raise TypeError(
+            f"mpc: settings must be an MpcSettings (co.MpcSettings(...)) or None; got "
+            f"{type(settings).__name__}"
+        )
     refuse_line_scene(scene, "mpc")
     settings, derived = settings.resolved(scene)
     compile_ahead(scene, settings.elements, SOLVERS[settings.solver].needs_compiled)
@@ -146,6 +152,9 @@ def mpc(scene, settings: MpcSettings | None = None, quiet: bool = False, **field
 
     Raises
     ------
+    TypeError
+        ``settings`` is not an :class:`MpcSettings` (e.g. an optimiser's settings), before any
+        heavy work.
     ValueError
         A setting out of its range, or one that does not fit the scene, before any heavy work.
     OffGridError
@@ -159,7 +168,7 @@ def mpc(scene, settings: MpcSettings | None = None, quiet: bool = False, **field
         raise ValueError(f"mpc: pass settings or its fields ({', '.join(fields)}), not both")
     started = time.perf_counter()
     scene = scene_given(scene, "mpc")
-    parts = loop_parts(scene, settings or MpcSettings(**fields))
+    parts = loop_parts(scene, MpcSettings(**fields) if settings is None else settings)
     settings, plant, estimator = parts.settings, parts.plant, parts.estimator
     controller, command = parts.controller, parts.command
     duration, h = scene.numerics.duration, plant.step
