@@ -6,6 +6,11 @@ saved, then the scheduler: each time the sweep stops with exit 3 and one line th
 engine was lost and how to resume, keeps every finished case as it was, and assembles
 ``sweep.nc``; a rerun on a new engine completes, computing only the cases that are missing.
 About 40 s.
+
+A terminal's Ctrl-C goes to the whole process group, the workers of the sweep's own
+LocalCluster included: ``cable-ocp sweep --workers`` runs in a session of its own and the group
+is signalled once a case is saved; the sweep stops with exit 130 and one line, and no worker
+prints a traceback (they ignore SIGINT). About 15 s.
 """
 
 from __future__ import annotations
@@ -21,6 +26,7 @@ from pathlib import Path
 import pytest
 
 from cable_ocp.sweep import open_sweep
+from cable_ocp.sweep.runner import usable_cores
 from cable_ocp.sweep.store import case_path
 
 ROOT = Path(__file__).resolve().parent.parent
@@ -165,3 +171,27 @@ def test_a_killed_worker_then_a_killed_scheduler_lose_nothing(engine, tmp_path):
     assert sorted(p.name for p in (tmp_path / "out" / "cases").iterdir()) == [
         case_path(tmp_path, k).name for k in range(CASES)
     ]  # no scratch file, no duplicate
+
+
+def test_ctrl_c_reaches_the_sweep_and_not_its_workers(tmp_path):
+    (tmp_path / "sweep.toml").write_text(SWEEP)
+    command = [sys.executable, "-m", "cable_ocp.cli", "sweep", "sweep.toml", "--out", "out",
+               "--workers", str(min(2, usable_cores())), "--quiet"]  # fmt: skip
+    env = {**os.environ, "PYTHONPATH": str(ROOT)}
+    run = subprocess.Popen(command, cwd=tmp_path, env=env, text=True, start_new_session=True,
+                           stdout=subprocess.PIPE, stderr=subprocess.PIPE)  # fmt: skip
+    try:
+        deadline = time.monotonic() + LIMIT
+        while not saved(tmp_path):  # the workers are up and busy
+            assert run.poll() is None and time.monotonic() < deadline, run.communicate()
+            time.sleep(0.02)
+        os.killpg(run.pid, signal.SIGINT)  # as a terminal's Ctrl-C: the whole group
+        out, err = run.communicate(timeout=LIMIT)
+    finally:
+        if run.poll() is None:
+            os.killpg(run.pid, signal.SIGKILL)
+            run.wait(timeout=LIMIT)
+    assert run.returncode == 130, err
+    assert "Traceback" not in out + err, err
+    assert err == "cable-ocp sweep: interrupted; rerun the same command to resume\n", err
+    assert 1 <= len(saved(tmp_path)) < CASES
