@@ -230,14 +230,18 @@ def _classes(hint) -> tuple[type, ...]:
     )
 
 
-def check_scene_of(scene, record: dict, part: str) -> None:
-    """Check that a result's ``scene`` is the one its part ``part`` ran on (its ``record``).
+def check_landing_scene(scene, record: dict, part: str) -> None:
+    """Check that a landing's ``scene`` has ``[lowering]`` and is the one its ``part`` ran on.
+
+    ``record`` is the part's scene record (``{}`` when the part kept no run).
 
     Raises
     ------
     ValueError
         Naming ``scene_record`` and the part.
     """
+    if scene.lowering is None:
+        raise ValueError(f"{SCENE}: scene {scene.name!r} has no [lowering] table: not a landing's")
     if record and scene.to_dict() != record:
         raise ValueError(f"{SCENE}: scene {scene.name!r} is not the scene its {part} ran on")
 
@@ -319,7 +323,7 @@ class WithParts:
         """Check a result read by :meth:`load` against the runs it holds (none here).
 
         A kind whose figures its runs give (its scene, its report) checks them here
-        (:func:`check_scene_of`, :func:`check_recomputed`).
+        (:func:`check_landing_scene`, :func:`check_recomputed`).
 
         Raises
         ------

@@ -41,7 +41,7 @@ from cable_ocp.drive.vessel import top_motion
 from cable_ocp.lowering.arguments import real_number
 from cable_ocp.lowering.checks import LandingReport, check_landing
 from cable_ocp.lowering.descent import landing_line
-from cable_ocp.lowering.files import WithParts, check_recomputed, check_scene_of
+from cable_ocp.lowering.files import WithParts, check_landing_scene, check_recomputed
 from cable_ocp.lowering.hold import (
     HOLD_RANGE,
     compensation_ratio,
@@ -327,11 +327,7 @@ class LandingResult(WithParts):
         ValueError
             Naming the field (a forged file).
         """
-        if self.scene.lowering is None:
-            raise ValueError(
-                f"scene_record: scene {self.scene.name!r} has no [lowering] table: not a landing's"
-            )
-        check_scene_of(self.scene, self.result.scene_record, "result")
+        check_landing_scene(self.scene, self.result.scene_record, "result")
         report, ratio = _measured(self.scene, self.result)
         check_recomputed("report", self.report, report)
         check_recomputed("compensation_ratio", self.compensation_ratio, ratio)

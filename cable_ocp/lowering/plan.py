@@ -28,7 +28,7 @@ import numpy as np
 from cable_ocp.drive.vessel import smoothstep, smoothstep_curvature, top_motion
 from cable_ocp.lowering.checks import LandingReport, check_landing
 from cable_ocp.lowering.descent import ReferenceDescent, reference_descent
-from cable_ocp.lowering.files import Flat, WithParts, check_recomputed, check_scene_of
+from cable_ocp.lowering.files import Flat, WithParts, check_landing_scene, check_recomputed
 from cable_ocp.scene.given import scene_given
 from cable_ocp.scene.schema import Scene
 from cable_ocp.simulation.integrate import SimulationError
@@ -100,15 +100,11 @@ class LandingPlan(WithParts):
         ValueError
             Naming the field (a forged file).
         """
-        if self.scene.lowering is None:
-            raise ValueError(
-                f"scene_record: scene {self.scene.name!r} has no [lowering] table: not a plan's"
-            )
+        check_landing_scene(self.scene, self.run.scene_record if self.run else {}, "run")
         if (self.run is None) != (self.report is None):
             raise ValueError("report: kept without its run, or a run kept without its report")
         if self.run is None:
             return
-        check_scene_of(self.scene, self.run.scene_record, "run")
         check_recomputed("report", self.report, check_landing(self.run, self.angle))
         errors = self.landing_errors
         check_recomputed("landing_errors[-1]", errors[-1] if errors else None,

@@ -288,9 +288,9 @@ def check_recorded(
 def check_figures(run: Trajectory) -> None:
     """Check what a run's own series say of it: its time starts at 0, its Omega is eq. 39.
 
-    For a run kept inside another result (an ``OcpResult``'s verified run, a closed loop's
-    plant, which may stop before its scene's end); a run's own file is checked further by
-    :func:`check_recorded`.
+    Part of :func:`check_kept`, for a run kept inside another result (an ``OcpResult``'s
+    verified run, a closed loop's plant, which may stop before its scene's end); a run's own
+    file is checked further by :func:`check_recorded`.
 
     Raises
     ------
@@ -309,18 +309,9 @@ def check_kept(run, strict: bool, whole: bool = True) -> None:
     and, if ``whole``, its time ends at ``numerics.duration``. Its output grid is not checked
     (an optimum's verified run may have taken a finer step than its scene's).
 
-    Parameters
-    ----------
-    run : Trajectory or LineTrajectory
-    strict : bool
-        The file holding it was written by this cable_ocp (:func:`written_here`).
-    whole : bool
-        The run went to its scene's end (False for a closed loop's plant, which may stop early).
-
-    Raises
-    ------
-    ValueError
-        Naming the variable, its value and what was expected (the caller adds the file).
+    ``run`` and ``strict`` are :func:`check_recorded`'s (``strict``: of the file that holds
+    the run), and so is the ValueError; ``whole`` says the run went to its scene's end (False
+    for a closed loop's plant, which may stop early).
     """
     check_figures(run)
     if run.scene_record:
