@@ -1,6 +1,7 @@
 """co.hold on a scene file's path, and a line whose joints agree only to rounding (issue 45)."""
 
 import numpy as np
+import pytest
 import xarray as xr
 
 import cable_ocp as co
@@ -86,3 +87,30 @@ def test_lower_writes_everything_when_a_closed_loop_stops_before_its_landing(tmp
     assert code == 3
     assert "the closed-loop landing from the hover failed" in capsys.readouterr().err
     assert (out / "hover_closed_loop.png").stat().st_size > 0 and (out / "summary.json").is_file()
+
+
+def test_a_saved_hold_whose_figures_its_run_does_not_give_is_refused(tmp_path):
+    """A hold's file is checked against its closed loop's run on load (a forged deviation, peak
+    rate or band is named), and the genuine file loads."""
+    import netCDF4
+
+    axis = np.arange(-200.0, 201.0, 5.0)
+    flat = np.full((axis.size, axis.size), -50.0)
+    xr.Dataset({"elevation": (("x", "y"), flat)}, coords={"x": axis, "y": axis}).to_netcdf(
+        tmp_path / "flat50.nc"
+    )
+    path = tmp_path / "small_lowering.toml"
+    path.write_text(SCENE)
+    genuine = co.hold(path).save(tmp_path / "hold.nc")
+    assert co.load_result(genuine).success
+    for name, value, message in (
+        ("deviation", 3.0, r"deviation = 3"),
+        ("peak_rate", 100.0, r"peak_rate = 100"),
+        ("band", -1.0, r"band = -1\.0 m: expected a hold band > 0"),
+    ):
+        forged = tmp_path / f"{name}.nc"
+        forged.write_bytes(genuine.read_bytes())
+        with netCDF4.Dataset(forged, "a") as data:
+            data.variables[name][...] = value
+        with pytest.raises(ValueError, match=rf"{name}\.nc: .*{message}"):
+            co.load_result(forged)

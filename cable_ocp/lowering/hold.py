@@ -31,7 +31,7 @@ from cable_ocp.drive.drive import Drive
 from cable_ocp.lowering.arguments import real_number
 from cable_ocp.lowering.checks import Check, drum_checks, sampled_line
 from cable_ocp.lowering.descent import landing_line, line_range, seabed_reference
-from cable_ocp.lowering.files import WithParts
+from cable_ocp.lowering.files import WithParts, check_recomputed
 from cable_ocp.model.cable import CableModel
 from cable_ocp.model.layout import INPUTS
 from cable_ocp.scene.given import scene_given
@@ -91,6 +91,24 @@ class HoldResult(WithParts):
     peak_rate: float
     peak_acceleration: float
     drum: tuple[Check, ...]
+
+    def check_file(self) -> None:
+        """Check a hold read from a file against the closed loop's run it holds.
+
+        Its scene is the one the closed loop ran on, its band a band, and its figures what
+        that run gives (:func:`_measured`, as :func:`hold` made them).
+
+        Raises
+        ------
+        ValueError
+            Naming the field (a forged file).
+        """
+        if self.scene.to_dict() != self.mpc.scene_record:
+            raise ValueError("scene_record: not the scene its closed loop ran on (mpc)")
+        if not (np.isfinite(self.band) and self.band > 0):
+            raise ValueError(f"band = {self.band!r} m: expected a hold band > 0")
+        for name, value in _measured(self.scene, self.mpc).items():
+            check_recomputed(name, getattr(self, name), value)
 
     def winch_profile(self, scene=None, retime: str | None = None):
         """The drum's angle the closed loop applied, to replay the hold on its scene.
@@ -314,11 +332,18 @@ def hold(
     scene = scene_given(scene, "hold")
     held = hold_scene(scene, line_out, duration)
     result = mpc(held, quiet=quiet, **settings)
+    return HoldResult(result, held, band=scene.lowering.hold_band, **_measured(held, result))
+
+
+def _measured(held: Scene, result: MpcResult) -> dict:
+    """A hold's figures from its closed loop's run (:class:`HoldResult`'s fields, by name)."""
     run = result.trajectory
-    deviation = float(np.max(np.abs(run.clearance_error)))
     ratio, heave_std, load_std = compensation_ratio(vessel_heights(run), run.end[:, 2])
     line = sampled_line(run)
     rate, acceleration = (float(np.abs(v).max()) / held.winch.drum_radius for v in line)
-    drum = tuple(drum_checks(held.winch, run.time, *line))
-    return HoldResult(result, held, deviation, scene.lowering.hold_band, ratio, heave_std,
-                      load_std, rate, acceleration, drum)  # fmt: skip
+    return {
+        "deviation": float(np.max(np.abs(run.clearance_error))),
+        "compensation_ratio": ratio, "heave_std": heave_std, "load_std": load_std,
+        "peak_rate": rate, "peak_acceleration": acceleration,
+        "drum": tuple(drum_checks(held.winch, run.time, *line)),
+    }  # fmt: skip
