@@ -28,7 +28,7 @@ import numpy as np
 
 from cable_ocp.model.cable import spec_from_scene
 from cable_ocp.model.layout import INPUTS
-from cable_ocp.simulation.drum_range import drum_failure, rate_failures
+from cable_ocp.simulation.drum_range import drum_failure, rate_findings
 from cable_ocp.simulation.seabed import seabed_findings
 
 # DNV-RP-H103 §5 (deepwater lowering): the minimum tension must stay above 10 % of the static.
@@ -283,9 +283,11 @@ class PhysicsCheck:
     drum_failure : str or None
         Where the drum turned beyond ``[winch.angle_min, winch.angle_max]``
         (:func:`~cable_ocp.simulation.drum_range.drum_failure`).
-    rate_failures : tuple of str
-        Where the drum turned faster than ``winch.rate_max`` or accelerated harder than
-        ``winch.acceleration_max`` (:func:`~cable_ocp.simulation.drum_range.rate_failures`).
+    rate_failure : str or None
+        Where the drum turned faster than ``winch.rate_max``
+        (:func:`~cable_ocp.simulation.drum_range.rate_findings`).
+    acceleration_note : str or None
+        Where it accelerated harder than ``winch.acceleration_max`` (a note).
     """
 
     slack: SlackReport
@@ -293,7 +295,8 @@ class PhysicsCheck:
     seabed_notes: tuple[str, ...] = ()
     end_under_seabed: bool = False
     drum_failure: str | None = None
-    rate_failures: tuple[str, ...] = ()
+    rate_failure: str | None = None
+    acceleration_note: str | None = None
 
     @property
     def success(self) -> bool:
@@ -303,13 +306,14 @@ class PhysicsCheck:
     @property
     def failures(self) -> list[str]:
         """Why the run fails, one line per cause (empty when it succeeds)."""
-        causes = (self.slack.reason, self.seabed_failure, self.drum_failure, *self.rate_failures)
+        causes = (self.slack.reason, self.seabed_failure, self.drum_failure, self.rate_failure)
         return [text for text in causes if text]
 
     @property
     def notes(self) -> list[str]:
-        """Slack crossings and seabed notes, one line each."""
-        return [*self.slack.notes, *self.seabed_notes]
+        """Slack crossings, seabed notes and the drum's acceleration, one line each."""
+        drum = [self.acceleration_note] if self.acceleration_note else []
+        return [*self.slack.notes, *self.seabed_notes, *drum]
 
     @property
     def status(self) -> str:
@@ -361,13 +365,15 @@ def check_physics(run) -> PhysicsCheck:
     tensions = run.padded(lambda s: s.signed_tensions if kept else s.tensions)
     report = slack_report(run.time, tensions, run_static(run, spec_from_scene(scene)))
     failure, notes, under = seabed_findings(scene.seabed, run.time, run.end)
+    rate, acceleration = rate_findings(scene, run.time, run.joined(lambda s: s.inputs))
     return PhysicsCheck(
         report if kept else replace(report, signed=False),
         seabed_failure=failure,
         seabed_notes=tuple(notes),
         end_under_seabed=under,
         drum_failure=drum_failure(scene.winch, run.time, run.winch_angle),
-        rate_failures=tuple(rate_failures(scene, run.time, run.joined(lambda s: s.inputs))),
+        rate_failure=rate,
+        acceleration_note=acceleration,
     )
 
 
