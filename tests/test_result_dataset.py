@@ -81,8 +81,9 @@ def test_a_field_the_file_lacks_takes_its_default(tmp_path):
 
 
 @pytest.mark.parametrize(("unit", "cf"), [("m/s", "m s-1"), ("m^2", "m2"), ("rad/s", "rad s-1"),
-                                          ("N", "N"), ("s^2", "s2"), ("1/s", "s-1"), ("%", "percent"),
-                                          ("1", "1"), ("N m", "N m")])  # fmt: skip
+                                          ("N", "N"), ("s^2", "s2"), ("1/s", "s-1"),
+                                          ("%", "percent"), ("1", "1"),
+                                          ("N m", "N m")])  # fmt: skip
 def test_units_in_the_cf_spelling(unit, cf):
     assert units.UNIT.match(unit) and units.cf_units(unit) == cf
 
