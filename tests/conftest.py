@@ -75,6 +75,36 @@ EXTRA_LINES = ["[cable]", "unknown = 1", "[[seabed.hills]]\nheight = 1", "model 
 ASSIGNMENT = re.compile(r"^(\s*[\w.]+\s*=\s*)(\S.*)$")
 
 
+def made_optimum(run):
+    """An OcpResult around ``run`` with made-up solver figures (no solve), to save and load."""
+    from cable_ocp.control.optimization import OcpResult
+
+    return OcpResult(
+        method="shooting", parameters=np.zeros(2), control="hermite(2)", trajectory=run,
+        omega=run.omega, omega_model=run.omega, success=True, status="made here",
+        iterations=0, evaluations=0, wall_time=0.0, build_time=0.0, solve_time=0.0,
+        function_time=0.0, history=[], refinements=[], scene_record=run.scene_record,
+    )  # fmt: skip
+
+
+@pytest.fixture(scope="session")
+def line_file(tmp_path_factory):
+    """A line run's file to copy and damage: a pay-out of 20 m on 10 m elements of paper_flat,
+    two segments (n = 5, then 6)."""
+    import cable_ocp as co
+
+    scene = co.load_scene(
+        MODELS / "paper_flat.toml",
+        {"top.motion": "fixed", "cable.length": 50.0, "numerics.duration": 12.0,
+         "numerics.constraint_tolerance": 1e-4, "winch.knots": 4,
+         "winch.line": {"element_length": 10.0, "pay_out_max": 30.0},
+         "end.payload": {"mass": 2000.0, "volume": 0.256}},
+    )  # fmt: skip
+    run = co.simulate(scene, winch=[10.0, 20.0, 30.0, 40.0], quiet=True)
+    assert len(run.segments) == 2
+    return run.save(tmp_path_factory.mktemp("line") / "line")
+
+
 def mutate(text: bytes, rng: np.random.Generator) -> tuple[bytes, str]:
     """One to three random mutations of a scene file; returns (bytes, what was done)."""
     done = []

@@ -15,7 +15,7 @@ import shutil
 import netCDF4
 import numpy as np
 import pytest
-from conftest import MODELS
+from conftest import MODELS, made_optimum
 
 import cable_ocp as co
 from cable_ocp.simulation.line_trajectory import LineTrajectory
@@ -106,21 +106,6 @@ def test_an_edited_run_file_is_refused(tmp_path, run_file, change, message):
         Trajectory.load(path)
 
 
-@pytest.fixture(scope="module")
-def line_file(tmp_path_factory):
-    """A pay-out of 20 m on 10 m elements: two segments (n = 5, then 6)."""
-    scene = co.load_scene(
-        MODELS / "paper_flat.toml",
-        {"top.motion": "fixed", "cable.length": 50.0, "numerics.duration": 12.0,
-         "numerics.constraint_tolerance": 1e-4, "winch.knots": 4,
-         "winch.line": {"element_length": 10.0, "pay_out_max": 30.0},
-         "end.payload": {"mass": 2000.0, "volume": 0.256}},
-    )  # fmt: skip
-    run = co.simulate(scene, winch=[10.0, 20.0, 30.0, 40.0], quiet=True)
-    assert len(run.segments) == 2
-    return run.save(tmp_path_factory.mktemp("line") / "line")
-
-
 def _in(group, edit):
     return lambda dataset: edit(dataset[group])
 
@@ -208,12 +193,7 @@ def test_a_forged_omega_in_an_optimum_or_a_closed_loop_is_refused(tmp_path):
 
     scene = co.load_scene("hanging").updated({"numerics.duration": 2.0})
     run = co.simulate(scene)
-    optimum = OcpResult(
-        method="shooting", parameters=np.zeros(2), control="hermite(2)", trajectory=run,
-        omega=run.omega, omega_model=run.omega, success=True, status="made here",
-        iterations=0, evaluations=0, wall_time=0.0, build_time=0.0, solve_time=0.0,
-        function_time=0.0, history=[], refinements=[],
-    )  # fmt: skip
+    optimum = made_optimum(run)
     data = optimum.to_xarray()
     data["omega"] = data["omega"] + 0.5
     path = netcdf.write(data, tmp_path / "forged" / "result.nc")
@@ -228,16 +208,10 @@ def test_a_forged_omega_in_an_optimum_or_a_closed_loop_is_refused(tmp_path):
 
 def _hanging_optimum(tmp_path):
     """A genuine result.nc of a 2 s hanging run on the default elements (no solve)."""
-    from cable_ocp.control.optimization import OcpResult
 
     scene = co.load_scene("hanging").updated({"numerics.duration": 2.0})
     run = co.simulate(scene)
-    optimum = OcpResult(
-        method="shooting", parameters=np.zeros(2), control="hermite(2)", trajectory=run,
-        omega=run.omega, omega_model=run.omega, success=True, status="made here",
-        iterations=0, evaluations=0, wall_time=0.0, build_time=0.0, solve_time=0.0,
-        function_time=0.0, history=[], refinements=[], scene_record=run.scene_record,
-    )  # fmt: skip
+    optimum = made_optimum(run)
     return optimum.save(tmp_path / "optimum"), run
 
 
@@ -306,17 +280,11 @@ def landing_file(tmp_path_factory):
     its report and compensation ratio measured as co.land measures them."""
     from test_lowering import lowering_scene
 
-    from cable_ocp.control.optimization import OcpResult
     from cable_ocp.lowering.landing import LandingResult, _measured, landing_scene
 
     scene = landing_scene(lowering_scene())
     run = co.simulate(scene, quiet=True)
-    optimum = OcpResult(
-        method="shooting", parameters=np.zeros(2), control="hermite(2)", trajectory=run,
-        omega=run.omega, omega_model=run.omega, success=True, status="made here",
-        iterations=0, evaluations=0, wall_time=0.0, build_time=0.0, solve_time=0.0,
-        function_time=0.0, history=[], refinements=[], scene_record=run.scene_record,
-    )  # fmt: skip
+    optimum = made_optimum(run)
     report, ratio = _measured(scene, optimum)
     assert report is not None
     landing = LandingResult(scene, False, optimum, report, ratio, 1.0)

@@ -109,25 +109,6 @@ def test_a_trajectory_variable_over_other_dimensions_is_named(tmp_path):
 # --- a line run's file: its groups against the file's size, its root and its scene (issue 45) ---
 
 
-@pytest.fixture(scope="module")
-def line_file(tmp_path_factory):
-    """A line run's file (2 segments of paper_flat with a line on the drum) to copy and damage."""
-    from conftest import MODELS
-
-    import cable_ocp as co
-
-    scene = co.load_scene(
-        MODELS / "paper_flat.toml",
-        {"top.motion": "fixed", "cable.length": 50.0, "numerics.duration": 12.0,
-         "numerics.constraint_tolerance": 1e-4, "winch.knots": 4,
-         "winch.line": {"element_length": 10.0, "pay_out_max": 30.0},
-         "end.payload": {"mass": 2000.0, "volume": 0.256}},
-    )  # fmt: skip
-    run = co.simulate(scene, winch=[10.0, 20.0, 30.0, 40.0], quiet=True)
-    assert len(run.segments) == 2
-    return run.save(tmp_path_factory.mktemp("line") / "landing")
-
-
 def _scene_edit(dataset) -> None:
     import json
 

@@ -6,7 +6,7 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
-from conftest import MODELS
+from conftest import MODELS, made_optimum
 
 import cable_ocp as co
 from cable_ocp import result_files
@@ -169,17 +169,11 @@ def test_a_plan_whose_model_failed_round_trips_without_its_run(tmp_path, plan):
 
 def test_an_optimum_saves_to_a_file_or_a_folder_and_loads_from_either(tmp_path):
     """save(path)/load(path) as every result has them: a ``.nc`` file, or a results folder."""
-    import numpy as np
 
     from cable_ocp.control.optimization import OcpResult
 
     run = co.simulate(co.load_scene("hanging").updated({"numerics.duration": 1.0}))
-    optimum = OcpResult(
-        method="shooting", parameters=np.zeros(2), control="hermite(2)", trajectory=run,
-        omega=run.omega, omega_model=run.omega, success=True, status="made here",
-        iterations=0, evaluations=0, wall_time=0.0, build_time=0.0, solve_time=0.0,
-        function_time=0.0,
-    )  # fmt: skip
+    optimum = made_optimum(run)
     in_folder = optimum.save(tmp_path / "run")
     as_file = optimum.save(tmp_path / "elsewhere" / "best.nc")
     assert in_folder == tmp_path / "run" / "result.nc" and as_file.name == "best.nc"
