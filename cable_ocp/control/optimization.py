@@ -23,6 +23,8 @@ import numpy as np
 import xarray as xr
 
 from cable_ocp import result_files
+from cable_ocp.control.adaptive_grid import Refinement, refine
+from cable_ocp.control.hermite_nodes import HermiteNodes
 from cable_ocp.control.keywords import refuse_unknown
 from cable_ocp.control.problem import SolverOutcome, WinchProblem
 from cable_ocp.control.settings import (
@@ -140,6 +142,10 @@ class OcpResult(result_files.KeptInFolder):
         :func:`cable_ocp.control.solvers.ocp_settings_from_record` rebuilds them, so that
         ``optimize(result.scene, settings=...)`` solves the same problem again. Empty in files
         written before it was kept, and when the settings could not be resolved.
+    nodes : array, s
+        The Hermite control's node times where they are not equally spaced (an adaptive grid's,
+        or ``GridSettings.nodes``); empty for equal intervals, the spline, and in files written
+        before it was kept.
     """
 
     FILE, WHAT, FORMAT_1 = "result.nc", "optimisation result", "result.json"  # save/load
@@ -150,7 +156,7 @@ class OcpResult(result_files.KeptInFolder):
         "wall_time": "s", "build_time": "s", "solve_time": "s", "function_time": "s",
         "history": "m", "refinements": "m", "compile_time": "s", "verification_time": "s",
         "bound_time": "s", "bond_residual": "m", "verified_step": "s", "heave_feedforward": "1",
-        "minimum_clearance": "m", "minimum_clearance_time": "s",
+        "minimum_clearance": "m", "minimum_clearance_time": "s", "nodes": "s",
     })  # fmt: skip
     method: str
     parameters: np.ndarray
@@ -180,6 +186,7 @@ class OcpResult(result_files.KeptInFolder):
     scene_record: dict = field(default_factory=dict)
     solver: str = ""
     settings: dict = field(default_factory=dict)
+    nodes: np.ndarray = field(default_factory=lambda: np.zeros(0))
 
     @property
     def scene(self):
@@ -216,7 +223,7 @@ class OcpResult(result_files.KeptInFolder):
         scene = scene if scene is not None else self.scene
         wanted = "result.retimed({})"
         own = replayed_duration(self.duration, scene.numerics.duration, retime, wanted)
-        control = control_of(self.control, own)
+        control = control_of(self.control, own, self.nodes)
         profile = control.angle_function(self.parameters)
         if own < scene.numerics.duration:
             profile = played_then_resting(profile, own)
@@ -290,6 +297,7 @@ class OcpResult(result_files.KeptInFolder):
         values = dataset.from_dataset(cls, data)
         values["method"] = transcription_named(values["method"]).name
         control_parameters(values["parameters"], values["control"])
+        _check_nodes(values.get("nodes"), values["parameters"])
         if "history" in data.variables and data["history"].attrs.get("units") == "m2":
             values["history"] = omega_history(values["history"])
         run = values["trajectory"]
@@ -338,15 +346,35 @@ class RetimedOptimum:
 
 
 RESULT_FILE, WHAT = OcpResult.FILE, OcpResult.WHAT
-RESULT_DIMS = {"parameters": ("parameter",), "history": ("iteration",), "refinements": ("solve",)}
+RESULT_DIMS = {
+    "parameters": ("parameter",), "history": ("iteration",), "refinements": ("solve",),
+    "nodes": ("node",),
+}  # fmt: skip
 # What the docstring cannot state: the parameters' units depend on the control.
 PARAMETER_UNITS = {"spline": "rad", "hermite": "rad, then rad s-1 (angles, then rates)"}
 # Fields of OcpResult that results written before them lack (their defaults are used).
 _OPTIONAL_FIELDS = {
     "compile_time", "verification_time", "bound_time", "bond_residual", "verified_step",
     "heave_feedforward", "notes", "minimum_clearance", "minimum_clearance_time", "scene_record",
-    "solver", "settings",
+    "solver", "settings", "nodes",
 }  # fmt: skip
+
+
+def _check_nodes(nodes, parameters: np.ndarray) -> None:
+    """Refuse a result's node times that are not a Hermite grid of its parameters (ValueError)."""
+    if nodes is None or np.size(nodes) == 0:
+        return
+    size = HermiteNodes(np.asarray(nodes, dtype=float)).size  # ValueError naming the nodes
+    if size != parameters.size:
+        raise ValueError(
+            f"nodes: {np.size(nodes)} node times carry {size} parameters, not the "
+            f"{parameters.size} of the result"
+        )
+
+
+def node_times(control) -> np.ndarray:
+    """The node times (s) a result keeps: a non-uniform Hermite control's, else none."""
+    return control.breakpoints if isinstance(control, HermiteNodes) else np.zeros(0)
 
 
 def omega_history(squares: list[float]) -> list[float]:
@@ -407,6 +435,7 @@ def solve_verified(
     quiet: bool = False,
     verbose: bool = False,
     verify_compiled: bool | None = None,
+    start: Refinement | None = None,
 ) -> OcpResult:
     """A solver of the registry on a problem, verified and refined on its scene.
 
@@ -424,6 +453,9 @@ def solve_verified(
         IPOPT's full log instead of one progress line per iteration.
     verify_compiled : bool, optional
         Verify on the compiled full model (default: as the transcription is compiled).
+    start : Refinement, optional
+        An adaptive grid's refinement on ``problem``: its solver and last optimum start the
+        solves, its rounds' times and iterations count in the result's.
 
     Returns
     -------
@@ -434,7 +466,7 @@ def solve_verified(
     """
     started = time.perf_counter()
     solver = SOLVERS[settings.solver]
-    nlp = solver.build(problem, settings, quiet, verbose, 0.0)
+    nlp = solver.build(problem, settings, quiet, verbose, 0.0) if start is None else start.solver
     compiled = settings.compiled if verify_compiled is None else verify_compiled
     verify, verification_time = _timed_verify(problem, quiet, compiled)
     outcomes: list[SolverOutcome] = []
@@ -442,7 +474,10 @@ def solve_verified(
     best_outcome, best, checked, failure = None, None, None, None
     values = problem.parameter_values()
     landing_bias = values.bias  # a landing's reference (-e_ref), zero on other scenes
-    parameters = problem.first_guess(compiled=settings.compiled)
+    if start is None:
+        parameters = problem.first_guess(compiled=settings.compiled)
+    else:
+        parameters = start.outcome.parameters
     solver_name = solver.label
     solves = 1 + (refinements if problem.reduced else 0)
     # Full-model runs that only steer the model correction take a coarser step; the profile
@@ -509,16 +544,17 @@ def solve_verified(
         solver=settings.solver,
         parameters=shown.parameters,
         control=f"{settings.control}({problem.control.size})",
+        nodes=node_times(problem.control),
         trajectory=best,
         omega=best.omega if best is not None else float("nan"),
         omega_model=shown.omega,
         success=failure is None,
         status=shown.status if failure is None else failure,
-        iterations=sum(o.iterations for o in outcomes),
+        iterations=sum(o.iterations for o in outcomes) + (start.iterations if start else 0),
         evaluations=sum(o.evaluations for o in outcomes),
         wall_time=time.perf_counter() - started,
-        build_time=nlp.build_time,
-        solve_time=sum(o.solve_time for o in outcomes),
+        build_time=nlp.build_time + (start.build_time if start else 0.0),
+        solve_time=sum(o.solve_time for o in outcomes) + (start.solve_time if start else 0.0),
         function_time=sum(o.function_time for o in outcomes),
         history=omega_history(history) if solver.history_unit == "m2" else history,
         refinements=verified,
@@ -675,13 +711,41 @@ def optimize(
             f"{'; ' + derived if derived else ''})"
         )
         problem = chosen.problem(scene, settings, entry.needs_compiled)
-        result = solve_verified(problem, settings, quiet=quiet, verbose=verbose, **options)
+        start, refining = None, 0.0
+        if settings.grid.adaptive:
+            begun = time.perf_counter()
+            start = _refined(problem, settings, entry)
+            refining = time.perf_counter() - begun
+            problem = start.problem
+            derived = "; ".join(text for text in (start.describe(), derived) if text)
+            nodes = tuple(float(t) for t in problem.control.breakpoints)
+            settings = replace(settings, grid=replace(settings.grid, adaptive=False, nodes=nodes))
+        result = solve_verified(
+            problem, settings, quiet=quiet, verbose=verbose, start=start, **options
+        )
     except RuntimeError as error:  # SimulationError, EquilibriumError, CasADi's errors
         elapsed = time.perf_counter() - started
         return failed_result(chosen.name, settings, error, elapsed, model_text)
     notes = "; ".join(text for text in (result.notes, derived) if text)
     ran = result.trajectory.scene_record if result.trajectory is not None else scene.to_dict()
-    return replace(result, notes=notes, scene_record=ran, settings=settings.record())
+    return replace(
+        result,
+        notes=notes,
+        scene_record=ran,
+        settings=settings.record(),
+        wall_time=result.wall_time + refining,  # an adaptive grid's rounds before the last
+    )
+
+
+def _refined(problem: WinchProblem, settings: OcpSettings, entry: Solver) -> Refinement:
+    """The adaptive grid's refinement of a problem on the default grid (quiet solves)."""
+    return refine(
+        problem,
+        lambda trial: entry.build(trial, settings, True, False, 0.0),
+        problem.parameter_values(),
+        problem.first_guess(compiled=settings.compiled),
+        settings.grid,
+    )
 
 
 def _solve_options(entry: Solver, refinements: int | None) -> dict:

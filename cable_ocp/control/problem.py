@@ -15,6 +15,7 @@ from dataclasses import dataclass, replace
 
 import numpy as np
 
+from cable_ocp.control.hermite_nodes import HermiteNodes
 from cable_ocp.control.parameters import ProblemParameters
 from cable_ocp.drive import winch
 from cable_ocp.drive.bounds import LinearBounds, angle_bounds
@@ -35,7 +36,7 @@ from cable_ocp.simulation.statics import starting_state
 # (1 cm on the 100 m elements of the default 3-element model): a coarse model only has to be
 # close, not exact.
 GUESS_TOLERANCE = 1e-4
-Control = KnotSpline | HermiteIntervals
+Control = KnotSpline | HermiteIntervals | HermiteNodes
 
 
 @dataclass(frozen=True, eq=False)
@@ -56,7 +57,7 @@ class WinchProblem:
         The optimisation model's drive with the winch locked.
     x0 : array
         Its equilibrium at t = 0, where every run starts.
-    control : KnotSpline or HermiteIntervals
+    control : KnotSpline, HermiteIntervals or HermiteNodes
         The winch angle as a linear function of the parameters.
     low, high : float, rad
         Bounds of the angle (and of each parameter that is an angle).

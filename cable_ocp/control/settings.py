@@ -20,7 +20,10 @@ from __future__ import annotations
 
 from dataclasses import asdict, dataclass, field
 
+import numpy as np
+
 from cable_ocp.control.checks import Rule, check_fields
+from cable_ocp.control.hermite_nodes import check_nodes
 
 
 @dataclass(frozen=True)
@@ -69,11 +72,33 @@ class GridSettings:
         RK4 steps (and set the Hermite control's intervals). Not for Nelder-Mead.
     control_intervals : int or None
         Intervals of the Hermite control (None: as many as shooting intervals).
+    nodes : tuple of float or None, s
+        The Hermite control's node times, from 0 to ``numerics.duration``, strictly increasing
+        and each on an RK4 step end of the optimisation model and of the full model's runs
+        (:mod:`cable_ocp.control.hermite_nodes`); None: equal intervals. Not with
+        ``control_intervals``.
+    adaptive : bool
+        Choose the nodes by refinement (:mod:`cable_ocp.control.adaptive_grid`): start coarse on
+        the default grid's nodes, split the intervals whose splitting pays and merge the nodes
+        that do not, re-solving warm-started, until Omega is within ``adaptive_tolerance`` of
+        the default grid's prediction or after ``adaptive_rounds`` solves. Hermite control and
+        the shooting solvers only.
+    adaptive_tolerance : float
+        The stopping rule's relative tolerance on Omega (CONVENTIONS.md §5).
+    adaptive_rounds : int
+        Most solves of the refinement.
+    adaptive_start : int
+        Default-grid intervals in each interval of the first, coarse grid.
     """
 
     control: str | None = None
     intervals: int | None = None
     control_intervals: int | None = None
+    nodes: tuple[float, ...] | None = None
+    adaptive: bool = False
+    adaptive_tolerance: float = 0.02
+    adaptive_rounds: int = 3
+    adaptive_start: int = 4
 
     def __post_init__(self):
         check_fields(
@@ -82,8 +107,28 @@ class GridSettings:
                 "control": Rule("choice", choices=("hermite", "spline"), optional=True),
                 "intervals": Rule("integer", low=1, optional=True),
                 "control_intervals": Rule("integer", low=1, optional=True),
+                "adaptive": Rule("flag"),
+                "adaptive_tolerance": Rule("number", above=0, high=1),
+                "adaptive_rounds": Rule("integer", low=1),
+                "adaptive_start": Rule("integer", low=1),
             },
         )
+        if self.nodes is not None:
+            times = check_nodes(self.nodes, float(np.ravel(self.nodes)[-1]))
+            object.__setattr__(self, "nodes", tuple(float(t) for t in times))
+        misfits = {
+            "nodes with control_intervals": self.nodes and self.control_intervals,
+            "adaptive with nodes": self.adaptive and self.nodes,
+            "adaptive with control_intervals": self.adaptive and self.control_intervals,
+            "nodes or adaptive with the spline": (self.nodes or self.adaptive)
+            and self.control == "spline",
+        }
+        for what, misfit in misfits.items():
+            if misfit:
+                raise ValueError(
+                    f"GridSettings: {what} do not go together (the nodes are the Hermite "
+                    "control's, given or chosen adaptively): leave one out"
+                )
 
 
 @dataclass(frozen=True)

@@ -18,13 +18,15 @@ from __future__ import annotations
 from dataclasses import replace
 
 import casadi as ca
+import numpy as np
 
 from cable_ocp.control import defaults
+from cable_ocp.control.hermite_nodes import HermiteNodes, check_nodes
 from cable_ocp.control.linearisation import (
     clearance_error_function,
     compile_rhs_jacobian_in_background,
 )
-from cable_ocp.control.problem import WinchProblem
+from cable_ocp.control.problem import Control, WinchProblem
 from cable_ocp.control.settings import ModelSettings, OcpSettings
 from cable_ocp.drive.controls import HermiteIntervals, KnotSpline
 from cable_ocp.drive.drive import stage_times
@@ -33,24 +35,39 @@ from cable_ocp.model.cable import CableModel
 from cable_ocp.model.compile import CompileReport
 from cable_ocp.model.layout import INPUT_SIZE
 from cable_ocp.scene.records import control_size
+from cable_ocp.scene.schema import whole_steps
 from cable_ocp.simulation.budget import check_memory, optimisation_memory
 from cable_ocp.simulation.integrate import step_compile_report, step_function
 from cable_ocp.simulation.seabed import trapezoid_weights
 
 
-def make_control(scene, settings: OcpSettings) -> KnotSpline | HermiteIntervals:
-    """The control parametrisation the settings ask for."""
+def make_control(scene, settings: OcpSettings) -> Control:
+    """The control parametrisation the settings ask for (Hermite on given nodes too)."""
     duration = scene.numerics.duration
     if settings.control == "spline":
         return KnotSpline(duration, scene.winch.knots)
+    if settings.grid.nodes is not None:
+        return HermiteNodes(np.array(settings.grid.nodes))
     return HermiteIntervals(duration, settings.control_intervals)
 
 
-def control_of(label: str, duration: float) -> KnotSpline | HermiteIntervals:
-    """The control a result names (``"hermite(84)"``, ``"spline(14)"``) over ``duration`` (s)."""
+def control_of(label: str, duration: float, nodes=None) -> Control:
+    """The control a result names (``"hermite(84)"``, ``"spline(14)"``) over ``duration`` (s).
+
+    ``nodes``: the Hermite control's node times (s) where they are not equally spaced (an
+    adaptive grid's; None or empty: equal intervals).
+    """
     size = control_size(label)
     if label.startswith("spline"):
         return KnotSpline(duration, size)
+    if nodes is not None and len(nodes):
+        control = HermiteNodes(np.asarray(nodes, dtype=float))
+        if control.size != size or not np.isclose(control.duration, duration):
+            raise ValueError(
+                f"nodes: {len(nodes)} node times to {control.duration:g} s do not fit control "
+                f"= {label!r} over {duration:g} s"
+            )
+        return control
     return HermiteIntervals(duration, size // 2)
 
 
@@ -66,7 +83,28 @@ def full_model_scene(scene, settings: OcpSettings):
     """
     if settings.control == "spline":
         return scene, ""
-    return defaults.on_nodes(scene, settings.control_intervals)
+    if settings.grid.nodes is None:
+        return defaults.on_nodes(scene, settings.control_intervals)
+    fitted, note = defaults.on_nodes(scene, settings.intervals)
+    check_nodes_on_steps(settings.grid.nodes, fitted.numerics.step, "the full model's runs")
+    return fitted, note
+
+
+def check_nodes_on_steps(nodes, step: float, what: str) -> None:
+    """Refuse Hermite nodes (s) that do not fall on the RK4 step ends (``step``, s) of ``what``.
+
+    Raises
+    ------
+    ValueError
+        Naming ``GridSettings.nodes``, the first node off the steps and the step.
+    """
+    for node in nodes[1:]:  # node 0 starts the run
+        if whole_steps(node, step) is None:
+            raise ValueError(
+                f"GridSettings.nodes: t = {node:g} s is not on an RK4 step end of {what} "
+                f"(h = {step:.6g} s); the Hermite acceleration jumps at the nodes: take them "
+                "from the steps' ends (multiples of the shooting intervals fit every model)"
+            )
 
 
 def steps_per_interval(duration: float, step: float, intervals: int) -> int:
@@ -130,6 +168,9 @@ def resolved(scene, settings: OcpSettings, compiled: bool | None = None):
         )
     if settings.intervals is None:
         notes.append(f"{intervals} intervals of {duration / intervals:.3g} s")
+    if settings.grid.nodes is not None:
+        check_nodes(settings.grid.nodes, duration)
+        check_nodes_on_steps(settings.grid.nodes, step, "the optimisation model")
     _check_memory(scene, settings, elements, step, intervals)
     chosen = replace(
         settings,

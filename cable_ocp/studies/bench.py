@@ -315,7 +315,7 @@ def ocp_speed_case(scene_path: str, solver: str, quick: bool) -> dict:
     started = time.perf_counter()
     result = optimize(scene, solver, quiet=True, **parts)
     wall = time.perf_counter() - started
-    control = control_of(result.control, result.scene.numerics.duration)
+    control = control_of(result.control, result.scene.numerics.duration, result.nodes)
     return {
         "wall": wall,
         "build": result.build_time - result.compile_time,

@@ -1,0 +1,283 @@
+"""An adaptive control grid: Hermite nodes where the winch needs them (issue 43, paper §6).
+
+``GridSettings(adaptive=True)`` chooses the open loop's Hermite nodes among the default grid's
+(:func:`cable_ocp.control.defaults.control_grid`, about 5 s apart; every one of them on an RK4
+step end of every model, so that any subset is too) by refinement, as hp-adaptive direct
+transcription does (GPOPS-II's error per mesh interval, Betts' equidistribution), with the error
+measured in the objective itself:
+
+1. Start coarse: every ``adaptive_start``-th node of the default grid (20 s apart by default).
+2. Solve on the reduced model (the solver of the settings), warm-started from the last profile
+   (its angle and rate at the new nodes: exact where intervals were split).
+3. Linearise the clearance error at that optimum in the default grid's parameters (one
+   sensitivity sweep, :class:`~cable_ocp.control.linearisation.ErrorLinearisation`): residual
+   ``r = W e`` and ``A = W J`` with Omega^2 = ``|r|^2``. The Gauss-Newton decrease of Omega^2 from
+   freeing a set ``S`` of the default grid's parameters is ``g_S^T (A_S^T A_S)^-1 g_S``,
+   ``g = A^T r``:
+
+   - all of them: Omega on the default grid is predicted as ``sqrt(|r|^2 - gain)``;
+   - the nodes inside one interval: that interval's *split gain*;
+   - a node's removal, the merged interval's cubic taking its place: its *merge cost*
+     ``d^T A^T A d + 2 g^T d`` (``d`` the change of the default grid's parameters).
+
+4. Stop when Omega is within ``adaptive_tolerance`` of the prediction, or after
+   ``adaptive_rounds`` solves. Otherwise the allowed excess of Omega^2, ``((1 + tol)^2 - 1)``
+   times the predicted one, is shared equally among the intervals: split (at the default node
+   nearest its middle) each interval whose gain exceeds its share (the largest gain at least),
+   and remove each node whose merge cost is under a tenth of a share (not beside a split, not two
+   in a row), then go to 2.
+
+The last solve's optimum and its solver start :func:`cable_ocp.control.optimization.solve_verified`
+on the chosen grid (model correction and verification as on any grid). The winch bounds and the
+minimum clearance are rows at every RK4 point of every grid, so no constraint is lost between
+coarse nodes (the verification checks the full model at its own steps). CONVENTIONS.md §5 states
+the rule and its measurements.
+"""
+
+from __future__ import annotations
+
+import time
+from dataclasses import dataclass, replace
+
+import numpy as np
+
+from cable_ocp.control.gauss_newton import DAMPING
+from cable_ocp.control.hermite_nodes import HermiteNodes
+from cable_ocp.control.linearisation import ErrorLinearisation
+from cable_ocp.control.problem import SolverOutcome, WinchProblem
+from cable_ocp.drive.bounds import LinearBounds
+from cable_ocp.drive.controls import hermite_polynomials
+from cable_ocp.drive.drive import stage_times
+from cable_ocp.simulation.seabed import trapezoid_weights
+
+# A node is removed when its merge cost is under this share of an interval's share of the
+# allowed excess of Omega^2.
+MERGE_SHARE = 0.1
+
+
+@dataclass(frozen=True)
+class Round:
+    """One solve of the refinement.
+
+    Attributes
+    ----------
+    intervals : int
+        Intervals of its grid.
+    omega : float, m
+        Omega on the optimisation model at its optimum.
+    predicted : float, m
+        Omega on the default grid as predicted from its optimum (NaN after the last solve).
+    split, merged : int
+        Intervals split and nodes removed after it.
+    """
+
+    intervals: int
+    omega: float
+    predicted: float = float("nan")
+    split: int = 0
+    merged: int = 0
+
+
+@dataclass(frozen=True, eq=False)
+class Refinement:
+    """What the refinement chose, and the solver and optimum on its last grid.
+
+    Attributes
+    ----------
+    problem : WinchProblem
+        The problem on the chosen nodes.
+    solver : ProblemSolver
+        Its solver, built (the last round's).
+    outcome : SolverOutcome
+        The last round's solve.
+    rounds : list of Round
+    build_time, solve_time : float, s
+        Building and solving in the rounds before the last.
+    iterations : int
+        Solver iterations in the rounds before the last.
+    """
+
+    problem: WinchProblem
+    solver: object
+    outcome: SolverOutcome
+    rounds: list[Round]
+    build_time: float
+    solve_time: float
+    iterations: int
+
+    def describe(self) -> str:
+        """One phrase: the grids, their Omega and the prediction."""
+        grids = " -> ".join(str(r.intervals) for r in self.rounds)
+        omegas = ", ".join(f"{r.omega:.3g}" for r in self.rounds)
+        predicted = [r.predicted for r in self.rounds if np.isfinite(r.predicted)]
+        told = f"; the default grid's predicted {predicted[-1]:.3g} m" if predicted else ""
+        return f"adaptive grid of {grids} intervals (Omega on the model {omegas} m{told})"
+
+
+def with_nodes(problem: WinchProblem, times: np.ndarray) -> WinchProblem:
+    """The problem with a Hermite control on the node times ``times`` (s), its bounds rebuilt."""
+    control = HermiteNodes(np.asarray(times, dtype=float))
+    bounds = LinearBounds.build(problem.scene, control, problem.grid)
+    return replace(problem, control=control, bounds=bounds)
+
+
+def on_nodes(control, parameters: np.ndarray, times: np.ndarray) -> np.ndarray:
+    """Hermite parameters on the nodes ``times`` (s) of the angle of ``control``: values, rates.
+
+    Exact for a control whose nodes are among ``times`` (a cubic is its own Hermite
+    interpolant); node 0 (held at rest) is left out.
+    """
+    b0, b1, _ = control.basis(np.asarray(times, dtype=float)[1:])
+    return np.concatenate([b0 @ parameters, b1 @ parameters])
+
+
+def refine(problem: WinchProblem, build, values, guess: np.ndarray, grid) -> Refinement:
+    """Choose the Hermite nodes of ``problem`` among its control's (module docstring).
+
+    Parameters
+    ----------
+    problem : WinchProblem
+        The problem on the default grid (a uniform Hermite control).
+    build : callable
+        ``problem -> solver`` (a build of :data:`cable_ocp.control.solvers.SOLVERS`, quiet).
+    values : ProblemParameters
+        The problem's named parameters.
+    guess : array
+        The first guess on the default grid (rad, rad/s).
+    grid : GridSettings
+        Its ``adaptive_start``, ``adaptive_tolerance`` and ``adaptive_rounds``.
+
+    Returns
+    -------
+    Refinement
+        Its times count every round's solve and indicators, and the builds before the last.
+    """
+    base = problem.control.breakpoints
+    count = base.size - 1
+    chosen = np.unique(np.r_[np.arange(0, count + 1, grid.adaptive_start), count])
+    linearise = _base_linearisation(problem)
+    weights = np.sqrt(trapezoid_weights(problem.step, problem.grid.size) / problem.duration)
+    rounds: list[Round] = []
+    build_time = solve_time = 0.0
+    iterations = 0
+    control, parameters = problem.control, guess
+    while True:
+        trial = with_nodes(problem, base[chosen])
+        solver = build(trial)
+        outcome = solver.solve(values, on_nodes(control, parameters, base[chosen]))
+        control, parameters = trial.control, outcome.parameters
+        solve_time += outcome.solve_time
+        iterations += outcome.iterations
+        grown, done = None, Round(control.intervals, outcome.omega)
+        if outcome.success and len(rounds) + 1 < grid.adaptive_rounds:
+            started = time.perf_counter()
+            on_base = on_nodes(control, parameters, base)
+            linearised = linearise(values, on_base)
+            if linearised.finite:
+                indicators = Indicators(
+                    weights * linearised.error, weights[:, None] * linearised.jacobian
+                )
+                predicted, split, merged = indicators.decide(
+                    chosen, grid.adaptive_tolerance, base, on_base
+                )
+                done = Round(control.intervals, outcome.omega, predicted, split.size, merged.size)
+                if split.size:
+                    grown = np.union1d(np.setdiff1d(chosen, merged), split)
+            solve_time += time.perf_counter() - started
+        rounds.append(done)
+        if grown is None:
+            return Refinement(trial, solver, outcome, rounds, build_time, solve_time, iterations)
+        build_time += solver.build_time
+        chosen = grown
+
+
+def _base_linearisation(problem: WinchProblem) -> ErrorLinearisation:
+    """The error's linearisation in the parameters of the problem's own (default) grid."""
+    times, left = stage_times(problem.grid[:-1], problem.step)
+    return ErrorLinearisation(
+        problem.model, problem.step, problem.grid.size - 1, problem.control,
+        problem.scene.winch.drum_radius, problem.scene.seabed, times, left,
+    )  # fmt: skip
+
+
+class Indicators:
+    """The Gauss-Newton model of Omega^2 in the default grid's parameters, at one optimum.
+
+    Parameters
+    ----------
+    residual : array (K + 1,), m
+        ``W e``: Omega^2 is its square norm.
+    jacobian : array (K + 1, 2 N), m/rad
+        ``W J`` in the default grid's parameters ``[phi_1..phi_N, phi'_1..phi'_N]``.
+    """
+
+    def __init__(self, residual: np.ndarray, jacobian: np.ndarray):
+        self.objective = float(residual @ residual)
+        self.gradient = jacobian.T @ residual
+        self.hessian = jacobian.T @ jacobian
+        self.count = jacobian.shape[1] // 2
+        self.damping = DAMPING * max(float(np.max(np.diag(self.hessian))), 1e-30)
+
+    def gain(self, columns: np.ndarray) -> float:
+        """The decrease of Omega^2 (m^2) from freeing the parameters ``columns``."""
+        if columns.size == 0:
+            return 0.0
+        block = self.hessian[np.ix_(columns, columns)] + self.damping * np.eye(columns.size)
+        g = self.gradient[columns]
+        return float(g @ np.linalg.solve(block, g))
+
+    def columns(self, nodes: np.ndarray) -> np.ndarray:
+        """The angle and rate columns of the default grid's nodes ``nodes`` (1 .. N)."""
+        return np.r_[nodes - 1, self.count + nodes - 1]
+
+    def predicted(self) -> float:
+        """Omega (m) on the default grid, predicted."""
+        whole = np.arange(2 * self.count)
+        return float(np.sqrt(max(self.objective - self.gain(whole), 0.0)))
+
+    def merge_cost(
+        self, left: int, node: int, right: int, times: np.ndarray, profile: np.ndarray
+    ) -> float:
+        """The rise of Omega^2 (m^2) when ``node`` goes and one cubic spans ``left..right``.
+
+        ``times``: the default nodes (s); ``profile``: the parameters on them (rad, rad/s).
+        """
+        angles = np.r_[0.0, profile[: self.count]]
+        rates = np.r_[0.0, profile[self.count :]]
+        inside = np.arange(left + 1, right)
+        width = times[right] - times[left]
+        h00, h10, h01, h11 = hermite_polynomials((times[inside] - times[left]) / width)
+        ends = (angles[left], width * rates[left], angles[right], width * rates[right])
+        value = sum(h[0] * e for h, e in zip((h00, h10, h01, h11), ends, strict=True))
+        slope = sum(h[1] * e for h, e in zip((h00, h10, h01, h11), ends, strict=True)) / width
+        change = np.zeros(2 * self.count)
+        change[self.columns(inside)] = np.r_[value - angles[inside], slope - rates[inside]]
+        return float(change @ self.hessian @ change + 2 * self.gradient @ change)
+
+    def decide(self, chosen: np.ndarray, tolerance: float, times: np.ndarray, profile):
+        """The prediction (m), the default nodes to add and those to remove (none: stop).
+
+        ``chosen``: the grid's nodes (indices of the default nodes ``times``, s); ``profile``:
+        its optimum on the default nodes (rad, rad/s).
+        """
+        predicted = self.predicted()
+        nothing = np.zeros(0, dtype=int)
+        if np.sqrt(self.objective) <= (1 + tolerance) * predicted:
+            return predicted, nothing, nothing
+        share = ((1 + tolerance) ** 2 - 1) * predicted**2 / (chosen.size - 1)
+        pairs = list(zip(chosen[:-1], chosen[1:], strict=True))
+        gains = np.array([self.gain(self.columns(np.arange(a + 1, b))) for a, b in pairs])
+        splitting = gains > share
+        splitting[np.argmax(gains)] = True
+        splitting &= np.diff(chosen) > 1
+        if not splitting.any():
+            return predicted, nothing, nothing
+        merged = []
+        for i in range(1, chosen.size - 1):
+            if splitting[i - 1] or splitting[i] or (merged and merged[-1] == chosen[i - 1]):
+                continue
+            cost = self.merge_cost(chosen[i - 1], chosen[i], chosen[i + 1], times, profile)
+            if cost < MERGE_SHARE * share:
+                merged.append(chosen[i])
+        split = (chosen[:-1] + chosen[1:])[splitting] // 2
+        return predicted, split, np.array(merged, dtype=int)

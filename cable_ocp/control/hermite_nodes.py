@@ -1,0 +1,154 @@
+"""A piecewise cubic Hermite winch angle on nodes at any times: the adaptive grid's control.
+
+:class:`HermiteNodes` is :class:`~cable_ocp.drive.controls.HermiteIntervals` on nodes
+``0 = t_0 < t_1 < ... < t_K = T`` that need not be equally spaced: the angle and its rate at
+``t_1 .. t_K`` are the parameters, ``phi(0) = phi'(0) = 0`` held fixed, the angle C1 with its
+acceleration jumping at the nodes (so each node must fall on an RK4 step end of every model that
+runs it: :mod:`cable_ocp.control.adaptive_grid` takes them from the uniform default grid). The
+same interface as the other controls (``size``, ``breakpoints``, ``basis``, ``evaluate``,
+``angle_function``), with ``left`` as theirs; beyond ``T`` the angle comes to rest C2 over one
+last interval (:func:`~cable_ocp.drive.winch.coming_to_rest`). A uniform grid keeps
+``HermiteIntervals``, so that today's optima stay bit for bit.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from cable_ocp.drive.controls import hermite_polynomials
+from cable_ocp.drive.winch import coming_to_rest
+
+# Share of the shortest interval within which a time counts as on a node.
+ON_NODE = 1e-9
+
+
+def check_nodes(nodes, duration: float, name: str = "GridSettings.nodes") -> np.ndarray:
+    """Node times (s) from 0 to ``duration``, strictly increasing, as an array.
+
+    Raises
+    ------
+    ValueError
+        Naming ``name``: fewer than two nodes, not finite, not increasing, or not from 0 to T.
+    """
+    times = np.asarray(nodes, dtype=float).ravel()
+    if times.size < 2 or not np.all(np.isfinite(times)):
+        raise ValueError(f"{name}: at least two finite node times (s), 0 first and T last")
+    if np.any(np.diff(times) <= 0):
+        raise ValueError(f"{name}: node times must increase strictly")
+    scale = max(duration, 1.0)
+    if abs(times[0]) > 1e-9 * scale or abs(times[-1] - duration) > 1e-9 * scale:
+        raise ValueError(
+            f"{name} run from {times[0]:g} to {times[-1]:g} s: they must run from 0 to "
+            f"numerics.duration = {duration:g} s"
+        )
+    times[0], times[-1] = 0.0, duration
+    return times
+
+
+@dataclass(frozen=True, eq=False)
+class HermiteNodes:
+    """Piecewise cubic Hermite angle on the nodes ``times`` (s, from 0 to the duration).
+
+    Parameters are ``[phi_1..phi_K, phi'_1..phi'_K]`` at ``t_1 .. t_K`` (module docstring).
+    """
+
+    times: np.ndarray
+
+    def __post_init__(self):
+        times = np.asarray(self.times, dtype=float)
+        object.__setattr__(self, "times", check_nodes(times, float(times[-1]), "nodes"))
+
+    @property
+    def duration(self) -> float:
+        """The horizon T (s): the last node."""
+        return float(self.times[-1])
+
+    @property
+    def intervals(self) -> int:
+        """Number of intervals ``K``."""
+        return self.times.size - 1
+
+    @property
+    def size(self) -> int:
+        """Number of parameters."""
+        return 2 * self.intervals
+
+    @property
+    def breakpoints(self) -> np.ndarray:
+        """Times (s) between which the angle is one cubic polynomial: the nodes."""
+        return self.times.copy()
+
+    @property
+    def widths(self) -> np.ndarray:
+        """The intervals' widths (s)."""
+        return np.diff(self.times)
+
+    def basis(self, t: np.ndarray, left=None) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """``B0, B1, B2`` at the times ``t``: arrays (len(t), size).
+
+        A time on a node belongs to the interval that starts there (the last node to the last
+        interval), or, where ``left`` (bool, or array like ``t``) is true, to the one that ends
+        there (node 0 to the first); beyond the duration, the extension that comes to rest.
+        """
+        t_given, beyond, k, s = self._located(t, left)
+        width = self.widths[k]
+        h00, h10, h01, h11 = hermite_polynomials(s)
+        scale = np.stack([np.ones_like(width), 1.0 / width, 1.0 / width**2])
+        out = np.zeros((3, s.size, self.size))
+        rows = np.arange(s.size)
+        rates = self.intervals
+        for node, (value_basis, rate_basis) in ((k, (h00, h10)), (k + 1, (h01, h11))):
+            valid = node >= 1  # node 0 is held at rest
+            column = node[valid] - 1
+            for d in range(3):
+                factor = scale[d][valid]
+                out[d, rows[valid], column] += factor * value_basis[d][valid]
+                out[d, rows[valid], rates + column] += factor * width[valid] * rate_basis[d][valid]
+        if np.any(beyond):
+            out[:, beyond] = self._extension(out[:, beyond], t_given[beyond] - self.duration)
+        return out[0], out[1], out[2]
+
+    def evaluate(
+        self, parameters: np.ndarray, t: np.ndarray, left=None
+    ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """Angle, rate and acceleration (rad, rad/s, rad/s^2) at the times ``t`` (s)."""
+        b0, b1, b2 = self.basis(t, left)
+        parameters = np.asarray(parameters, dtype=float)
+        return b0 @ parameters, b1 @ parameters, b2 @ parameters
+
+    def node_values(self, parameters: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """The angle (rad) and rate (rad/s) at every node, node 0's (rest) included."""
+        parameters = np.asarray(parameters, dtype=float)
+        zero = np.zeros(1)
+        return (
+            np.concatenate([zero, parameters[: self.intervals]]),
+            np.concatenate([zero, parameters[self.intervals :]]),
+        )
+
+    def _located(self, t: np.ndarray, left) -> tuple[np.ndarray, np.ndarray, np.ndarray, ...]:
+        """The times ``t`` (s) as given, which lie beyond the end, their intervals and place."""
+        t = t_given = np.atleast_1d(np.asarray(t, dtype=float))
+        beyond = t > self.duration * (1 + 1e-9)
+        t = t.clip(0.0, self.duration)
+        tolerance = ON_NODE * float(np.min(self.widths))
+        k = np.searchsorted(self.times, t + tolerance, side="right") - 1
+        if left is not None:
+            left = np.where(beyond, True, left)  # the end's rows from the last interval
+            k = np.where(left, np.searchsorted(self.times, t - tolerance, side="left") - 1, k)
+        k = np.clip(k, 0, self.intervals - 1)
+        return t_given, beyond, k, (t - self.times[k]) / self.widths[k]
+
+    def _extension(self, end: np.ndarray, tau: np.ndarray) -> np.ndarray:
+        """Rows (3, k, size) of the angle ``tau`` (s) past the end, from its rows there."""
+        return np.stack(coming_to_rest(*end, tau[:, None], float(self.widths[-1])))
+
+    def angle_function(self, parameters: np.ndarray):
+        """The winch angle history of a parameter vector (it takes ``left`` as :meth:`basis`)."""
+        parameters = np.asarray(parameters, dtype=float).ravel()
+
+        def angle(t, left=None):
+            return self.evaluate(parameters, t, left)
+
+        return angle
