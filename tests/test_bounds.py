@@ -131,7 +131,7 @@ def test_verification_failure_is_a_failed_result(short, monkeypatch):
     def broken(*args, **kwargs):
         raise SimulationError("the bonds tore at t = 3 s")
 
-    monkeypatch.setattr(verification_module, "checked_simulation", broken)
+    monkeypatch.setattr(verification_module, "simulate", broken)
     result = optimize(short, grid=GridSettings(intervals=2), quiet=True)
     assert not result.success
     assert "; verification failed: no trustworthy simulation of the full model" in result.status
@@ -145,7 +145,7 @@ def test_nelder_mead_verification_failure_is_a_failed_result(short, monkeypatch)
     def broken(*args, **kwargs):
         raise ValueError("top element too long")
 
-    monkeypatch.setattr(verification_module, "checked_simulation", broken)
+    monkeypatch.setattr(verification_module, "simulate", broken)
     result = optimize(short, "nelder-mead", NelderMeadSettings(max_evaluations=400), quiet=True)
     assert not result.success
     assert result.status == (  # the same wording as the shooting solvers' (one verified loop)

@@ -59,9 +59,11 @@ def test_trajectory_file_has_units_on_every_variable(tmp_path, flat_run):
 
 def test_a_trajectory_of_format_1_still_loads(tmp_path, flat_run):
     write_trajectory(flat_run, tmp_path / "old")
-    # Format 1 kept no scene nor signed tensions: the rest is the run as it was.
+    # Format 1 kept no scene, signed tensions or bond residual: the rest is the run as it was.
     assert Trajectory.load(tmp_path / "old").equals(
-        replace(flat_run, scene_record={}, signed_tensions=np.zeros((0, 0)))
+        replace(
+            flat_run, scene_record={}, signed_tensions=np.zeros((0, 0)), bond_residual=float("nan")
+        )
     )
 
 

@@ -11,6 +11,7 @@ from cable_ocp.drive.controls import HermiteIntervals
 from cable_ocp.drive.drive import Drive
 from cable_ocp.model.cable import CableModel
 from cable_ocp.scene.schema import load_scene
+from cable_ocp.simulation.run import simulate
 from cable_ocp.simulation.seabed import rms_objective
 from cable_ocp.simulation.stability import linearised_step
 from cable_ocp.simulation.statics import starting_state
@@ -67,12 +68,12 @@ def test_a_correction_run_that_blows_up_falls_back_to_the_scenes_step(hill):
 
 
 def test_the_runs_own_bond_check_is_the_residual_of_its_states(hill):
-    """checked_simulation reports the largest residual its integration checked: the same as
+    """A run's bond_residual is the largest residual its integration checked: the same as
     evaluating the bond residuals of the returned states afresh (the states after the first)."""
     from cable_ocp.simulation.integrate import bond_residuals
-    from cable_ocp.simulation.run import checked_simulation
 
-    trajectory, residual = checked_simulation(hill, compiled=True)
+    trajectory = simulate(hill, compiled=True)
+    residual = trajectory.bond_residual
     model = CableModel.from_scene(hill)
     again = bond_residuals(model, trajectory.states, trajectory.inputs, compiled=True)
     assert residual == pytest.approx(float(again[1:].max()), rel=1e-12)

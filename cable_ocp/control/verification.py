@@ -32,7 +32,7 @@ from cable_ocp.drive.drive import Drive
 from cable_ocp.model import structured
 from cable_ocp.model.cable import CableModel
 from cable_ocp.simulation.integrate import SimulationError, step_count
-from cable_ocp.simulation.run import checked_simulation
+from cable_ocp.simulation.run import simulate
 from cable_ocp.simulation.seabed import OffGridError, clearance, clearance_reference
 from cable_ocp.simulation.stability import linearised_step
 from cable_ocp.simulation.statics import starting_state
@@ -187,9 +187,7 @@ def verify_profile(
         if trial_step != numerics.step:
             trial = scene.updated({"numerics.step": trial_step, "numerics.output_every": every})
         try:
-            trajectory, residual = checked_simulation(
-                trial, winch=angle, quiet=quiet, compiled=compiled
-            )
+            trajectory = simulate(trial, winch=angle, quiet=quiet, compiled=compiled)
         except OffGridError as error:
             return Verification(None, str(error), trial.numerics.step)
         except SimulationError as error:
@@ -213,7 +211,7 @@ def verify_profile(
             None if broken else trajectory,
             broken,
             trial.numerics.step,
-            residual,
+            trajectory.bond_residual,
             bound_time(scene, control, parameters, trajectory),
             note,
             lowest,

@@ -2,7 +2,7 @@
 
 from __future__ import annotations
 
-from dataclasses import fields
+from dataclasses import fields, replace
 
 import numpy as np
 
@@ -16,6 +16,7 @@ from cable_ocp.simulation.budget import check_simulation_memory
 from cable_ocp.simulation.integrate import TIME_BLOCK, integrate, step_times
 from cable_ocp.simulation.landing_reference import reference_error
 from cable_ocp.simulation.line_run import simulate_line
+from cable_ocp.simulation.line_trajectory import LineTrajectory
 from cable_ocp.simulation.outputs import output_trajectory, run_outputs
 from cable_ocp.simulation.seabed import (
     check_on_grid,
@@ -131,27 +132,14 @@ def simulate(
     initial_state: np.ndarray | None = None,
     quiet: bool = True,
     compiled: bool = False,
-) -> Trajectory:
+) -> Trajectory | LineTrajectory:
     """Simulate a scene by RK4 from its static equilibrium.
 
-    See :func:`checked_simulation`, which also returns the run's largest bond residual. The
-    run's physics (a rope that pushes, an end under an absolute seabed, a drum beyond
-    ``[winch.angle_min, winch.angle_max]``) is checked after it:
-    ``trajectory.success``, ``status`` and ``summary()`` say where and when
-    (:mod:`cable_ocp.simulation.slack`); a run that fails it is returned, not raised.
-    """
-    return checked_simulation(scene, winch, model, initial_state, quiet, compiled)[0]
-
-
-def checked_simulation(
-    scene,
-    winch: WinchSpec = None,
-    model: CableModel | None = None,
-    initial_state: np.ndarray | None = None,
-    quiet: bool = True,
-    compiled: bool = False,
-) -> tuple[Trajectory, float]:
-    """Simulate a scene by RK4 from its static equilibrium; with the largest bond residual (m).
+    The run's physics (a rope that pushes, an end under an absolute seabed, a drum beyond
+    ``[winch.angle_min, winch.angle_max]``) is checked after it: ``trajectory.success``,
+    ``status`` and ``summary()`` say where and when (:mod:`cable_ocp.simulation.slack`); a run
+    that fails it is returned, not raised. Its ``bond_residual`` is the largest bond residual
+    that the integration checked (the health check of the run).
 
     Parameters
     ----------
@@ -173,10 +161,8 @@ def checked_simulation(
 
     Returns
     -------
-    trajectory : Trajectory
-    bond_residual : float, m
-        Largest bond residual of the run's states after the first, as the integration checked
-        them (the health check of the run).
+    Trajectory or LineTrajectory
+        A :class:`LineTrajectory` for a scene with ``[winch.line]`` (segment by segment).
 
     Raises
     ------
@@ -220,7 +206,7 @@ def checked_simulation(
     )
     angle = drive.winch_angle(run.time)[0]
     trajectory = run_trajectory(scene, model, run.time, run.states, run.inputs, angle, compiled)
-    return trajectory, run.bond_residual
+    return replace(trajectory, bond_residual=run.bond_residual)
 
 
 def run_trajectory(
@@ -284,5 +270,4 @@ def _line_simulation(scene, winch, model, initial_state, quiet, compiled):
             "a scene with [winch.line] builds its models for every n itself: model and "
             "initial_state are not taken"
         )
-    trajectory = simulate_line(scene, winch, quiet=quiet, compiled=compiled)
-    return trajectory, trajectory.bond_residual
+    return simulate_line(scene, winch, quiet=quiet, compiled=compiled)

@@ -60,13 +60,17 @@ class Trajectory(PhysicsChecked):
         The bond forces along the element axes, positive pulling, negative pushing
         (:func:`~cable_ocp.simulation.slack.signed_tensions`); the last is the top tension. Empty
         in runs written before it was kept (:attr:`kept_signs`).
+    bond_residual : float, m
+        Largest bond residual of the run's states after the first, as the integration checked
+        them: the run's health check (NaN where no integration checked it, as in files written
+        before it was kept).
     """
 
     # The states and inputs are stored split into named quantities, each with its own unit
     # (:mod:`cable_ocp.simulation.trajectory_dataset`).
     UNITS: ClassVar[dict[str, str]] = {
         "time": "s", "joints": "m", "tensions": "N", "winch_angle": "rad",
-        "clearance_error": "m", "omega": "m", "signed_tensions": "N",
+        "clearance_error": "m", "omega": "m", "signed_tensions": "N", "bond_residual": "m",
     }  # fmt: skip
 
     time: np.ndarray
@@ -81,6 +85,7 @@ class Trajectory(PhysicsChecked):
     state_names: list[str]
     scene_record: dict = field(default_factory=dict)
     signed_tensions: np.ndarray = field(default_factory=lambda: np.zeros((0, 0)))
+    bond_residual: float = float("nan")
 
     @property
     def scene(self):
