@@ -217,18 +217,17 @@ def propagate_sensitivities(
     for k, (m, start, j1, j2, j3, j4, p1, p2, p3, p4) in enumerate(steps):
         current, point, k1, k2, k3, k4, out = by_active[m]
         w1, w2, w3, w4 = by_window[start]
-        np.dot(current, j1, k1)
-        w1 += p1
-        np.multiply(k1, half, point)
-        point += current
-        np.dot(point, j2, k2)
-        w2 += p2
-        np.multiply(k2, half, point)
-        point += current
-        np.dot(point, j3, k3)
-        w3 += p3
-        np.multiply(k3, whole, point)
-        point += current
+        source = current  # each of the first three slopes sets the point the next is taken at
+        for jacobian, forcing, window, slope, reach in (
+            (j1, p1, w1, k1, half),
+            (j2, p2, w2, k2, half),
+            (j3, p3, w3, k3, whole),
+        ):
+            np.dot(source, jacobian, slope)
+            window += forcing
+            np.multiply(slope, reach, point)
+            point += current
+            source = point
         np.dot(point, j4, k4)
         w4 += p4
         np.add(k2, k3, point)
