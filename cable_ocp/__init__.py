@@ -34,6 +34,8 @@ if TYPE_CHECKING:  # what __getattr__ imports (lazy_names reads it), for type ch
     from cable_ocp.lowering.plan import plan_landing
     from cable_ocp.lowering.results import load_result
     from cable_ocp.model.cable import INPUT_NAMES, CableModel
+    from cable_ocp.policy.learn import learn_policy
+    from cable_ocp.policy.policy import Policy, load_policy
     from cable_ocp.scene.schema import Scene, load_scene
     from cable_ocp.simulation.integrate import SimulationError, integrate, reference_solution
     from cable_ocp.simulation.line_trajectory import LineTrajectory
@@ -56,6 +58,7 @@ __all__ = [
     "MpcSettings",
     "NelderMeadSettings",
     "OcpResult",
+    "Policy",
     "Drive",
     "EquilibriumError",
     "LineTrajectory",
@@ -69,7 +72,9 @@ __all__ = [
     "hold",
     "integrate",
     "land",
+    "learn_policy",
     "landing_scene",
+    "load_policy",
     "load_result",
     "load_scene",
     "mpc",

@@ -30,6 +30,7 @@ LAYERS = (
     ("control",),
     ("lowering",),
     ("sweep", "studies"),
+    ("policy",),
     ("cli", "plots", "entry", "__init__"),
 )
 

@@ -114,9 +114,11 @@ def check_engine(scheduler: str | None, workers: int | None) -> None:
         )
 
 
-def _client(scheduler: str | None, workers: int | None, processes: bool):
+def engine(scheduler: str | None, workers: int | None, processes: bool = True):
     """A Dask client of an existing scheduler, or of a new LocalCluster (one thread per worker).
 
+    Returns ``(client, cluster)``, the cluster None for a scheduler's address; close both when
+    done. The sweep's engine, and a policy's data generation's (:mod:`cable_ocp.policy.data`).
     The client is not made Dask's default, so that nothing else (xarray's write lock) goes
     through the scheduler.
     """
@@ -284,7 +286,7 @@ def _run(spec, folder, todo, report, scheduler, workers, quiet, processes, engin
     """Submit ``todo`` and save each case as it arrives (Ctrl-C, a lost engine: stop)."""
     from dask.distributed import as_completed
 
-    client, cluster = _client(scheduler, workers, processes)
+    client, cluster = engine(scheduler, workers, processes)
     progress = Progress(f"sweep ({len(todo)} cases)", len(todo), quiet)
     failed, lost = 0, False
     try:

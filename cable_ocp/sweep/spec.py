@@ -286,9 +286,14 @@ def _is_number(value: Any) -> bool:
     return isinstance(value, numbers.Real) and not isinstance(value, bool) and math.isfinite(value)
 
 
-def _range_bounds(key: str, value: Any) -> tuple[np.ndarray, np.ndarray, bool]:
-    """``[low, high]`` (scalar) or ``[[low...], [high...]]`` (vector) -> (low, high, is_vector)."""
-    where = f"sample.ranges.{key}"
+def _range_bounds(
+    key: str, value: Any, table: str = "sample.ranges"
+) -> tuple[np.ndarray, np.ndarray, bool]:
+    """``[low, high]`` (scalar) or ``[[low...], [high...]]`` (vector) -> (low, high, is_vector).
+
+    ``table``: where the range is, for the error.
+    """
+    where = f"{table}.{key}"
     hint = ": expected [low, high] numbers or [[low, ...], [high, ...]] vectors"
     if not isinstance(value, list) or len(value) != 2:
         raise _fail(where, f"{hint}, got {value!r}")
@@ -321,11 +326,24 @@ def _sample(table: dict, base: Scene) -> tuple[str, tuple[str, ...], list[dict]]
     if design not in DESIGNS:
         raise _fail("sample.design", f" = {design!r}: must be one of {', '.join(DESIGNS)}")
     ranges = table.get("ranges", {})
+    overrides = draw(ranges, base, n, seed, design)
+    return design, tuple(ranges), overrides
+
+
+def draw(
+    ranges: Any, base: Scene, n: int, seed: int, design: str, table: str = "sample.ranges"
+) -> list[dict]:
+    """``n`` cases' overrides drawn in ``ranges`` (dotted key -> ``[low, high]``), seeded.
+
+    The random design of a sweep's ``[sample]`` (module docstring), and a policy's family's
+    scenes (:mod:`cable_ocp.policy.family`). ``table`` names the ranges in errors: a ValueError
+    names the key at fault. A key whose base value is an integer draws integers.
+    """
     if not isinstance(ranges, dict):
-        raise _fail("sample.ranges", f": expected a table, got {ranges!r}")
+        raise _fail(table, f": expected a table, got {ranges!r}")
     if not ranges:
-        raise _fail("sample.ranges", ": expected a table of at least one dotted key")
-    bounds = {key: _range_bounds(key, value) for key, value in ranges.items()}
+        raise _fail(table, ": expected a table of at least one dotted key")
+    bounds = {key: _range_bounds(key, value, table) for key, value in ranges.items()}
     integers = {key: isinstance(_base_value(base, key), int) for key in bounds}
     width = sum(low.size for low, _, _ in bounds.values())
     rng = np.random.default_rng(seed)
@@ -345,7 +363,7 @@ def _sample(table: dict, base: Scene) -> tuple[str, tuple[str, ...], list[dict]]
                 case[key] = int(round(float(row[0])))
             else:
                 case[key] = [float(v) for v in row] if vector else float(row[0])
-    return design, tuple(bounds), overrides
+    return overrides
 
 
 def _base_value(scene: Scene, key: str) -> Any:

@@ -81,6 +81,9 @@ class Solve:
         The solver's iterations (of the second solve when it solved again).
     solve_time : float, s
         Wall time inside the solver (of both solves when it solved again).
+    by_policy : bool
+        A learned policy's action made the plan, not a solve (:func:`~.loop.mpc`'s
+        ``policy``); ``solve_time`` is then its evaluation's.
     """
 
     parameters: np.ndarray
@@ -88,6 +91,7 @@ class Solve:
     success: bool
     iterations: int
     solve_time: float
+    by_policy: bool = False
 
 
 class RecedingHorizon:

@@ -120,7 +120,9 @@ def loop_parts(scene, settings: MpcSettings) -> LoopParts:
     return LoopParts(settings, derived, estimator, controller, command, plant)
 
 
-def mpc(scene, settings: MpcSettings | None = None, quiet: bool = False, **fields) -> MpcResult:
+def mpc(
+    scene, settings: MpcSettings | None = None, quiet: bool = False, policy=None, **fields
+) -> MpcResult:
     """Closed-loop winch control of a scene by a receding-horizon OCP.
 
     Parameters
@@ -135,6 +137,14 @@ def mpc(scene, settings: MpcSettings | None = None, quiet: bool = False, **field
         and the result's ``settings["derived"]`` says how).
     quiet : bool
         Print nothing (otherwise a progress bar on stderr).
+    policy : optional
+        A learned policy that acts instead of the controller where it is trusted
+        (:class:`cable_ocp.policy.Policy`): ``policy.controller(parts)`` makes, from the loop's
+        :class:`LoopParts`, the object whose ``make_step(now, measured, estimate, angle, rate)``
+        returns the sample's :class:`~.controller.Solve` (the policy's action, or the
+        controller's solve where its safety net hands the sample over). The result's
+        ``solves.by_policy`` says which acted, ``handed_share`` how often the MPC did, and
+        ``settings["policy"]`` names the policy.
     **fields
         Fields of :class:`MpcSettings` to set instead of passing ``settings`` (``horizon=10.0``);
         another keyword is refused (TypeError naming the allowed ones).
@@ -163,16 +173,22 @@ def mpc(scene, settings: MpcSettings | None = None, quiet: bool = False, **field
     """
     own = MpcSettings.__dataclass_fields__
     unknown = {name: value for name, value in fields.items() if name not in own}
-    refuse_unknown("mpc", unknown, ("scene", "settings", "quiet", *own))
+    refuse_unknown("mpc", unknown, ("scene", "settings", "quiet", "policy", *own))
+    if policy is not None and not callable(getattr(policy, "controller", None)):
+        raise TypeError(
+            f"mpc: policy must be a learned policy (co.load_policy(...)) or None; got "
+            f"{type(policy).__name__}"
+        )
     if settings is not None and fields:
         raise ValueError(f"mpc: pass settings or its fields ({', '.join(fields)}), not both")
     started = time.perf_counter()
     scene = scene_given(scene, "mpc")
     parts = loop_parts(scene, MpcSettings(**fields) if settings is None else settings)
     settings, plant, estimator = parts.settings, parts.plant, parts.estimator
-    controller, command = parts.controller, parts.command
+    command = parts.command
     duration, h = scene.numerics.duration, plant.step
     samples = round(duration / settings.sample)
+    step = _controller_step(parts) if policy is None else policy.controller(parts).make_step
     build_time = time.perf_counter() - started
 
     loop_started = time.perf_counter()
@@ -184,7 +200,7 @@ def mpc(scene, settings: MpcSettings | None = None, quiet: bool = False, **field
         now = k * settings.sample
         winch = command.winch(now, plant.lag)
         estimate = estimator.make_step(measured, *winch)
-        solve = controller.make_step(now, estimate, *winch)
+        solve = step(now, measured, estimate, *winch)
         solves.append(solve)
         if not solve.success:
             failures.append(f"t = {now:g} s: {solve.status}")
@@ -223,12 +239,19 @@ def mpc(scene, settings: MpcSettings | None = None, quiet: bool = False, **field
         solve_time=np.array([solve.solve_time for solve in solves]),
         iterations=np.array([solve.iterations for solve in solves]),
         status=[solve.status for solve in solves],
+        by_policy=np.array([solve.by_policy for solve in solves], dtype=bool),
     )
     widened = sum(WIDENED in text for text in solve_log.status)
     notes = [f"{widened} solves {WIDENED}"] if widened else []
     saturated = np.concatenate([np.zeros(1, bool)] + [run.applied.saturated for run in runs[1:]])
     saturation = saturation_note(time_grid, saturated, h)
     notes += [saturation] if saturation else []
+    if policy is not None:
+        acted = int(np.count_nonzero(solve_log.by_policy))
+        notes.append(
+            f"the policy acted at {acted} of {len(solves)} samples, the MPC at "
+            f"{len(solves) - acted} (its safety net)"
+        )
     return MpcResult(
         trajectory=trajectory,
         planned_angle=np.concatenate(planned),
@@ -252,8 +275,18 @@ def mpc(scene, settings: MpcSettings | None = None, quiet: bool = False, **field
             "derived": parts.derived,
             "plant_elements": scene.model.elements,
             "plant_step": h,
+            **({"policy": policy.name} if policy is not None else {}),
         },
     )
+
+
+def _controller_step(parts: LoopParts):
+    """The controller's solve as a loop's step ``(now, measured, estimate, angle, rate)``."""
+
+    def step(now, measured, estimate, angle, rate):
+        return parts.controller.make_step(now, estimate, angle, rate)
+
+    return step
 
 
 SHOWN_FAILURES = 3  # failed solves named in the status (all of them are in MpcResult.failures)

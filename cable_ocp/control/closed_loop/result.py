@@ -42,28 +42,40 @@ class SolveLog:
         Iterations of each solve (1 for the real-time iteration).
     status : list of str
         The solver's status of each solve.
+    by_policy : array of bool (s,)
+        A learned policy acted at the sample (its action, not a solve; ``co.mpc(scene,
+        policy=...)``); all False without a policy, and in files written before policies.
     """
 
     # CF units of the fields kept as variables (result_files.units).
     UNITS = MappingProxyType({
-        "sample_time": "s", "solve_time": "s", "iterations": "1",
+        "sample_time": "s", "solve_time": "s", "iterations": "1", "by_policy": "1",
     })  # fmt: skip
 
     sample_time: np.ndarray
     solve_time: np.ndarray
     iterations: np.ndarray
     status: list[str]
+    by_policy: np.ndarray = field(default_factory=lambda: np.zeros(0, dtype=bool))
+
+    def __post_init__(self):
+        if not len(self.by_policy):  # none given, or a file written before policies
+            object.__setattr__(self, "by_policy", np.zeros(len(self.sample_time), dtype=bool))
 
     def to_xarray(self) -> xr.Dataset:
         """The solves as a Dataset over ``solve``."""
-        dims = {name: ("solve",) for name in ("sample_time", "solve_time", "iterations")}
-        return dataset.to_dataset(self, type(self).__name__, dims)
+        names = ("sample_time", "solve_time", "iterations", "by_policy")
+        return dataset.to_dataset(self, type(self).__name__, dict.fromkeys(names, ("solve",)))
 
     @classmethod
     def from_xarray(cls, data: xr.Dataset) -> SolveLog:
         """The solves a Dataset of :meth:`to_xarray` holds; ValueError if they do not fit."""
         values = dataset.from_dataset(cls, data)
-        sizes = {name: len(values[name]) for name in ("solve_time", "iterations", "status")}
+        if "by_policy" in values:
+            values["by_policy"] = np.asarray(values["by_policy"], dtype=bool)
+        names = ("solve_time", "iterations", "status", "by_policy")
+        sizes = {name: len(values[name]) for name in names if name in values}
+        sizes["by_policy"] = sizes.get("by_policy") or len(values["sample_time"])
         if any(size != len(values["sample_time"]) for size in sizes.values()):
             raise ValueError(f"{sizes} entries for {len(values['sample_time'])} sample times")
         return cls(**values)
@@ -226,6 +238,17 @@ class MpcResult(result_files.KeptInFolder):
         return self.trajectory.omega
 
     @property
+    def handed_share(self) -> float:
+        """Share of the samples that a learned policy's safety net handed to the MPC.
+
+        NaN for a run without a policy (``settings["policy"]`` names the policy that ran).
+        """
+        log = self.solves.by_policy
+        if not self.settings.get("policy") or not log.size:
+            return float("nan")
+        return 1.0 - float(np.mean(log))
+
+    @property
     def scene_record(self) -> dict:
         """The plant's scene as :meth:`~cable_ocp.scene.schema.Scene.to_dict` gives it."""
         return self.trajectory.scene_record
@@ -271,6 +294,7 @@ class MpcResult(result_files.KeptInFolder):
             "real_time_factor": self.real_time_factor,
             "wall_time": self.wall_time,
             "build_time": self.build_time,
+            "handed_share": self.handed_share,
             "limited_steps": self.limited_steps,
             "projected_samples": self.projected_samples,
             "saturated_steps": self.saturated_steps,
@@ -286,7 +310,8 @@ class MpcResult(result_files.KeptInFolder):
             "settings": self.settings,
         }
         units = {**units_of(type(self), figures), "omega": "m", "mean_solve_time": "s",
-                 "applied_angle_range": "rad", "saturated_time": "s"}  # fmt: skip
+                 "applied_angle_range": "rad", "saturated_time": "s",
+                 "handed_share": "1"}  # fmt: skip
         if self.trajectory.kept_signs:  # the plant's signed top tension (simulation.slack)
             slack = self.trajectory.physics.slack
             tensions = {"top_tension_min": slack.least_top_tension,
