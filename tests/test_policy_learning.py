@@ -1,0 +1,95 @@
+"""Learning a policy (issue 42): data on a LocalCluster of 2 workers, the same seed the same
+policy, the policy in the closed loop with its safety net, a scene outside the family flagged."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+import cable_ocp as co
+from cable_ocp.policy.data import generate, run_scene
+from cable_ocp.policy.family import load_family
+from cable_ocp.policy.observation import FEATURES
+from cable_ocp.scene.bundled import models_dir
+
+FAMILY = """
+name = "tiny_tow"
+scene = "{scene}"
+[set]
+"numerics.duration" = 20.0
+[ranges]
+"top.tow.surge_speed" = [0.8, 1.1]
+"top.heave.amplitude" = [0.0, 0.4]
+"top.heave.period" = [6.0, 9.0]
+"""
+
+
+@pytest.fixture(scope="module")
+def family_file(tmp_path_factory):
+    path = tmp_path_factory.mktemp("family") / "tiny_tow.toml"
+    path.write_text(FAMILY.format(scene=models_dir() / "small_tow.toml"))
+    return path
+
+
+@pytest.fixture(scope="module")
+def learned(family_file, tmp_path_factory):
+    out = tmp_path_factory.mktemp("learned")
+    policy = co.learn_policy(
+        family_file, out=out, scenes=3, rounds=1, hidden=(6,), seed=4, workers=2, quiet=True
+    )
+    return policy, out
+
+
+def test_data_on_a_local_cluster_of_two_workers_is_the_runs_in_order(family_file):
+    scenes = load_family(family_file).draw(3, seed=1)
+    pairs, records = generate(scenes, workers=2)
+    alone = [run_scene(scene) for scene in scenes]  # here, one after the other
+    np.testing.assert_array_equal(pairs.observations, np.vstack([r["observations"] for r in alone]))
+    np.testing.assert_array_equal(pairs.actions, np.concatenate([r["actions"] for r in alone]))
+    assert pairs.observations.shape == (3 * 20, len(FEATURES))  # one pair a 1 s sample
+    assert all(record["success"] for record in records)
+    assert np.ptp(pairs.actions) > 0  # the MPC moved the winch
+
+
+def test_the_same_seed_learns_the_same_policy_bit_for_bit(family_file, learned):
+    policy, out = learned
+    again = co.learn_policy(
+        family_file, scenes=3, rounds=1, hidden=(6,), seed=4, workers=2, quiet=True
+    )
+    assert again.digest == policy.digest
+    np.testing.assert_array_equal(again.observations, policy.observations)
+    assert set(np.unique(policy.rounds)) == {0, 1}  # the MPC's runs and one DAgger round
+    saved = co.load_policy(out / "policy.nc", family=family_file)
+    assert saved.digest == policy.digest
+    assert (out / "policy.c").is_file() and (out / "policy.h").is_file()
+
+
+def test_the_policy_runs_the_loop_and_its_result_says_so(family_file, learned, tmp_path):
+    policy, _ = learned
+    scene = load_family(family_file).draw(2, seed=99)[0]  # a scene training never saw
+    alone = co.mpc(scene, quiet=True, policy=policy.alone())
+    assert alone.solves.by_policy.all() and alone.handed_share == 0.0
+    assert alone.settings["policy"] == policy.alone().name
+    assert "the policy acted at 20 of 20 samples" in alone.status
+    netted = co.mpc(scene, quiet=True, policy=policy)
+    assert 0.0 <= netted.handed_share < 1.0
+    again = co.MpcResult.load(netted.save(tmp_path / "mpc"))
+    np.testing.assert_array_equal(again.solves.by_policy, netted.solves.by_policy)
+    assert again.handed_share == netted.handed_share
+    plain = co.mpc(scene, quiet=True)
+    assert not plain.solves.by_policy.any() and np.isnan(plain.handed_share)
+
+
+def test_a_scene_outside_the_family_is_flagged_by_the_safety_net(family_file, learned):
+    policy, _ = learned
+    scene = load_family(family_file).base.updated({"top.tow.surge_speed": 1.6})
+    result = co.mpc(scene, quiet=True, policy=policy)
+    assert result.handed_share > 0.5
+    flagged = [status for status in result.solves.status if "safety net" in status]
+    assert any("tow_speed" in s and "outside the training envelope" in s for s in flagged)
+    assert "the MPC at" in result.status
+
+
+def test_mpc_refuses_a_policy_that_is_not_one():
+    with pytest.raises(TypeError, match="policy must be a learned policy"):
+        co.mpc("small_tow", policy="policy.nc")
