@@ -93,3 +93,37 @@ def test_a_scene_outside_the_family_is_flagged_by_the_safety_net(family_file, le
 def test_mpc_refuses_a_policy_that_is_not_one():
     with pytest.raises(TypeError, match="policy must be a learned policy"):
         co.mpc("small_tow", policy="policy.nc")
+
+
+def test_cable_ocp_learn_writes_the_policy_and_mpc_runs_it(family_file, learned, tmp_path, capsys):
+    import json
+
+    from cable_ocp.cli import main
+
+    out = tmp_path / "learned"
+    command = ["learn", str(family_file), "--out", str(out), "--scenes", "2", "--rounds", "0",
+               "--workers", "2", "--hidden", "4", "--quiet"]  # fmt: skip
+    assert main(command) == 0
+    policy = co.load_policy(out / "policy.nc", family=family_file)
+    assert policy.network.hidden == (4,) and set(policy.rounds) == {0}
+    assert json.loads((out / "summary.json").read_text())["pairs"] == 40
+    assert (out / "policy.c").is_file()
+    _, saved = learned
+    run = tmp_path / "mpc"
+    assert main(["mpc", "small_tow", "--out", str(run), "--set", "numerics.duration=20",
+                 "--policy", str(saved / "policy.nc"), "--quiet"]) == 0  # fmt: skip
+    summary = json.loads((run / "summary.json").read_text())
+    assert 0.0 <= summary["handed_share"] < 1.0 and summary["units"]["handed_share"] == "1"
+
+
+def test_cable_ocp_learn_refuses_bad_input_before_any_work(tmp_path, capsys):
+    from cable_ocp.cli import main
+
+    out = tmp_path / "nothing"
+    assert main(["learn", "no_such_family", "--out", str(out), "--quiet"]) == 2
+    assert "no_such_family" in capsys.readouterr().err and not out.exists()
+    assert main(["learn", "hill_tow", "--out", str(out), "--hidden", "0,4"]) == 2
+    not_a_policy = tmp_path / "policy.nc"
+    not_a_policy.write_text("not netCDF")
+    assert main(["mpc", "small_tow", "--out", str(out), "--policy", str(not_a_policy)]) == 2
+    assert "policy.nc: not a readable netCDF file" in capsys.readouterr().err

@@ -1,6 +1,6 @@
 """The command line, ``cable-ocp COMMAND``.
 
-Commands: simulate, replay, optimize, compare, mpc, lower, sweep, validate, study, bench;
+Commands: simulate, replay, optimize, compare, mpc, lower, sweep, learn, validate, study, bench;
 ``cable-ocp scenes`` lists the bundled scenes, ``cable-ocp schema [KEY]`` the fields of a scene;
 ``cable-ocp COMMAND --help`` tells what each command does.
 
@@ -19,6 +19,7 @@ from cable_ocp.cli.bench import add_bench_command
 from cable_ocp.cli.compare import add_compare_command
 from cable_ocp.cli.exits import BROKEN_PIPE, INTERRUPTED, described, exit_code, one_line
 from cable_ocp.cli.files import check_replaceable
+from cable_ocp.cli.learn import add_learn_command
 from cable_ocp.cli.lower import add_lower_command
 from cable_ocp.cli.mpc import add_mpc_command
 from cable_ocp.cli.optimize import add_optimize_command
@@ -40,6 +41,7 @@ COMMANDS = (
     add_mpc_command,
     add_lower_command,
     add_sweep_command,
+    add_learn_command,
     add_reference_commands,
     add_study_command,
     add_bench_command,

@@ -85,6 +85,11 @@ def add_mpc_command(subparsers) -> None:
         "--open-loop", action="store_true",
         help="also optimise open loop (without the heave) and simulate that profile as a reference",
     )  # fmt: skip
+    parser.add_argument(
+        "--policy", type=Path, metavar="POLICY.nc",
+        help="a learned policy (cable-ocp learn) acts where its safety net trusts it, the MPC "
+        "elsewhere; summary.json's handed_share says how often the MPC did",
+    )  # fmt: skip
     add_set(parser, "top.heave.amplitude=1")
     parser.add_argument("--quiet", action="store_true", help="no progress bar")
     parser.set_defaults(run=run_mpc_command)
@@ -119,7 +124,12 @@ def run_mpc_command(args: argparse.Namespace) -> int:
     from cable_ocp.scene.output import json_text
 
     scene = scene_from(args)
-    result = mpc(scene, settings_from(args), quiet=args.quiet)
+    policy = None
+    if args.policy is not None:
+        from cable_ocp.policy.policy import load_policy
+
+        policy = load_policy(args.policy)  # refused here, before any work, when it is no policy
+    result = mpc(scene, settings_from(args), quiet=args.quiet, policy=policy)
     names = ("locked", "open-loop") if args.open_loop else ("locked",)
     references = reference_runs(scene, result, names)
     figures = result.summary()

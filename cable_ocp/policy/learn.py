@@ -19,12 +19,10 @@ from pathlib import Path
 import numpy as np
 
 from cable_ocp.policy.data import generate
+from cable_ocp.policy.defaults import C_NAME, HIDDEN, POLICY_FILE, ROUNDS, SCENES
 from cable_ocp.policy.family import Family, load_family
 from cable_ocp.policy.network import Network
 from cable_ocp.policy.policy import Policy
-
-SCENES, ROUNDS, HIDDEN = 16, 2, (16, 16)  # the defaults of learn_policy and cable-ocp learn
-POLICY_FILE, C_NAME = "policy.nc", "policy"  # what learn_policy writes in its out folder
 
 
 def rate_limit(family: Family, actions: np.ndarray) -> float:
