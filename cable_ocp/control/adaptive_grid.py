@@ -41,18 +41,20 @@ from dataclasses import dataclass, replace
 
 import numpy as np
 
-from cable_ocp.control.gauss_newton import DAMPING
+from cable_ocp.control.gauss_newton import DAMPING, GaussNewton, GaussNewtonSettings
 from cable_ocp.control.hermite_nodes import HermiteNodes
-from cable_ocp.control.linearisation import ErrorLinearisation
-from cable_ocp.control.problem import SolverOutcome, WinchProblem
+from cable_ocp.control.problem import WinchProblem
 from cable_ocp.drive.bounds import LinearBounds
 from cable_ocp.drive.controls import hermite_polynomials
-from cable_ocp.drive.drive import stage_times
-from cable_ocp.simulation.seabed import trapezoid_weights
 
 # A node is removed when its merge cost is under this share of an interval's share of the
 # allowed excess of Omega^2.
 MERGE_SHARE = 0.1
+# m: an Omega within this of the prediction is within the tolerance, however small both are
+# (a straight profile that the coarse grid fits to round-off).
+OMEGA_ROUND_OFF = 1e-7
+# An interval whose split gain is above this many shares takes all the default nodes inside it.
+FULL_SPLIT = 8.0
 
 
 @dataclass(frozen=True)
@@ -88,8 +90,9 @@ class Refinement:
         The problem on the chosen nodes.
     solver : ProblemSolver
         Its solver, built (the last round's).
-    outcome : SolverOutcome
-        The last round's solve.
+    parameters : array
+        The profile on its nodes to start from (rad, rad/s): the last solve's optimum, on the
+        nodes that remain after the last merges.
     rounds : list of Round
     build_time, solve_time : float, s
         Building and solving in the rounds before the last.
@@ -99,7 +102,7 @@ class Refinement:
 
     problem: WinchProblem
     solver: object
-    outcome: SolverOutcome
+    parameters: np.ndarray
     rounds: list[Round]
     build_time: float
     solve_time: float
@@ -155,12 +158,13 @@ def refine(problem: WinchProblem, build, values, guess: np.ndarray, grid) -> Ref
     base = problem.control.breakpoints
     count = base.size - 1
     chosen = np.unique(np.r_[np.arange(0, count + 1, grid.adaptive_start), count])
-    linearise = _base_linearisation(problem)
-    weights = np.sqrt(trapezoid_weights(problem.step, problem.grid.size) / problem.duration)
+    # The default grid's Gauss-Newton model: its linearisation and its QP (the bounds).
+    model = GaussNewton(problem, GaussNewtonSettings())
     rounds: list[Round] = []
     build_time = solve_time = 0.0
     iterations = 0
     control, parameters = problem.control, guess
+    nothing = np.zeros(0, dtype=int)
     while True:
         trial = with_nodes(problem, base[chosen])
         solver = build(trial)
@@ -168,36 +172,28 @@ def refine(problem: WinchProblem, build, values, guess: np.ndarray, grid) -> Ref
         control, parameters = trial.control, outcome.parameters
         solve_time += outcome.solve_time
         iterations += outcome.iterations
-        grown, done = None, Round(control.intervals, outcome.omega)
-        if outcome.success and len(rounds) + 1 < grid.adaptive_rounds:
+        done, split, merged = Round(control.intervals, outcome.omega), nothing, nothing
+        if outcome.success:
             started = time.perf_counter()
             on_base = on_nodes(control, parameters, base)
-            linearised = linearise(values, on_base)
+            linearised = model.linearisation(values, on_base)
             if linearised.finite:
-                indicators = Indicators(
-                    weights * linearised.error, weights[:, None] * linearised.jacobian
-                )
-                predicted, split, merged = indicators.decide(
-                    chosen, grid.adaptive_tolerance, base, on_base
-                )
+                indicators = Indicators.at(model, linearised, on_base)
+                predicted, split, merged = indicators.decide(chosen, grid.adaptive_tolerance, base)
+                if split.size and len(rounds) + 1 >= grid.adaptive_rounds:
+                    split, merged = nothing, nothing  # the last solve: no more nodes
                 done = Round(control.intervals, outcome.omega, predicted, split.size, merged.size)
-                if split.size:
-                    grown = np.union1d(np.setdiff1d(chosen, merged), split)
             solve_time += time.perf_counter() - started
         rounds.append(done)
-        if grown is None:
-            return Refinement(trial, solver, outcome, rounds, build_time, solve_time, iterations)
+        if not split.size and not merged.size:
+            return Refinement(trial, solver, parameters, rounds, build_time, solve_time, iterations)
         build_time += solver.build_time
-        chosen = grown
-
-
-def _base_linearisation(problem: WinchProblem) -> ErrorLinearisation:
-    """The error's linearisation in the parameters of the problem's own (default) grid."""
-    times, left = stage_times(problem.grid[:-1], problem.step)
-    return ErrorLinearisation(
-        problem.model, problem.step, problem.grid.size - 1, problem.control,
-        problem.scene.winch.drum_radius, problem.scene.seabed, times, left,
-    )  # fmt: skip
+        chosen = np.union1d(np.setdiff1d(chosen, merged), split)
+        if not split.size:  # within the tolerance: the merged grid is solved by the caller
+            trial = with_nodes(problem, base[chosen])
+            parameters = on_nodes(control, parameters, base[chosen])
+            solver = build(trial)
+            return Refinement(trial, solver, parameters, rounds, build_time, solve_time, iterations)
 
 
 class Indicators:
@@ -209,14 +205,35 @@ class Indicators:
         ``W e``: Omega^2 is its square norm.
     jacobian : array (K + 1, 2 N), m/rad
         ``W J`` in the default grid's parameters ``[phi_1..phi_N, phi'_1..phi'_N]``.
+    profile : array (2 N,)
+        The optimum on the default grid's nodes (rad, rad/s).
+    bounded : (array, float) or None
+        The QP's step within the winch bounds (and the minimum clearance) and the decrease of
+        Omega^2 it predicts (m^2); None where there is none (no bound counts then). Its decrease
+        is the prediction, and what each interval's part of it achieves caps that interval's
+        gain: a winch that rides its bound there gains nothing from more nodes.
     """
 
-    def __init__(self, residual: np.ndarray, jacobian: np.ndarray):
+    def __init__(self, residual, jacobian, profile, bounded=None):
         self.objective = float(residual @ residual)
         self.gradient = jacobian.T @ residual
         self.hessian = jacobian.T @ jacobian
         self.count = jacobian.shape[1] // 2
         self.damping = DAMPING * max(float(np.max(np.diag(self.hessian))), 1e-30)
+        self.profile = profile
+        self.step, self.decrease = bounded if bounded is not None else (None, 0.0)
+
+    @classmethod
+    def at(cls, model: GaussNewton, linearised, profile: np.ndarray) -> Indicators:
+        """The indicators of the default grid's solver ``model`` at its linearisation."""
+        bounds = model.problem.bounds
+        step, decrease, _ = model.step(linearised, profile, bounds.lower, bounds.upper, {})
+        return cls(
+            model.weights * linearised.error,
+            model.weights[:, None] * linearised.jacobian,
+            profile,
+            None if step is None else (step, decrease),
+        )
 
     def gain(self, columns: np.ndarray) -> float:
         """The decrease of Omega^2 (m^2) from freeing the parameters ``columns``."""
@@ -230,20 +247,29 @@ class Indicators:
         """The angle and rate columns of the default grid's nodes ``nodes`` (1 .. N)."""
         return np.r_[nodes - 1, self.count + nodes - 1]
 
+    def bounded_gain(self, columns: np.ndarray) -> float:
+        """The decrease of Omega^2 (m^2) from the bounded step's part in ``columns`` alone."""
+        if self.step is None:
+            return self.gain(columns)
+        part = np.zeros_like(self.step)
+        part[columns] = self.step[columns]
+        return max(-float(2 * self.gradient @ part + part @ self.hessian @ part), 0.0)
+
     def predicted(self) -> float:
-        """Omega (m) on the default grid, predicted."""
-        whole = np.arange(2 * self.count)
-        return float(np.sqrt(max(self.objective - self.gain(whole), 0.0)))
+        """Omega (m) on the default grid, predicted (within the bounds where the QP solved)."""
+        if self.step is None:
+            decrease = self.gain(np.arange(2 * self.count))
+        else:
+            decrease = self.decrease
+        return float(np.sqrt(max(self.objective - decrease, 0.0)))
 
-    def merge_cost(
-        self, left: int, node: int, right: int, times: np.ndarray, profile: np.ndarray
-    ) -> float:
-        """The rise of Omega^2 (m^2) when ``node`` goes and one cubic spans ``left..right``.
+    def merge_cost(self, left: int, right: int, times: np.ndarray) -> float:
+        """The rise of Omega^2 (m^2) when one cubic spans the default nodes ``left..right``.
 
-        ``times``: the default nodes (s); ``profile``: the parameters on them (rad, rad/s).
+        ``times``: the default nodes (s).
         """
-        angles = np.r_[0.0, profile[: self.count]]
-        rates = np.r_[0.0, profile[self.count :]]
+        angles = np.r_[0.0, self.profile[: self.count]]
+        rates = np.r_[0.0, self.profile[self.count :]]
         inside = np.arange(left + 1, right)
         width = times[right] - times[left]
         h00, h10, h01, h11 = hermite_polynomials((times[inside] - times[left]) / width)
@@ -254,21 +280,25 @@ class Indicators:
         change[self.columns(inside)] = np.r_[value - angles[inside], slope - rates[inside]]
         return float(change @ self.hessian @ change + 2 * self.gradient @ change)
 
-    def decide(self, chosen: np.ndarray, tolerance: float, times: np.ndarray, profile):
+    def decide(self, chosen: np.ndarray, tolerance: float, times: np.ndarray):
         """The prediction (m), the default nodes to add and those to remove (none: stop).
 
-        ``chosen``: the grid's nodes (indices of the default nodes ``times``, s); ``profile``:
-        its optimum on the default nodes (rad, rad/s).
+        ``chosen``: the grid's nodes (indices of the default nodes ``times``, s).
         """
         predicted = self.predicted()
         nothing = np.zeros(0, dtype=int)
-        if np.sqrt(self.objective) <= (1 + tolerance) * predicted:
-            return predicted, nothing, nothing
+        allowed = ((1 + tolerance) * predicted + OMEGA_ROUND_OFF) ** 2
+        if self.objective <= allowed:
+            return predicted, nothing, self._spare(chosen, times, allowed)
         share = ((1 + tolerance) ** 2 - 1) * predicted**2 / (chosen.size - 1)
         pairs = list(zip(chosen[:-1], chosen[1:], strict=True))
-        gains = np.array([self.gain(self.columns(np.arange(a + 1, b))) for a, b in pairs])
-        splitting = gains > share
-        splitting[np.argmax(gains)] = True
+        inside = [self.columns(np.arange(a + 1, b)) for a, b in pairs]
+        gains = np.array([min(self.gain(c), self.bounded_gain(c)) for c in inside])
+        # Split where an interval carries more than its share of the allowed excess, and of
+        # half the excess left now (so that a grid far off refines where it is furthest off first).
+        threshold = max(share, (self.objective - predicted**2) / (2 * gains.size))
+        splitting = gains > threshold
+        splitting[np.argmax(gains)] |= gains.max() > 0
         splitting &= np.diff(chosen) > 1
         if not splitting.any():
             return predicted, nothing, nothing
@@ -276,8 +306,33 @@ class Indicators:
         for i in range(1, chosen.size - 1):
             if splitting[i - 1] or splitting[i] or (merged and merged[-1] == chosen[i - 1]):
                 continue
-            cost = self.merge_cost(chosen[i - 1], chosen[i], chosen[i + 1], times, profile)
-            if cost < MERGE_SHARE * share:
+            cost = self.merge_cost(chosen[i - 1], chosen[i + 1], times)
+            if cost < MERGE_SHARE * threshold:
                 merged.append(chosen[i])
-        split = (chosen[:-1] + chosen[1:])[splitting] // 2
-        return predicted, split, np.array(merged, dtype=int)
+        # An interval that carries more than FULL_SPLIT shares takes every default node inside
+        # it at once; the others are halved.
+        split = [
+            np.arange(a + 1, b) if gain > FULL_SPLIT * threshold else [(a + b) // 2]
+            for (a, b), gain, chosen_one in zip(pairs, gains, splitting, strict=True)
+            if chosen_one
+        ]
+        return predicted, np.concatenate(split).astype(int), np.array(merged, dtype=int)
+
+    def _spare(self, chosen: np.ndarray, times: np.ndarray, allowed: float) -> np.ndarray:
+        """Nodes to remove from a grid within the tolerance, cheapest first, none two in a row.
+
+        Their merge costs add up to at most what is left of ``allowed`` Omega^2 (m^2).
+        """
+        costs = [
+            (self.merge_cost(chosen[i - 1], chosen[i + 1], times), i)
+            for i in range(1, chosen.size - 1)
+        ]
+        left, taken = allowed - self.objective, set()
+        for cost, i in sorted(costs):
+            if cost > left:
+                break
+            if i - 1 in taken or i + 1 in taken:
+                continue
+            taken.add(i)
+            left -= max(cost, 0.0)
+        return np.sort(chosen[list(taken)]).astype(int)

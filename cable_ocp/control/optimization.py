@@ -142,7 +142,7 @@ class OcpResult(result_files.KeptInFolder):
         :func:`cable_ocp.control.solvers.ocp_settings_from_record` rebuilds them, so that
         ``optimize(result.scene, settings=...)`` solves the same problem again. Empty in files
         written before it was kept, and when the settings could not be resolved.
-    nodes : array, s
+    nodes : list of float, s
         The Hermite control's node times where they are not equally spaced (an adaptive grid's,
         or ``GridSettings.nodes``); empty for equal intervals, the spline, and in files written
         before it was kept.
@@ -186,7 +186,7 @@ class OcpResult(result_files.KeptInFolder):
     scene_record: dict = field(default_factory=dict)
     solver: str = ""
     settings: dict = field(default_factory=dict)
-    nodes: np.ndarray = field(default_factory=lambda: np.zeros(0))
+    nodes: list[float] = field(default_factory=list)
 
     @property
     def scene(self):
@@ -372,9 +372,9 @@ def _check_nodes(nodes, parameters: np.ndarray) -> None:
         )
 
 
-def node_times(control) -> np.ndarray:
+def node_times(control) -> list[float]:
     """The node times (s) a result keeps: a non-uniform Hermite control's, else none."""
-    return control.breakpoints if isinstance(control, HermiteNodes) else np.zeros(0)
+    return control.breakpoints.tolist() if isinstance(control, HermiteNodes) else []
 
 
 def omega_history(squares: list[float]) -> list[float]:
@@ -477,7 +477,7 @@ def solve_verified(
     if start is None:
         parameters = problem.first_guess(compiled=settings.compiled)
     else:
-        parameters = start.outcome.parameters
+        parameters = start.parameters
     solver_name = solver.label
     solves = 1 + (refinements if problem.reduced else 0)
     # Full-model runs that only steer the model correction take a coarser step; the profile

@@ -256,7 +256,8 @@ def winch_angle(
 
     ``bounds`` is ``(winch.angle_min, winch.angle_max)``, rad (a closed loop's
     ``angle_range``). A closed loop's angle is the one applied (heave feedback included); its
-    controller's plan is drawn beside it.
+    controller's plan is drawn beside it. An optimum on non-uniform Hermite nodes (an adaptive
+    grid's, ``OcpResult.nodes``) has its nodes marked on its angle.
     """
     fig, ax = plt.subplots(figsize=(9, 4.4))
     runs = _runs(trajectories, labels)
@@ -266,7 +267,8 @@ def winch_angle(
             ax.plot(traj.time, traj.winch_angle, lw=0.9, label=f"{label}, applied")
             ax.plot(traj.time, run.planned_angle, lw=1.6, label=f"{label}, planned")
         else:
-            ax.plot(traj.time, traj.winch_angle, label=label)
+            (line,) = ax.plot(traj.time, traj.winch_angle, label=label)
+            _mark_nodes(ax, run, traj, line.get_color(), label)
     if bounds is not None:
         low, high = bounds
         text = f"winch bounds phi_min = {low:g} rad, phi_max = {high:g} rad"
@@ -278,6 +280,16 @@ def winch_angle(
     ax.grid(alpha=0.3)
     ax.legend(fontsize=8)
     return finish_figure(fig, path)
+
+
+def _mark_nodes(ax, run, trajectory: Trajectory, color: str, label: str) -> None:
+    """Mark an optimum's non-uniform Hermite nodes (``OcpResult.nodes``, s) on its angle."""
+    nodes = np.asarray(getattr(run, "nodes", ()), dtype=float)
+    if nodes.size == 0:
+        return
+    angle = np.interp(nodes, trajectory.time, trajectory.winch_angle)
+    text = f"{label}: its {nodes.size - 1} control intervals' nodes"
+    ax.plot(nodes, angle, "o", ms=3.5, mfc="none", color=color, label=text)
 
 
 def catenary_comparison(

@@ -1,0 +1,159 @@
+"""The adaptive control grid (issue 43): Hermite nodes at any times, chosen by refinement."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+import cable_ocp as co
+from cable_ocp.control.adaptive_grid import Indicators, on_nodes
+from cable_ocp.control.hermite_nodes import HermiteNodes
+from cable_ocp.control.settings import GridSettings
+from cable_ocp.control.solvers import ocp_settings_from_record
+from cable_ocp.drive.bounds import BOUND_TOLERANCE
+from cable_ocp.drive.controls import HermiteIntervals
+
+
+@pytest.fixture(scope="module")
+def default_hill():
+    return co.optimize("paper_hill", quiet=True)
+
+
+@pytest.fixture(scope="module")
+def bounded():
+    """paper_hill with a narrow winch (2 rad of haul-in at most 0.3 rad/s): it rides the bounds."""
+    scene = co.load_scene("paper_hill", {"winch.angle_max": 2.0, "winch.rate_max": 0.3})
+    return scene, co.optimize(scene, quiet=True, grid=GridSettings(adaptive=True))
+
+
+def test_nodes_on_a_uniform_spacing_reproduce_the_default_optimum(default_hill):
+    nodes = tuple(np.linspace(0.0, 210.0, 43))
+    result = co.optimize("paper_hill", quiet=True, grid=GridSettings(nodes=nodes))
+    assert result.control == default_hill.control == "hermite(84)"
+    assert result.omega == pytest.approx(default_hill.omega, rel=1e-8)
+    np.testing.assert_allclose(result.parameters, default_hill.parameters, rtol=0, atol=1e-9)
+    np.testing.assert_allclose(result.nodes, nodes)
+    assert default_hill.nodes == []  # equal intervals keep no node times
+
+
+def test_hermite_nodes_match_equal_intervals_and_stay_c1_on_unequal_ones():
+    t = np.r_[np.linspace(0.0, 66.0, 331), np.arange(13) * 5.0]
+    uniform, nodes = HermiteIntervals(60.0, 12), HermiteNodes(np.linspace(0.0, 60.0, 13))
+    for left in (None, True):
+        for a, b in zip(uniform.basis(t, left), nodes.basis(t, left), strict=True):
+            np.testing.assert_allclose(a, b, rtol=0, atol=1e-12)
+    unequal = HermiteNodes(np.array([0.0, 5.0, 20.0, 25.0, 60.0]))
+    p = np.random.default_rng(3).normal(size=unequal.size)
+    inner = unequal.breakpoints[1:-1]
+    before, after = unequal.evaluate(p, inner, True), unequal.evaluate(p, inner, False)
+    np.testing.assert_allclose(before[:2], after[:2], atol=1e-12)  # angle and rate continuous
+    assert np.all(np.abs(before[2] - after[2]) > 1e-6)  # the acceleration jumps at the nodes
+    # A profile carried onto a grid holding its nodes is the same angle.
+    finer = np.array([0.0, 5.0, 10.0, 20.0, 25.0, 40.0, 60.0])
+    moved = HermiteNodes(finer).evaluate(on_nodes(unequal, p, finer), t.clip(0, 60))
+    np.testing.assert_allclose(moved, unequal.evaluate(p, t.clip(0, 60)), atol=1e-9)
+
+
+def _fitted_indicators(target, times, chosen):
+    """The indicators of a least-squares fit of ``target`` by a Hermite angle on ``chosen``."""
+    base = HermiteIntervals(float(times[-1]), times.size - 1)
+    samples = np.linspace(0.0, times[-1], 2001)
+    basis = base.basis(samples)[0]
+    coarse = HermiteNodes(times[chosen])
+    fit, *_ = np.linalg.lstsq(coarse.basis(samples)[0], target(samples), rcond=None)
+    profile = on_nodes(coarse, fit, times)
+    weight = np.sqrt(1.0 / samples.size)
+    residual = weight * (basis @ profile - target(samples))
+    return Indicators(residual, weight * basis, profile)
+
+
+def test_refinement_splits_where_the_profile_bends_and_merges_where_it_is_straight():
+    times = np.arange(0.0, 201.0, 5.0)  # the default grid: 40 intervals
+
+    def smooth(t):  # a pay-out from rest that one cubic holds
+        return 1e-4 * t**2
+
+    def target(t):  # the same, with a sharp bend over a hill at 150 s
+        return smooth(t) + 3.0 * np.exp(-(((t - 150.0) / 6.0) ** 2))
+
+    chosen = np.arange(0, 41, 4)
+    indicators = _fitted_indicators(target, times, chosen)
+    predicted, split, merged = indicators.decide(chosen, 0.02, times)
+    assert predicted < 0.1 * np.sqrt(indicators.objective)
+    assert split.size and np.all(np.abs(times[split] - 150.0) <= 25.0)
+    assert merged.size and np.all(times[merged] <= 100.0)  # the smooth stretch
+    # On the smooth pay-out alone the coarse grid is within the tolerance: nothing is split,
+    # and its interior nodes go (none two in a row).
+    straight = _fitted_indicators(smooth, times, chosen)
+    predicted, split, merged = straight.decide(chosen, 0.02, times)
+    assert split.size == 0 and merged.size >= 4 and np.all(np.diff(merged) > 4)
+
+
+def test_adaptive_optimum_keeps_its_bounds_on_the_verified_run(bounded):
+    scene, result = bounded
+    assert result.success, result.status
+    assert "adaptive grid" in result.notes and result.bound_time > 10.0
+    assert result.parameters.size < 84  # fewer than the default grid's
+    run = result.trajectory
+    angle = run.winch_angle
+    assert angle.max() <= scene.winch.angle_max + BOUND_TOLERANCE
+    rate = np.diff(angle) / np.diff(run.time)
+    assert np.abs(rate).max() <= scene.winch.rate_max * (1 + 1e-3)
+
+
+def test_node_times_are_saved_loaded_and_drawn(bounded, tmp_path):
+    from cable_ocp import plots
+
+    _, result = bounded
+    nodes = np.array(result.nodes)
+    assert nodes.size == result.parameters.size // 2 + 1 and np.all(np.diff(nodes) > 0)
+    assert np.ptp(np.diff(nodes)) > 0  # not equally spaced
+    loaded = co.load_result(result.save(tmp_path / "adaptive"))
+    np.testing.assert_array_equal(loaded.nodes, nodes)
+    t = np.linspace(0.0, 210.0, 777)
+    np.testing.assert_allclose(
+        loaded.winch_profile()(t)[0], result.winch_profile()(t)[0], rtol=0, atol=1e-12
+    )
+    again = co.optimize(
+        loaded.scene, settings=ocp_settings_from_record(loaded.settings), quiet=True
+    )
+    np.testing.assert_array_equal(again.nodes, nodes)  # the same grid, given this time
+    figure = plots.winch_angle(loaded)
+    assert any("nodes" in (line.get_label() or "") for line in figure.axes[0].lines)
+
+
+@pytest.mark.parametrize(
+    ("grid", "named"),
+    [
+        ({"adaptive_tolerance": 0.0}, "GridSettings.adaptive_tolerance"),
+        ({"adaptive_rounds": 0}, "GridSettings.adaptive_rounds"),
+        ({"adaptive": "yes"}, "GridSettings.adaptive"),
+        ({"nodes": (0.0, 20.0, 10.0)}, "GridSettings.nodes"),
+        ({"nodes": (0.0,)}, "GridSettings.nodes"),
+        ({"adaptive": True, "control": "spline"}, "adaptive"),
+        ({"adaptive": True, "nodes": (0.0, 210.0)}, "adaptive with nodes"),
+    ],
+)
+def test_bad_grid_settings_are_refused_naming_the_field(grid, named):
+    with pytest.raises(ValueError, match=named):
+        GridSettings(**grid)
+
+
+def test_nodes_off_the_steps_or_the_horizon_are_refused_before_any_solve():
+    with pytest.raises(ValueError, match=r"GridSettings.nodes: t = 7.3 s is not on an RK4 step"):
+        co.optimize("paper_hill", quiet=True, grid=GridSettings(nodes=(0.0, 7.3, 210.0)))
+    with pytest.raises(ValueError, match="GridSettings.nodes.*numerics.duration = 210"):
+        co.optimize("paper_hill", quiet=True, grid=GridSettings(nodes=(0.0, 100.0)))
+    with pytest.raises(ValueError, match="adaptive"):
+        co.optimize("paper_hill", "nelder-mead", quiet=True, grid=GridSettings(adaptive=True))
+
+
+def test_files_without_node_times_still_load_and_forged_ones_are_refused(bounded):
+    from cable_ocp.control.optimization import OcpResult
+
+    _, result = bounded
+    data = result.to_xarray()
+    older = OcpResult.from_xarray(data.drop_vars("nodes"))  # written before nodes were kept
+    assert older.nodes == []
+    with pytest.raises(ValueError, match="nodes"):
+        OcpResult.from_xarray(data.isel(node=slice(0, -1)))
