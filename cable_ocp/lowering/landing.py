@@ -142,8 +142,7 @@ def tension_acceleration(scene: Scene, hover: float = 0.0) -> tuple[float, float
     mass = element.mass_per_length * scene.cable.length
     payload = scene.end.payload
     if payload is not None:
-        water = scene.environment.water_density if scene.environment.submerged else 0.0
-        mass += payload.mass + payload.added_mass * water * payload.volume
+        mass += payload.inertia_in(scene.environment)
     return TENSION_SHARE * max(room, 0.0) / mass, top
 
 

@@ -121,6 +121,17 @@ class ModelSpec:
         """``Delta = (L - l_top) / (n - 1/2)`` (m): L / n on a uniform mesh."""
         return (self.cable_length - self.top_length) / (self.elements - 0.5)
 
+    @property
+    def payload_weight(self) -> float:
+        """The payload's weight less its buoyancy, ``(M - rho_w V) g`` (N; negative: it floats)."""
+        return (self.payload.mass - self.water_density * self.payload.volume) * self.gravity
+
+    @property
+    def payload_inertia(self) -> float:
+        """The payload's mass with the water it drags along, ``M + C_a rho_w V`` (kg)."""
+        payload = self.payload
+        return payload.mass + payload.added_mass_coefficient * self.water_density * payload.volume
+
 
 def spec_from_scene(scene, elements: int | None = None) -> ModelSpec:
     """Model data for a scene, optionally with another number of elements (a reduced model).
@@ -132,7 +143,7 @@ def spec_from_scene(scene, elements: int | None = None) -> ModelSpec:
         Overrides ``scene.model.elements``.
     """
     cable, env, hyd = scene.cable, scene.environment, scene.hydrodynamics
-    water = env.water_density if env.submerged else 0.0
+    water = env.fluid_density
     area = cable.cross_section_area
     hydro = None
     if water > 0:

@@ -303,12 +303,10 @@ class ParametricModel(ModelLayout):
         force = force + translational
         if is_on(payload.mass) or is_on(payload.volume):
             water = spec.water_density
-            added = payload.added_mass_coefficient * water * payload.volume
             mass = mass + ca.diagcat(
-                ca.SX.eye(3) * (payload.mass + added), ca.SX(self.dofs - 3, self.dofs - 3)
+                ca.SX.eye(3) * spec.payload_inertia, ca.SX(self.dofs - 3, self.dofs - 3)
             )
-            weight = (payload.mass - water * payload.volume) * spec.gravity
-            payload_force = ca.vertcat(0, 0, -weight)
+            payload_force = ca.vertcat(0, 0, -spec.payload_weight)
             if is_on(water) and is_on(payload.drag_area):
                 current = current_at(spec.element.hydro, q_end[2])
                 relative = qd_end[POSITION] - current
@@ -318,8 +316,6 @@ class ParametricModel(ModelLayout):
         return mass, force
 
     def _payload_energy(self, q_end, qd_end) -> ca.SX:
-        payload, water = self.spec.payload, self.spec.water_density
         velocity = qd_end[POSITION]
-        inertia = payload.mass + payload.added_mass_coefficient * water * payload.volume
-        weight = (payload.mass - water * payload.volume) * self.spec.gravity
+        inertia, weight = self.spec.payload_inertia, self.spec.payload_weight
         return 0.5 * inertia * ca.dot(velocity, velocity) + weight * q_end[2]

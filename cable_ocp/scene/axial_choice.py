@@ -96,13 +96,11 @@ def longest_line(scene) -> float:
 def axial_period(scene, length: float) -> float:
     """First axial period ``T0`` (s) of ``length`` m of the scene's line with its payload."""
     cable, env = scene.cable, scene.environment
-    water = env.water_density if env.submerged else 0.0
+    water = env.fluid_density
     hyd = scene.hydrodynamics
     axial_added = water * cable.cross_section_area * hyd.added_mass_axial if hyd.added_mass else 0
     payload = scene.end.payload
-    mass = 0.0
-    if payload is not None:
-        mass = payload.mass + payload.added_mass * water * payload.volume
+    mass = payload.inertia_in(env) if payload is not None else 0.0
     line = (cable.mass_per_length + axial_added) * length / 3
     return 2 * math.pi * math.sqrt((mass + line) * length / cable.axial_stiffness_value)
 
@@ -153,10 +151,9 @@ def static_strain(scene, length: float) -> float:
     The submerged weight of the line and the payload and the end force's size, over ``EA``.
     """
     cable, env = scene.cable, scene.environment
-    water = env.water_density if env.submerged else 0.0
-    line = abs(cable.density - water) * cable.cross_section_area * env.gravity * length
+    line = abs(cable.density - env.fluid_density) * cable.cross_section_area * env.gravity * length
     payload = scene.end.payload
-    load = abs(payload.mass - water * payload.volume) * env.gravity if payload else 0.0
+    load = abs(payload.weight_in(env)) if payload else 0.0
     force = math.hypot(*scene.end.force)
     return (line + load + force) / cable.axial_stiffness_value
 

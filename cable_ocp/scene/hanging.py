@@ -47,7 +47,7 @@ def check_hanging(scene) -> None:
     g, water = environment.gravity, environment.water_density
     weight = (cable.density - water) * cable.cross_section_area * g  # w, N/m
     payload = end.payload
-    payload_lift = (water * payload.volume - payload.mass) * g if payload is not None else 0.0
+    payload_lift = -payload.weight_in(environment) if payload is not None else 0.0
     lift = payload_lift + end.force[2]  # P_z, N
     sideways = math.hypot(end.force[0], end.force[1])  # P_h, N
     length = cable.length

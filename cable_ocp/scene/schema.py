@@ -358,6 +358,11 @@ class Environment(_Validated):
         f"{MAX_CURRENT_ROWS} rows).", item=CurrentRow,
     )  # fmt: skip
 
+    @property
+    def fluid_density(self) -> float:
+        """Density of the fluid around the rope (kg/m^3): ``water_density`` submerged, 0 in air."""
+        return self.water_density if self.submerged else 0.0
+
     def _check_relations(self) -> None:
         if self.submerged and self.water_density <= 0:
             raise self._fail("water_density", "> 0 when environment.submerged is true")
@@ -585,6 +590,14 @@ class EndPayload(_Validated):
     drag_area: float = _param(0.0, doc="Payload drag area.", ge=0, unit="m^2")
     drag: float = _param(1.0, doc="Payload drag coefficient.", ge=0)
     added_mass: float = _param(1.0, doc="Payload added-mass coefficient.", ge=0)
+
+    def weight_in(self, environment: Environment) -> float:
+        """Its weight less its buoyancy in ``environment`` (N; negative: it floats)."""
+        return (self.mass - environment.fluid_density * self.volume) * environment.gravity
+
+    def inertia_in(self, environment: Environment) -> float:
+        """Its mass with the fluid it drags along in ``environment``, ``M + C_a rho_w V`` (kg)."""
+        return self.mass + self.added_mass * environment.fluid_density * self.volume
 
 
 @_section("end")

@@ -72,8 +72,7 @@ def string_guess(model: CableModel, u: np.ndarray) -> np.ndarray:
     lengths = np.array(model.element_lengths(float(u[INPUTS.top_length])))
     below = np.cumsum(lengths) - lengths / 2
     weight = spec.element.submerged_weight_per_length
-    payload = (spec.payload.mass - spec.water_density * spec.payload.volume) * spec.gravity
-    pull = np.outer(weight * below + payload, [0.0, 0.0, 1.0]) - u[INPUTS.end_force]
+    pull = np.outer(weight * below + spec.payload_weight, [0.0, 0.0, 1.0]) - u[INPUTS.end_force]
     hydro = spec.element.hydro
     if hydro is not None and hydro.has_drag and has_current(hydro):
         # The current at each element's middle and at E as if the line hung straight down.
@@ -367,10 +366,9 @@ def check_physical(model: CableModel, found: Equilibrium) -> None:
             f"{tensions.size} bonds push): the equilibrium is not physical. {remedy}"
         )
     hydro = spec.element.hydro
-    payload = spec.payload.mass - spec.water_density * spec.payload.volume
     hangs = (
         spec.element.submerged_weight_per_length > 0
-        and payload >= 0
+        and spec.payload_weight >= 0
         and u[INPUTS.end_force][2] <= 0
         and (hydro is None or hydro.current[2] <= 0)
     )

@@ -156,10 +156,8 @@ def axial_period(scene: Scene) -> float:
 
     ``EA = E A`` (``cable.youngs_modulus`` times the section), ``A33 = C_a rho_w V``.
     """
-    spec = spec_from_scene(scene)
-    payload, length = spec.payload, scene.cable.length
-    added = payload.added_mass_coefficient * spec.water_density * payload.volume
-    mass = payload.mass + added + spec.element.mass_per_length * length / 3
+    spec, length = spec_from_scene(scene), scene.cable.length
+    mass = spec.payload_inertia + spec.element.mass_per_length * length / 3
     return 2 * math.pi * math.sqrt(mass * length / _axial_stiffness(scene))
 
 
@@ -170,9 +168,8 @@ def axial_period_exact(scene: Scene) -> float:
     the axial wave speed ``sqrt(EA / m)``; :func:`axial_period` is its Rayleigh estimate.
     """
     spec = spec_from_scene(scene)
-    payload, length, mass = spec.payload, scene.cable.length, spec.element.mass_per_length
-    added = payload.added_mass_coefficient * spec.water_density * payload.volume
-    ratio = mass * length / (payload.mass + added)
+    length, mass = scene.cable.length, spec.element.mass_per_length
+    ratio = mass * length / spec.payload_inertia
     root = brentq(lambda x: x * math.tan(x) - ratio, 0.0, math.pi / 2 - 1e-12)
     return 2 * math.pi * length / (root * math.sqrt(_axial_stiffness(scene) / mass))
 
@@ -205,9 +202,7 @@ def _axial_stiffness(scene: Scene) -> float:
 def _submerged_weights(scene: Scene) -> tuple[float, float]:
     """The payload's submerged weight (N) and the line's per metre (N/m)."""
     spec = spec_from_scene(scene)
-    payload = spec.payload
-    weight = (payload.mass - spec.water_density * payload.volume) * spec.gravity
-    return weight, spec.element.submerged_weight_per_length
+    return spec.payload_weight, spec.element.submerged_weight_per_length
 
 
 def internal_step(scene: Scene, segments: int, ratio: float = DAMPING_RATIO) -> float:

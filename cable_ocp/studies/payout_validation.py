@@ -176,8 +176,7 @@ def static_top_tension(scene: Scene, line_out: np.ndarray) -> np.ndarray:
     cable, water = scene.cable, scene.environment
     area = cable.cross_section_area
     rope = (cable.density - water.water_density) * area * water.gravity * line_out
-    payload = scene.end.payload
-    return (payload.mass - water.water_density * payload.volume) * water.gravity + rope
+    return scene.end.payload.weight_in(water) + rope
 
 
 @dataclass(frozen=True)
