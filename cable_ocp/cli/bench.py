@@ -11,7 +11,7 @@ from cable_ocp.cli.files import results_folder
 from cable_ocp.scene.bundled import models_dir
 
 PARTS = ("rk4", "simulate", "moordyn", "payout", "elastic", "ocp", "ocp-speed", "mpc")
-NAMED_ONLY = ("robustness", "lowering")  # long: run only when --only names them
+NAMED_ONLY = ("robustness", "lowering", "grid")  # long: run only when --only names them
 
 
 def add_bench_command(commands) -> None:
@@ -29,7 +29,10 @@ def add_bench_command(commands) -> None:
         "speed (the default optimize, cold and warm), mpc (the closed loop's solve times). The "
         "default parts run for tens of minutes on 2 cores (MoorDyn and the optimisers "
         "dominate); --quick runs short versions; --only picks parts. robustness (random scenes)"
-        " and lowering (random landings: 10 cases took 5 min on 2 cores) run only when named. "
+        " and lowering (random landings: 10 cases took 5 min on 2 cores) run only when named, and "
+        "grid (the adaptive control grid against the uniform one on the whole-space scenes of "
+        "seeds S and S + 1 and on paper_hill; with --out, its chart of Omega against the "
+        "parameters). "
         "Nothing is written without --out.",
     )
     parser.add_argument(
@@ -37,16 +40,17 @@ def add_bench_command(commands) -> None:
     )
     parser.add_argument(
         "--only", nargs="+", choices=[*PARTS, *NAMED_ONLY],
-        help="run only these parts (robustness and lowering run only when named)",
+        help="run only these parts (robustness, lowering and grid run only when named)",
     )  # fmt: skip
     parser.add_argument(
         "--cases", type=integer(1, 10_000), default=None,
-        help="robustness, lowering: random scenes to draw (default 50 and 10; 6 and 3 with "
-        "--quick)",
+        help="robustness, lowering, grid: random scenes to draw (default 50, 10 and 50 a seed; "
+        "6, 3 and 4 with --quick)",
     )  # fmt: skip
     parser.add_argument(
         "--seed", type=int, default=0,
-        help="robustness, lowering: seed of the random scenes (default 0)",
+        help="robustness, lowering, grid: seed of the random scenes (default 0; grid takes it "
+        "and the next)",
     )  # fmt: skip
     parser.add_argument(
         "--hessian", action="store_true", help="IPOPT exact vs limited-memory Hessian instead"
@@ -88,11 +92,30 @@ def run_bench_command(args: argparse.Namespace) -> int:
         "lowering": lambda _, quick: bench_lowering.report(
             args.cases or (3 if quick else 10), args.seed
         ),
+        "grid": lambda _, quick: _bench_grid(
+            args.cases or (4 if quick else 50), args.seed, args.out
+        ),
     }
     for name in args.only or PARTS:
         parts[name](models_dir(), quick=args.quick)
         print()
     return SUCCESS
+
+
+def _bench_grid(cases: int, seed: int, out: Path | None = None) -> None:
+    """The control grid's benchmark; with ``out``, its chart saved there."""
+    from cable_ocp.studies import bench_grid
+
+    figures = bench_grid.report(cases, seed, chart=out is not None)
+    if out is None:
+        print("chart of Omega against the parameters not written (give --out DIR)")
+        return
+    from cable_ocp.plots.grid import omega_against_parameters
+
+    with results_folder(out) as folder:
+        path = folder / "grid_omega_parameters.png"
+        omega_against_parameters(figures["chart"], path)
+    print(f"chart written to {(Path(out) / path.name).resolve()}")
 
 
 def _bench_mpc(models: Path, quick: bool = False, out: Path | None = None) -> None:
