@@ -157,3 +157,53 @@ def test_files_without_node_times_still_load_and_forged_ones_are_refused(bounded
     assert older.nodes == []
     with pytest.raises(ValueError, match="nodes"):
         OcpResult.from_xarray(data.isel(node=slice(0, -1)))
+
+
+def _row(omegas, parameters, walls, success=(True, True)):
+    return {
+        "seed": 0, "case": 0, "duration": 100.0,
+        **{grid: {"success": ok, "omega": o, "parameters": p, "wall": w, "refinement": ""}
+           for grid, o, p, w, ok in zip(("uniform", "adaptive"), omegas, parameters, walls,
+                                        success, strict=True)},
+    }  # fmt: skip
+
+
+def test_the_grid_bench_summary_judges_issue_43s_acceptance():
+    from cable_ocp.studies.bench_grid import summary, summary_text
+
+    rows = [
+        _row((1.0, 1.02), (100, 40), (2.0, 1.5)),
+        _row((2.0, 2.2), (200, 60), (3.0, 2.0)),  # 10 % worse: outside 5 %
+        _row((1.0, 0.9), (80, 30), (1.0, 1.2)),
+        _row((1.0, float("nan")), (80, 0), (1.0, 1.0), success=(True, False)),
+    ]
+    figures = summary(rows)
+    assert (figures["both"], figures["uniform_only"], figures["within"]) == (3, 1, 2)
+    assert figures["ratio_median"] == pytest.approx(1.02)
+    assert figures["ratio_worst"] == pytest.approx(1.1)
+    assert (figures["uniform_parameters"], figures["adaptive_parameters"]) == (100, 40)
+    assert figures["accepted"] and "acceptance: met" in summary_text(figures, "seed 0")
+    rows[0]["adaptive"]["parameters"] = 90  # the median of parameters over half the uniform's
+    assert not summary(rows)["accepted"]
+
+
+def test_the_grid_chart_draws_each_kind_of_grid(tmp_path):
+    from cable_ocp.plots.grid import omega_against_parameters
+
+    points = {
+        "paper_hill": [
+            {"kind": "uniform", "label": f"every {k}", "parameters": 84 // k, "omega": 1e-4 * k}
+            for k in (4, 2, 1)
+        ]
+        + [
+            {"kind": "adaptive", "label": "adaptive", "parameters": 60, "omega": 1.1e-4},
+            {"kind": "spline", "label": "14 knots", "parameters": 14, "omega": 2e-3},
+        ]
+    }
+    figure = omega_against_parameters(points)
+    lines = {line.get_label(): line for line in figure.axes[0].lines}
+    assert list(lines["uniform Hermite grids"].get_xdata()) == [21, 42, 84]
+    assert list(lines["adaptive grid"].get_ydata()) == [1.1e-4]
+    assert "the paper's knots (spline)" in lines
+    omega_against_parameters(points, tmp_path / "chart.png")
+    assert (tmp_path / "chart.png").stat().st_size > 1000
