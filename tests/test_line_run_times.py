@@ -12,8 +12,11 @@ import re
 import pytest
 
 import cable_ocp as co
-from cable_ocp.simulation.integrate import SimulationError
-from cable_ocp.simulation.line_run import in_run_time
+from cable_ocp.drive.drive import Drive
+from cable_ocp.model.cable import CableModel
+from cable_ocp.simulation.integrate import SimulationError, integrate
+from cable_ocp.simulation.statics import starting_state
+from cable_ocp.simulation.winch_input import winch_function
 
 SCENE = """
 name = "short_pay_out"
@@ -58,9 +61,17 @@ def test_a_failure_in_a_later_segment_names_the_run_time(tmp_path):
     assert start <= when <= 20.0  # the run's time: within the segment, not from its start
 
 
-def test_every_time_of_a_message_is_shifted_by_the_segment_start():
-    text = in_run_time("the state became non-finite at t = 0.05 s; at t <= 1.5e+02 s", 62.25, 9)
-    assert text == (
-        "in the segment of 9 elements from t = 62.25 s: "
-        "the state became non-finite at t = 62.3 s; at t <= 212.25 s"
-    )
+def test_a_run_names_its_failure_on_the_callers_clock():
+    """integrate's ``time_origin`` (a segment's start) is added to the time of its failure."""
+    scene = co.load_scene("paper_flat", {"model.elements": 3, "numerics.duration": 2.0})
+    model = CableModel.from_scene(scene)
+    drive = Drive.from_scene(scene, winch_function(scene, None), elements=3)
+    start = starting_state(model, drive)
+    step = scene.numerics.step
+    times = []
+    for origin in (0.0, 62.25):
+        with pytest.raises(SimulationError) as caught:  # no run keeps its bonds to 1e-18 m
+            integrate(model, start, drive, 2.0, step, tolerance=1e-18, time_origin=origin)
+        times.append(float(re.search(r"at t = ([\d.]+) s with step", str(caught.value))[1]))
+    assert times[0] == pytest.approx(step)  # the first step's residual is already beyond it
+    assert times[1] == pytest.approx(62.25 + step)

@@ -251,6 +251,7 @@ def integrate(
     tolerance: float = 1e-6,
     quiet: bool = True,
     compiled: bool = False,
+    time_origin: float = 0.0,
 ) -> RawRun:
     """Integrate the model by RK4 from ``x0`` over ``[0, duration]``.
 
@@ -274,6 +275,9 @@ def integrate(
         No progress bar when true.
     compiled : bool
         Use the RK4 step compiled to C (cached on disk).
+    time_origin : float, s
+        Where this run's t = 0 lies on the caller's clock (a pay-out segment's start): the
+        times of an error are given on that clock.
 
     Raises
     ------
@@ -329,7 +333,8 @@ def integrate(
                 [states[block], all_inputs[block]],
                 [norms],
             )
-            _check_block(model, states[block], norms, all_times[block], step, tolerance)
+            when = all_times[block] + time_origin
+            _check_block(model, states[block], norms, when, step, tolerance)
             largest = max(largest, float(norms.max()))
         progress.update(done * inner * step)  # also within an output of many calls
         # The next call takes about CALL_SECONDS at this one's wall time per step; its size a power

@@ -14,7 +14,6 @@ before integrating).
 
 from __future__ import annotations
 
-import re
 from dataclasses import dataclass
 
 import numpy as np
@@ -183,27 +182,15 @@ def simulate_line(scene, winch=None, quiet: bool = True, compiled: bool = True) 
             run = integrate(
                 model, state, local, (last - first) * interval, numerics.step,
                 output_every=numerics.output_every, tolerance=numerics.constraint_tolerance,
-                quiet=quiet, compiled=True,
+                quiet=quiet, compiled=True, time_origin=local.start,
             )  # fmt: skip
         except SimulationError as error:
-            raise SimulationError(in_run_time(str(error), local.start, n)) from error
+            where = f"in the segment of {n} elements from t = {local.start:g} s"
+            raise SimulationError(f"{where}: {error}") from error
         outputs = run_outputs(model, run.states, run.inputs, True)
         segments.append((run.time + times[first], run, *outputs, model))
         state = _mapped(run.states[-1], run.inputs[-1], n, int(counts[last]), mesh)
     return _trajectory(scene, drive, segments)
-
-
-# A time in a message of integrate (its health check): ``t = 0.05 s`` or ``t <= 0.05 s``.
-_SEGMENT_TIME = re.compile(r"\bt (=|<=) ([-+]?\d[\d.]*(?:e[-+]?\d+)?) s\b")
-
-
-def in_run_time(message: str, start: float, elements: int) -> str:
-    """A segment's error ``message`` with its times (segment time, s) made the run's.
-
-    ``integrate`` counts time from its segment's start; the run's time is ``start`` (s) more.
-    """
-    text = _SEGMENT_TIME.sub(lambda m: f"t {m[1]} {float(m[2]) + start:.6g} s", message)
-    return f"in the segment of {elements} elements from t = {start:g} s: {text}"
 
 
 def _mapped(state: np.ndarray, u: np.ndarray, elements: int, wanted: int, mesh) -> np.ndarray:
