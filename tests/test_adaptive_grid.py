@@ -207,3 +207,19 @@ def test_the_grid_chart_draws_each_kind_of_grid(tmp_path):
     assert "the paper's knots (spline)" in lines
     omega_against_parameters(points, tmp_path / "chart.png")
     assert (tmp_path / "chart.png").stat().st_size > 1000
+
+
+def test_the_command_line_asks_for_the_adaptive_grid():
+    from cable_ocp import cli
+    from cable_ocp.cli.optimiser_options import optimize_settings
+
+    parser = cli.build_parser()
+    args = parser.parse_args(["optimize", "paper_hill", "--out", "o", "--adaptive"])
+    assert optimize_settings(args).grid.adaptive is True
+    plain = parser.parse_args(["optimize", "paper_hill", "--out", "o"])
+    assert optimize_settings(plain).grid.adaptive is False
+    simplex = parser.parse_args(
+        ["optimize", "paper_hill", "--out", "o", "--adaptive", "--solver", "nelder-mead"]
+    )
+    with pytest.raises(ValueError, match="--adaptive True is an option of Gauss-Newton"):
+        optimize_settings(simplex)

@@ -12,8 +12,8 @@ from cable_ocp.control.solvers import DEFAULT_SOLVER, SOLVERS, Solver, ocp_setti
 
 # The optimiser's options, each named as the settings field it sets (OcpSettings' parts), and
 # optimize()'s keyword of the model correction (optimize's option only).
-OPTIONS = ("elements", "step", "control", "intervals", "shooting", "hessian", "max_iter",
-           "max_evaluations")  # fmt: skip
+OPTIONS = ("elements", "step", "control", "intervals", "adaptive", "shooting", "hessian",
+           "max_iter", "max_evaluations")  # fmt: skip
 CORRECTION = "refinements"
 
 
@@ -21,9 +21,9 @@ def _takes(entry: Solver, args: argparse.Namespace, name: str) -> bool:
     """Whether the registry's solver ``entry`` takes the option ``name`` as given in ``args``.
 
     The model's (``--elements``, ``--step``) every solver; the shooting grid's (``--control``,
-    ``--intervals``) a shooting solver (not the paper's Nelder-Mead, on the scene's knots); a
-    shooting its own; ``--refinements`` a solver whose transcription corrects its model; else a
-    field of its settings (``--hessian``, ``--max-iter``, ...).
+    ``--intervals``, ``--adaptive``) a shooting solver (not the paper's Nelder-Mead, on the
+    scene's knots); a shooting its own; ``--refinements`` a solver whose transcription
+    corrects its model; else a field of its settings (``--hessian``, ``--max-iter``, ...).
     """
     if name in ModelSettings.__dataclass_fields__:
         return True
@@ -131,6 +131,13 @@ def add_optimiser_options(parser: argparse.ArgumentParser) -> None:
         "--intervals",
         type=integer(1, 100_000),
         help="shooting intervals (default: optimize()'s, about 5 s each)",
+    )
+    parser.add_argument(
+        "--adaptive",
+        action="store_const",
+        const=True,
+        help="an adaptive control grid: Hermite nodes chosen among the default grid's, split "
+        "where they pay and merged where they do not (GridSettings(adaptive=True))",
     )
     parser.add_argument(
         "--solver",
