@@ -53,6 +53,11 @@ MERGE_SHARE = 0.1
 # m: an Omega within this of the prediction is within the tolerance, however small both are
 # (a straight profile that the coarse grid fits to round-off).
 OMEGA_ROUND_OFF = 1e-7
+# A winch bound row within this of its limit (rad, rad/s, rad/s^2, m) is active.
+ACTIVE = 1e-3
+# A grid far off splits the intervals that carry more than 1/EXCESS_SHARES of their share of
+# the excess of Omega^2 over the prediction.
+EXCESS_SHARES = 8.0
 # An interval whose split gain is above this many shares takes all the default nodes inside it.
 FULL_SPLIT = 8.0
 
@@ -207,36 +212,43 @@ class Indicators:
         ``W J`` in the default grid's parameters ``[phi_1..phi_N, phi'_1..phi'_N]``.
     profile : array (2 N,)
         The optimum on the default grid's nodes (rad, rad/s).
-    bounded : (array, float) or None
-        The QP's step within the winch bounds (and the minimum clearance) and the decrease of
-        Omega^2 it predicts (m^2); None where there is none (no bound counts then). Its decrease
-        is the prediction, and what each interval's part of it achieves caps that interval's
-        gain: a winch that rides its bound there gains nothing from more nodes.
+    decrease : float or None, m^2
+        The decrease of Omega^2 that the default grid's QP predicts within the winch bounds (and
+        the minimum clearance): the prediction; None: the unbounded one.
+    pinned : array of bool (2 N,) or None
+        The parameters in a winch bound row that is active at ``profile``: a winch that rides
+        its bound gains nothing from more nodes there, so they count in no split gain.
     """
 
-    def __init__(self, residual, jacobian, profile, bounded=None):
+    def __init__(self, residual, jacobian, profile, decrease=None, pinned=None):
         self.objective = float(residual @ residual)
         self.gradient = jacobian.T @ residual
         self.hessian = jacobian.T @ jacobian
         self.count = jacobian.shape[1] // 2
         self.damping = DAMPING * max(float(np.max(np.diag(self.hessian))), 1e-30)
         self.profile = profile
-        self.step, self.decrease = bounded if bounded is not None else (None, 0.0)
+        self.decrease = decrease
+        self.free = ~pinned if pinned is not None else np.ones(2 * self.count, dtype=bool)
 
     @classmethod
     def at(cls, model: GaussNewton, linearised, profile: np.ndarray) -> Indicators:
         """The indicators of the default grid's solver ``model`` at its linearisation."""
         bounds = model.problem.bounds
-        step, decrease, _ = model.step(linearised, profile, bounds.lower, bounds.upper, {})
+        _, decrease, status = model.step(linearised, profile, bounds.lower, bounds.upper, {})
+        values = bounds.matrix @ profile
+        active = (values - bounds.lower < ACTIVE) | (bounds.upper - values < ACTIVE)
+        pinned = np.any(bounds.matrix[active] != 0.0, axis=0)
         return cls(
             model.weights * linearised.error,
             model.weights[:, None] * linearised.jacobian,
             profile,
-            None if step is None else (step, decrease),
+            decrease if status == "solved" else None,
+            pinned,
         )
 
     def gain(self, columns: np.ndarray) -> float:
-        """The decrease of Omega^2 (m^2) from freeing the parameters ``columns``."""
+        """The decrease of Omega^2 (m^2) from freeing the parameters ``columns`` (not pinned)."""
+        columns = columns[self.free[columns]]
         if columns.size == 0:
             return 0.0
         block = self.hessian[np.ix_(columns, columns)] + self.damping * np.eye(columns.size)
@@ -247,20 +259,11 @@ class Indicators:
         """The angle and rate columns of the default grid's nodes ``nodes`` (1 .. N)."""
         return np.r_[nodes - 1, self.count + nodes - 1]
 
-    def bounded_gain(self, columns: np.ndarray) -> float:
-        """The decrease of Omega^2 (m^2) from the bounded step's part in ``columns`` alone."""
-        if self.step is None:
-            return self.gain(columns)
-        part = np.zeros_like(self.step)
-        part[columns] = self.step[columns]
-        return max(-float(2 * self.gradient @ part + part @ self.hessian @ part), 0.0)
-
     def predicted(self) -> float:
         """Omega (m) on the default grid, predicted (within the bounds where the QP solved)."""
-        if self.step is None:
+        decrease = self.decrease
+        if decrease is None:
             decrease = self.gain(np.arange(2 * self.count))
-        else:
-            decrease = self.decrease
         return float(np.sqrt(max(self.objective - decrease, 0.0)))
 
     def merge_cost(self, left: int, right: int, times: np.ndarray) -> float:
@@ -293,10 +296,11 @@ class Indicators:
         share = ((1 + tolerance) ** 2 - 1) * predicted**2 / (chosen.size - 1)
         pairs = list(zip(chosen[:-1], chosen[1:], strict=True))
         inside = [self.columns(np.arange(a + 1, b)) for a, b in pairs]
-        gains = np.array([min(self.gain(c), self.bounded_gain(c)) for c in inside])
-        # Split where an interval carries more than its share of the allowed excess, and of
-        # half the excess left now (so that a grid far off refines where it is furthest off first).
-        threshold = max(share, (self.objective - predicted**2) / (2 * gains.size))
+        gains = np.array([self.gain(c) for c in inside])
+        # Split where an interval carries more than its share of the allowed excess, and more
+        # than an eighth of its share of the excess left now (so that a grid far off refines
+        # where it is furthest off first).
+        threshold = max(share, (self.objective - predicted**2) / (EXCESS_SHARES * gains.size))
         splitting = gains > threshold
         splitting[np.argmax(gains)] |= gains.max() > 0
         splitting &= np.diff(chosen) > 1

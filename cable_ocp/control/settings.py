@@ -97,7 +97,7 @@ class GridSettings:
     nodes: tuple[float, ...] | None = None
     adaptive: bool = False
     adaptive_tolerance: float = 0.02
-    adaptive_rounds: int = 3
+    adaptive_rounds: int = 4
     adaptive_start: int = 4
 
     def __post_init__(self):
