@@ -3,6 +3,8 @@ policy, the policy in the closed loop with its safety net, a scene outside the f
 
 from __future__ import annotations
 
+import shutil
+
 import numpy as np
 import pytest
 
@@ -127,3 +129,29 @@ def test_cable_ocp_learn_refuses_bad_input_before_any_work(tmp_path, capsys):
     not_a_policy.write_text("not netCDF")
     assert main(["mpc", "small_tow", "--out", str(out), "--policy", str(not_a_policy)]) == 2
     assert "policy.nc: not a readable netCDF file" in capsys.readouterr().err
+
+
+@pytest.mark.skipif(shutil.which("cc") is None, reason="no C compiler")
+def test_the_policy_bench_times_the_c_function_beside_the_mpc(learned, capsys):
+    from cable_ocp.policy.bench import bench_policy
+
+    policy, _ = learned
+    figures = bench_policy(policy, co.load_scene("small_tow", {"numerics.duration": 20.0}))
+    assert 0 < figures["c_per_sample"] < 20e-6  # the bound on a sample's evaluation
+    assert figures["ratio"] == figures["mpc_median_solve"] / figures["c_per_sample"]
+    assert "us per sample" in capsys.readouterr().out
+
+
+def test_the_validation_runs_held_out_scenes_and_states_its_bound(family_file, learned):
+    from cable_ocp.policy.validation import statement, success_bound, validate_policy
+
+    policy, _ = learned
+    figures = validate_policy(policy, family_file, scenes=2, workers=2, quiet=True)
+    assert figures["scenes"] == 2 and len(figures["rows"]) == 2
+    for kind in ("alone", "net"):
+        successes = figures[kind]["successes"]
+        assert figures[kind]["statement"] == statement(2, 2 - successes)
+    assert 0.0 <= figures["net"]["handed_share"] <= 1.0
+    assert np.isfinite(figures["locked"]["median_omega"])
+    assert success_bound(100, 0) == pytest.approx(0.05 ** (1 / 100))  # the all-success case
+    assert success_bound(10, 10) == 0.0

@@ -140,24 +140,10 @@ def generate(
     progress : callable, optional
         Called with the count of scenes done, as each finishes.
     """
-    from dask.distributed import as_completed
+    from cable_ocp.sweep.runner import mapped
 
-    from cable_ocp.sweep.runner import check_engine, engine
-
-    check_engine(scheduler, workers)
-    client, cluster = engine(scheduler, workers)
-    try:
-        futures = [client.submit(run_scene, scene, network, round_, pure=False) for scene in scenes]
-        order = {future.key: k for k, future in enumerate(futures)}
-        records: list[dict | None] = [None] * len(scenes)
-        for done, future in enumerate(as_completed(futures, loop=client.loop), start=1):
-            records[order[future.key]] = future.result()
-            if progress is not None:
-                progress(done)
-    finally:
-        client.close(timeout=5)
-        if cluster is not None:
-            cluster.close()
+    tasks = [(scene, network, round_) for scene in scenes]
+    records = mapped(run_scene, tasks, scheduler, workers, progress)
     pairs = Pairs.empty()
     for record in records:
         pairs = pairs + Pairs(record["observations"], record["actions"], record["rounds"])

@@ -3,5 +3,5 @@
 ``cable-ocp --help`` reads them without loading the learning's modules.
 """
 
-SCENES, ROUNDS, HIDDEN = 16, 2, (16, 16)  # learn_policy's and cable-ocp learn's
+SCENES, ROUNDS, HIDDEN = 16, 2, (8, 8)  # learn_policy's and cable-ocp learn's
 POLICY_FILE, C_NAME = "policy.nc", "policy"  # what they write in a results folder

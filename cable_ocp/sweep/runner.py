@@ -15,6 +15,7 @@ import os
 import signal
 import threading
 import time
+from collections.abc import Callable
 from contextlib import contextmanager
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -141,6 +142,39 @@ def engine(scheduler: str | None, workers: int | None, processes: bool = True):
             silence_logs=logging.ERROR,
         )
     return Client(cluster, set_as_default=False), cluster
+
+
+def mapped(
+    function: Callable,
+    tasks: list[tuple],
+    scheduler: str | None = None,
+    workers: int | None = None,
+    progress: Callable[[int], None] | None = None,
+) -> list:
+    """``[function(*task) for task in tasks]`` on the Dask engine, in the tasks' order.
+
+    The engine of :func:`engine` (a LocalCluster of ``workers``, or the ``scheduler``'s),
+    closed when done; ``progress`` is called with the count of tasks done as each finishes.
+    An exception of a task is raised here. Used by a policy's data and validation
+    (:mod:`cable_ocp.policy`).
+    """
+    from dask.distributed import as_completed
+
+    check_engine(scheduler, workers)
+    client, cluster = engine(scheduler, workers)
+    try:
+        futures = [client.submit(function, *task, pure=False) for task in tasks]
+        order = {future.key: k for k, future in enumerate(futures)}
+        results: list = [None] * len(tasks)
+        for done, future in enumerate(as_completed(futures, loop=client.loop), start=1):
+            results[order[future.key]] = future.result()
+            if progress is not None:
+                progress(done)
+    finally:
+        client.close(timeout=5)
+        if cluster is not None:
+            cluster.close()
+    return results
 
 
 @contextmanager

@@ -1,0 +1,124 @@
+"""The policy's speed: its C function's time per sample beside the MPC's median solve.
+
+:func:`bench_policy` compiles the policy's C export (:meth:`.policy.Policy.to_c`) with a timing
+loop (``cc -O2``), evaluates it on the policy's own training observations, and runs the closed
+loop (the MPC) on the family's base scene in the same process, so that the ratio is of one run
+on one machine.
+"""
+
+from __future__ import annotations
+
+import shutil
+import subprocess
+import tempfile
+import time
+from pathlib import Path
+
+import numpy as np
+
+from cable_ocp.control.closed_loop.loop import mpc
+from cable_ocp.policy.observation import FEATURES
+from cable_ocp.scene.schema import Scene
+
+EVALUATIONS = 200_000  # C evaluations timed
+HARNESS = """#include <stdio.h>
+#include <time.h>
+#include "{header}"
+int main(void) {{
+    static double o[{rows}][{width}];
+    volatile double sink = 0.0;
+    struct timespec a, b;
+    long i; int r, j;
+    for (r = 0; r < {rows}; ++r)
+        for (j = 0; j < {width}; ++j)
+            if (scanf("%lf", &o[r][j]) != 1) return 1;
+    clock_gettime(CLOCK_MONOTONIC, &a);
+    for (i = 0; i < {evaluations}L; ++i) sink += cable_ocp_policy(o[i % {rows}]);
+    clock_gettime(CLOCK_MONOTONIC, &b);
+    printf("%.6f\\n", ((b.tv_sec - a.tv_sec) * 1e9 + (b.tv_nsec - a.tv_nsec)) / {evaluations}.0);
+    return sink != sink;
+}}
+"""
+
+
+def c_time(policy, observations: np.ndarray, evaluations: int = EVALUATIONS) -> float:
+    """Mean wall time (s) of one evaluation of the compiled C function (``cc -O2``).
+
+    Raises
+    ------
+    RuntimeError
+        No C compiler ``cc`` on this machine.
+    """
+    compiler = shutil.which("cc")
+    if compiler is None:
+        raise RuntimeError("bench_policy: no C compiler (cc) to time the policy's C export")
+    with tempfile.TemporaryDirectory() as folder:
+        folder = Path(folder)
+        c_file, h_file = policy.to_c(folder / "policy")
+        main = folder / "bench.c"
+        rows = observations.shape[0]
+        main.write_text(HARNESS.format(header=h_file.name, rows=rows, width=len(FEATURES),
+                                       evaluations=evaluations))  # fmt: skip
+        binary = folder / "bench"
+        subprocess.run([compiler, "-O2", str(c_file), str(main), "-o", str(binary), "-lm"],
+                       check=True, cwd=folder)  # fmt: skip
+        text = "\n".join(" ".join(f"{v:.17g}" for v in row) for row in observations)
+        out = subprocess.run([str(binary)], input=text, capture_output=True, text=True,
+                             check=True)  # fmt: skip
+    return float(out.stdout) * 1e-9
+
+
+def bench_policy(policy, scene, quiet: bool = False) -> dict:
+    """Time the policy's C function, numpy and CasADi forms, and the MPC on ``scene``.
+
+    Parameters
+    ----------
+    policy : Policy
+    scene : Scene, Family, str or path-like
+        The MPC's scene, or a family (its file or bundled name) whose base scene it is.
+    quiet : bool
+        Print nothing (else a table of the figures).
+
+    Returns
+    -------
+    dict
+        ``c_per_sample``, ``numpy_per_sample``, ``casadi_per_sample`` and
+        ``mpc_median_solve`` (s), and ``ratio`` (the MPC's median solve over the C function's).
+    """
+    from cable_ocp.policy.family import load_family
+
+    observations = policy.observations[:: max(1, policy.observations.shape[0] // 1000)][:1000]
+    c_seconds = c_time(policy, observations)
+    numpy_seconds = _per_call(lambda o: policy(o[None, :]), observations)
+    function = policy.function()
+    casadi_seconds = _per_call(function, observations)
+    if not isinstance(scene, Scene):
+        scene = load_family(scene).base
+    result = mpc(scene, quiet=True)
+    solve = float(np.median(result.solves.solve_time))
+    figures = {
+        "c_per_sample": c_seconds,
+        "numpy_per_sample": numpy_seconds,
+        "casadi_per_sample": casadi_seconds,
+        "mpc_median_solve": solve,
+        "ratio": solve / c_seconds,
+    }
+    if not quiet:
+        print(f"policy {policy.name}: hidden {policy.network.hidden}, {len(FEATURES)} inputs")
+        print(f"  C (cc -O2)        {c_seconds * 1e6:10.3f} us per sample")
+        print(f"  numpy             {numpy_seconds * 1e6:10.3f} us per sample")
+        print(f"  CasADi Function   {casadi_seconds * 1e6:10.3f} us per sample")
+        print(f"  MPC median solve  {solve * 1e6:10.1f} us ({scene.name}, the same run)")
+        print(f"  ratio MPC / C     {figures['ratio']:10.0f}")
+    return figures
+
+
+def _per_call(function, observations: np.ndarray, repeats: int = 3) -> float:
+    """Least mean time (s) of ``function(observation)`` over the rows, of ``repeats``."""
+    best = float("inf")
+    for _ in range(repeats):
+        started = time.perf_counter()
+        for row in observations:
+            function(row)
+        best = min(best, (time.perf_counter() - started) / observations.shape[0])
+    return best
