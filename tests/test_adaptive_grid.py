@@ -223,3 +223,17 @@ def test_the_command_line_asks_for_the_adaptive_grid():
     )
     with pytest.raises(ValueError, match="--adaptive True is an option of Gauss-Newton"):
         optimize_settings(simplex)
+
+
+def test_the_finest_grid_of_an_adaptive_grid_is_finer_only_when_asked():
+    from cable_ocp.control.shooting import resolved
+    from cable_ocp.control.solvers import ocp_settings
+
+    scene = co.load_scene("paper_hill")
+    finer = GridSettings(adaptive=True, adaptive_finest=2)
+    for grid, intervals in ((finer, 84), (GridSettings(adaptive=True), 42), (None, 42)):
+        chosen, _ = resolved(scene, ocp_settings(grid=grid))
+        assert chosen.intervals == intervals
+    # Not adaptive, the finest grid is not asked for: the default grid stays.
+    plain, _ = resolved(scene, ocp_settings(grid=GridSettings(adaptive_finest=2)))
+    assert plain.intervals == 42

@@ -6,26 +6,34 @@ step end of every model, so that any subset is too) by refinement, as hp-adaptiv
 transcription does (GPOPS-II's error per mesh interval, Betts' equidistribution), with the error
 measured in the objective itself:
 
-1. Start coarse: every ``adaptive_start``-th node of the default grid (20 s apart by default).
+The default grid here is the shooting grid: about 5 s, or ``adaptive_finest`` times finer.
+
+1. Start coarse: every ``adaptive_start * adaptive_finest``-th node of the default grid (20 s
+   apart by default).
 2. Solve on the reduced model (the solver of the settings), warm-started from the last profile
    (its angle and rate at the new nodes: exact where intervals were split).
 3. Linearise the clearance error at that optimum in the default grid's parameters (one
-   sensitivity sweep, :class:`~cable_ocp.control.linearisation.ErrorLinearisation`): residual
-   ``r = W e`` and ``A = W J`` with Omega^2 = ``|r|^2``. The Gauss-Newton decrease of Omega^2 from
-   freeing a set ``S`` of the default grid's parameters is ``g_S^T (A_S^T A_S)^-1 g_S``,
-   ``g = A^T r``:
+   sensitivity sweep of the default grid's Gauss-Newton solver): residual ``r = W e`` and
+   ``A = W J`` with Omega^2 = ``|r|^2``. The Gauss-Newton decrease of Omega^2 from freeing a set
+   ``S`` of the default grid's parameters is ``g_S^T (A_S^T A_S)^-1 g_S``, ``g = A^T r``:
 
-   - all of them: Omega on the default grid is predicted as ``sqrt(|r|^2 - gain)``;
-   - the nodes inside one interval: that interval's *split gain*;
-   - a node's removal, the merged interval's cubic taking its place: its *merge cost*
-     ``d^T A^T A d + 2 g^T d`` (``d`` the change of the default grid's parameters).
+   - the prediction: Omega on the default grid, from the decrease of its QP within the winch
+     bounds (and the minimum clearance), so that a winch that rides its bounds is not promised
+     what no grid can give;
+   - an interval's *split gain*: the decrease from freeing the default nodes inside it, those in
+     an active bound row left out (no gain where the winch rides a bound);
+   - a node's *merge cost*: the rise ``d^T A^T A d + 2 g^T d`` when one cubic spans its two
+     neighbours (``d`` the change of the default grid's parameters), without re-solving.
 
-4. Stop when Omega is within ``adaptive_tolerance`` of the prediction, or after
-   ``adaptive_rounds`` solves. Otherwise the allowed excess of Omega^2, ``((1 + tol)^2 - 1)``
-   times the predicted one, is shared equally among the intervals: split (at the default node
-   nearest its middle) each interval whose gain exceeds its share (the largest gain at least),
-   and remove each node whose merge cost is under a tenth of a share (not beside a split, not two
-   in a row), then go to 2.
+4. Stop when Omega is within ``adaptive_tolerance`` of the prediction (and
+   :data:`OMEGA_ROUND_OFF`), after removing the nodes whose merge costs fit in what is left of
+   the tolerance (cheapest first, never two in a row; the caller's solve re-optimises on what
+   remains), or after ``adaptive_rounds`` solves. Otherwise split each interval whose gain is
+   above its share of the allowed excess of Omega^2 (``((1 + tol)^2 - 1)`` times the predicted
+   one, over the intervals) and above 1/:data:`EXCESS_SHARES` of its share of the excess left
+   (the largest gain at least): at every default node inside it when its gain is above
+   :data:`FULL_SPLIT` times that, at the one nearest its middle otherwise. Nodes whose merge cost
+   is under :data:`MERGE_SHARE` of that threshold (not beside a split) go. Then go to 2.
 
 The last solve's optimum and its solver start :func:`cable_ocp.control.optimization.solve_verified`
 on the chosen grid (model correction and verification as on any grid). The winch bounds and the
@@ -162,7 +170,8 @@ def refine(problem: WinchProblem, build, values, guess: np.ndarray, grid) -> Ref
     """
     base = problem.control.breakpoints
     count = base.size - 1
-    chosen = np.unique(np.r_[np.arange(0, count + 1, grid.adaptive_start), count])
+    start = grid.adaptive_start * grid.adaptive_finest
+    chosen = np.unique(np.r_[np.arange(0, count + 1, start), count])
     # The default grid's Gauss-Newton model: its linearisation and its QP (the bounds).
     model = GaussNewton(problem, GaussNewtonSettings())
     rounds: list[Round] = []

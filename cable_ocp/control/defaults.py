@@ -158,18 +158,19 @@ def model_step(
     return step, [StepChoice(step, limit, at).describe(what)]
 
 
-def control_intervals(duration: float) -> int:
-    """Hermite intervals of about :data:`CONTROL_INTERVAL` over ``duration`` (s)."""
-    return max(1, round(duration / CONTROL_INTERVAL))
+def control_intervals(duration: float, interval: float = CONTROL_INTERVAL) -> int:
+    """Hermite intervals of about ``interval`` (s; :data:`CONTROL_INTERVAL`) over ``duration``."""
+    return max(1, round(duration / interval))
 
 
-def control_grid(duration: float, scene_step: float) -> int:
+def control_grid(duration: float, scene_step: float, interval: float = CONTROL_INTERVAL) -> int:
     """Hermite intervals of a duration (s) whose RK4 steps are ``scene_step`` (s) long.
 
-    The count nearest ``duration / CONTROL_INTERVAL`` that divides the steps, if it is within
-    :data:`GRID_SLACK` of it; that count itself otherwise (:func:`on_nodes` then fits the step).
+    The count nearest ``duration / interval`` (:data:`CONTROL_INTERVAL` by default; an adaptive
+    grid's finest is finer) that divides the steps, if it is within :data:`GRID_SLACK` of it;
+    that count itself otherwise (:func:`on_nodes` then fits the step).
     """
-    wanted = control_intervals(duration)
+    wanted = control_intervals(duration, interval)
     fitting = intervals_for(duration, scene_step, wanted)
     return fitting if abs(fitting - wanted) <= GRID_SLACK * wanted else wanted
 

@@ -88,7 +88,11 @@ class GridSettings:
     adaptive_rounds : int
         Most solves of the refinement.
     adaptive_start : int
-        Default-grid intervals in each interval of the first, coarse grid.
+        Default-grid intervals (about 5 s) in each interval of the first, coarse grid.
+    adaptive_finest : int
+        The adaptive grid's nodes are chosen among those of a grid this many times finer than
+        the default (its intervals about 5 s / ``adaptive_finest``; the shooting intervals when
+        ``intervals`` is unset).
     """
 
     control: str | None = None
@@ -99,6 +103,7 @@ class GridSettings:
     adaptive_tolerance: float = 0.02
     adaptive_rounds: int = 4
     adaptive_start: int = 4
+    adaptive_finest: int = 1
 
     def __post_init__(self):
         check_fields(
@@ -111,6 +116,7 @@ class GridSettings:
                 "adaptive_tolerance": Rule("number", above=0, high=1),
                 "adaptive_rounds": Rule("integer", low=1),
                 "adaptive_start": Rule("integer", low=1),
+                "adaptive_finest": Rule("integer", low=1, high=8),
             },
         )
         if self.nodes is not None:
