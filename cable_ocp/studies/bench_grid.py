@@ -35,7 +35,7 @@ from cable_ocp.studies.scene_space import space_cases, space_scene
 OMEGA_SHARE = 1.05  # the adaptive Omega at most this times the uniform one
 PARAMETER_SHARE = 0.5  # the adaptive median of parameters at most this times the uniform one
 GRIDS = ("uniform", "adaptive")
-# Uniform grids of the chart: every k-th node of the default grid.
+# Uniform grids of the chart: every k-th node of the default grid (and one twice as fine).
 CHART_SPACINGS = (8, 4, 2, 1)
 LONG_CASE = (0, 0)  # seed and case of the chart's long whole-space scene (508 s)
 
@@ -165,12 +165,19 @@ def chart_points(scene, quiet: bool = False) -> list[dict]:
     for spacing in CHART_SPACINGS:
         nodes = np.unique(np.r_[default[::spacing], duration])
         grids.append(("uniform", f"every {spacing}", GridSettings(nodes=tuple(nodes))))
+    grids.append(("uniform", "twice as fine", GridSettings(intervals=2 * count)))
     grids.append(("adaptive", "adaptive", GridSettings(adaptive=True)))
+    finest = GridSettings(adaptive=True, adaptive_finest=2)
+    grids.append(("adaptive", "adaptive, among a grid twice as fine", finest))
     grids.append(("spline", f"{scene.winch.knots} knots", GridSettings(control="spline")))
     points = []
     for kind, label, grid in grids:
         started = time.perf_counter()
-        result = optimize(scene, grid=grid, quiet=True)
+        try:
+            result = optimize(scene, grid=grid, quiet=True)
+        except ValueError as error:  # a grid that does not fit the scene's steps
+            print(f"    {kind} {label}: not run ({error})", flush=True)
+            continue
         point = {
             "label": label,
             "kind": kind,
