@@ -9,3 +9,6 @@
 # and 63 s for (16, 16) (2000 L-BFGS iterations).
 SCENES, ROUNDS, HIDDEN = 16, 2, (8, 8)
 POLICY_FILE, C_NAME = "policy.nc", "policy"  # what they write in a results folder
+# Most L-BFGS iterations of a fit. On hill_tow's data of 3 rounds (8400 pairs, 1000 held out),
+# (8, 8): held-out error 4.7e-3 of the action's variance after 2000, 2.4e-3 after 5000.
+ITERATIONS = 5000

@@ -16,6 +16,8 @@ from dataclasses import dataclass
 import casadi as ca
 import numpy as np
 
+from cable_ocp.policy.defaults import ITERATIONS
+
 # Weight decay on the normalised problem: enough to keep the weights finite where a feature
 # never varied in the data, too little to bias the fit (the loss is about 1e-2 to 1e-4).
 DECAY = 1e-6
@@ -113,7 +115,7 @@ class Network:
         hidden: tuple[int, ...],
         rate_limit: float,
         seed: int,
-        iterations: int = 2000,
+        iterations: int = ITERATIONS,
     ) -> tuple[Network, float]:
         """Train a network on (observation, action) pairs by L-BFGS; it and its final loss.
 
