@@ -79,9 +79,15 @@ def test_result_round_trip(solved, tmp_path):
 def test_a_result_of_format_1_still_loads(solved, tmp_path):
     result, _ = solved
     write_ocp_result(result, tmp_path / "r")
-    # Format 1 kept no scene (neither the result's nor its trajectory's) and no signed tensions
-    # (its top tension is then the bond force's magnitude): the rest is as it was.
-    trajectory = replace(result.trajectory, scene_record={}, signed_tensions=np.zeros((0, 0)))
+    # Format 1 kept no scene (neither the result's nor its trajectory's), no signed tensions
+    # (its top tension is then the bond force's magnitude) and no bond residual: the rest is as
+    # it was.
+    trajectory = replace(
+        result.trajectory,
+        scene_record={},
+        signed_tensions=np.zeros((0, 0)),
+        bond_residual=float("nan"),
+    )
     expected = replace(result, scene_record={}, trajectory=trajectory)
     assert fields_equal(OcpResult.load(tmp_path / "r"), expected)
 
