@@ -237,3 +237,10 @@ def test_the_finest_grid_of_an_adaptive_grid_is_finer_only_when_asked():
     # Not adaptive, the finest grid is not asked for: the default grid stays.
     plain, _ = resolved(scene, ocp_settings(grid=GridSettings(adaptive_finest=2)))
     assert plain.intervals == 42
+
+
+def test_out_of_solves_the_refinement_ends_on_the_default_grid(default_hill):
+    grid = GridSettings(adaptive=True, adaptive_rounds=1)  # 11 intervals, far off: no more solves
+    result = co.optimize("paper_hill", quiet=True, grid=grid)
+    assert result.control == "hermite(84)" and "11 -> 42 intervals" in result.notes
+    assert result.omega == pytest.approx(default_hill.omega, rel=1e-3)

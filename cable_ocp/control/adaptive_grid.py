@@ -28,12 +28,14 @@ The default grid here is the shooting grid: about 5 s, or ``adaptive_finest`` ti
 4. Stop when Omega is within ``adaptive_tolerance`` of the prediction (and
    :data:`OMEGA_ROUND_OFF`), after removing the nodes whose merge costs fit in what is left of
    the tolerance (cheapest first, never two in a row; the caller's solve re-optimises on what
-   remains), or after ``adaptive_rounds`` solves. Otherwise split each interval whose gain is
-   above its share of the allowed excess of Omega^2 (``((1 + tol)^2 - 1)`` times the predicted
-   one, over the intervals) and above 1/:data:`EXCESS_SHARES` of its share of the excess left
-   (the largest gain at least): at every default node inside it when its gain is above
-   :data:`FULL_SPLIT` times that, at the one nearest its middle otherwise. Nodes whose merge cost
-   is under :data:`MERGE_SHARE` of that threshold (not beside a split) go. Then go to 2.
+   remains). After ``adaptive_rounds`` solves not within it, end on the whole default grid
+   (solved from the last optimum: Omega as the default grid's, at its cost). Otherwise split
+   each interval whose gain is above its share of the allowed excess of Omega^2
+   (``((1 + tol)^2 - 1)`` times the predicted one, over the intervals) and above
+   1/:data:`EXCESS_SHARES` of its share of the excess left (the largest gain at least): at every
+   default node inside it when its gain is above :data:`FULL_SPLIT` times that, at the one
+   nearest its middle otherwise. Nodes whose merge cost is under :data:`MERGE_SHARE` of that
+   threshold (not beside a split) go. Then go to 2.
 
 The last solve's optimum and its solver start :func:`cable_ocp.control.optimization.solve_verified`
 on the chosen grid (model correction and verification as on any grid). The winch bounds and the
@@ -123,7 +125,9 @@ class Refinement:
 
     def describe(self) -> str:
         """One phrase: the grids, their Omega and the prediction."""
-        grids = " -> ".join(str(r.intervals) for r in self.rounds)
+        counts = [r.intervals for r in self.rounds]
+        final = self.problem.control.intervals
+        grids = " -> ".join(map(str, counts + ([final] if final != counts[-1] else [])))
         omegas = ", ".join(f"{r.omega:.3g}" for r in self.rounds)
         predicted = [r.predicted for r in self.rounds if np.isfinite(r.predicted)]
         told = f"; the default grid's predicted {predicted[-1]:.3g} m" if predicted else ""
@@ -195,7 +199,8 @@ def refine(problem: WinchProblem, build, values, guess: np.ndarray, grid) -> Ref
                 indicators = Indicators.at(model, linearised, on_base)
                 predicted, split, merged = indicators.decide(chosen, grid.adaptive_tolerance, base)
                 if split.size and len(rounds) + 1 >= grid.adaptive_rounds:
-                    split, merged = nothing, nothing  # the last solve: no more nodes
+                    # Out of solves and not within the tolerance: the whole default grid.
+                    split, merged = np.setdiff1d(np.arange(count + 1), chosen), nothing
                 done = Round(control.intervals, outcome.omega, predicted, split.size, merged.size)
             solve_time += time.perf_counter() - started
         rounds.append(done)
@@ -203,11 +208,20 @@ def refine(problem: WinchProblem, build, values, guess: np.ndarray, grid) -> Ref
             return Refinement(trial, solver, parameters, rounds, build_time, solve_time, iterations)
         build_time += solver.build_time
         chosen = np.union1d(np.setdiff1d(chosen, merged), split)
-        if not split.size:  # within the tolerance: the merged grid is solved by the caller
-            trial = with_nodes(problem, base[chosen])
-            parameters = on_nodes(control, parameters, base[chosen])
-            solver = build(trial)
-            return Refinement(trial, solver, parameters, rounds, build_time, solve_time, iterations)
+        if not split.size or len(rounds) >= grid.adaptive_rounds:
+            # Within the tolerance (nodes merged), or out of solves (the whole default grid):
+            # the caller solves on it from this optimum.
+            return _on(problem, base, chosen, control, parameters, build, rounds, build_time,
+                       solve_time, iterations)  # fmt: skip
+
+
+def _on(problem, base, chosen, control, parameters, build, *figures) -> Refinement:
+    """The refinement that ends on the default nodes ``chosen``, unsolved, from ``parameters``.
+
+    ``figures``: the rounds, build time, solve time and iterations so far.
+    """
+    trial = with_nodes(problem, base[chosen])
+    return Refinement(trial, build(trial), on_nodes(control, parameters, base[chosen]), *figures)
 
 
 class Indicators:
