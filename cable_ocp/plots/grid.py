@@ -6,6 +6,7 @@ from pathlib import Path
 
 import matplotlib.pyplot as plt
 from matplotlib.figure import Figure
+from matplotlib.ticker import NullFormatter, ScalarFormatter
 
 from cable_ocp.plots.figure import finish_figure
 
@@ -39,6 +40,8 @@ def omega_against_parameters(points: dict, path: str | Path | None = None) -> Fi
                 ax.plot([p["parameters"] for p in chosen], [p["omega"] for p in chosen], **style)
         ax.set_xscale("log")
         ax.set_yscale("log")
+        ax.xaxis.set_major_formatter(ScalarFormatter())
+        ax.xaxis.set_minor_formatter(NullFormatter())
         ax.set_title(name, fontsize=9)
         ax.set_xlabel("winch parameters")
         ax.set_ylabel("Omega [m] (verified on the scene's model)")
