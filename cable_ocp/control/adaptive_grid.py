@@ -83,16 +83,12 @@ class Round:
     omega : float, m
         Omega on the optimisation model at its optimum.
     predicted : float, m
-        Omega on the default grid as predicted from its optimum (NaN after the last solve).
-    split, merged : int
-        Intervals split and nodes removed after it.
+        Omega on the default grid as predicted from its optimum (NaN where none was).
     """
 
     intervals: int
     omega: float
     predicted: float = float("nan")
-    split: int = 0
-    merged: int = 0
 
 
 @dataclass(frozen=True, eq=False)
@@ -201,7 +197,7 @@ def refine(problem: WinchProblem, build, values, guess: np.ndarray, grid) -> Ref
                 if split.size and len(rounds) + 1 >= grid.adaptive_rounds:
                     # Out of solves and not within the tolerance: the whole default grid.
                     split, merged = np.setdiff1d(np.arange(count + 1), chosen), nothing
-                done = Round(control.intervals, outcome.omega, predicted, split.size, merged.size)
+                done = Round(control.intervals, outcome.omega, predicted)
             solve_time += time.perf_counter() - started
         rounds.append(done)
         if not split.size and not merged.size:

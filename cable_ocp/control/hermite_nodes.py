@@ -118,15 +118,6 @@ class HermiteNodes:
         parameters = np.asarray(parameters, dtype=float)
         return b0 @ parameters, b1 @ parameters, b2 @ parameters
 
-    def node_values(self, parameters: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        """The angle (rad) and rate (rad/s) at every node, node 0's (rest) included."""
-        parameters = np.asarray(parameters, dtype=float)
-        zero = np.zeros(1)
-        return (
-            np.concatenate([zero, parameters[: self.intervals]]),
-            np.concatenate([zero, parameters[self.intervals :]]),
-        )
-
     def _located(self, t: np.ndarray, left) -> tuple[np.ndarray, np.ndarray, np.ndarray, ...]:
         """The times ``t`` (s) as given, which lie beyond the end, their intervals and place."""
         t = t_given = np.atleast_1d(np.asarray(t, dtype=float))
