@@ -155,3 +155,43 @@ def test_the_validation_runs_held_out_scenes_and_states_its_bound(family_file, l
     assert np.isfinite(figures["locked"]["median_omega"])
     assert success_bound(100, 0) == pytest.approx(0.05 ** (1 / 100))  # the all-success case
     assert success_bound(10, 10) == 0.0
+
+
+def test_the_observation_is_what_the_winch_controller_measures():
+    """Each feature against the measurement it comes from, on a tow towards a hill."""
+    from cable_ocp.control.closed_loop import loop_parts
+    from cable_ocp.control.closed_loop.drum import ON_COMMAND
+    from cable_ocp.model.layout import INPUTS
+    from cable_ocp.policy.observation import LOOK_AHEAD, observe
+    from cable_ocp.simulation.seabed import seabed_height
+
+    hill = {"height": 4.0, "x0": 30.0, "y0": 0.0, "width_x": 10.0, "width_y": 10.0}
+    overrides = {"numerics.duration": 20.0, "seabed.hills": [hill], "top.heave.amplitude": 0.3,
+                 "top.heave.period": 7.0}  # fmt: skip
+    scene = co.load_scene("small_tow", overrides)
+    parts = loop_parts(scene, co.MpcSettings())
+    measured = parts.start()
+    for k in range(3):  # three samples under the MPC
+        now = k * parts.settings.sample
+        winch = parts.command.winch(now, parts.plant.lag)
+        estimate = parts.estimator.make_step(measured, *winch)
+        solve = parts.controller.make_step(now, estimate, *winch)
+        parts.command.make_step(now, solve, estimate, ON_COMMAND)
+        measured = parts.plant.make_step(parts.command.angle, now + parts.settings.sample)
+    winch = parts.command.winch(3.0, parts.plant.lag)
+    estimate = parts.estimator.make_step(measured, *winch)
+    observation = observe(scene, parts.plant.model, measured, estimate, *winch)
+    seen = dict(zip(FEATURES, observation, strict=True))
+    x, u = measured.states[-1], measured.inputs[-1]
+    assert (seen["drum_angle"], seen["drum_rate"]) == winch
+    assert seen["heave"] == u[INPUTS.top][2] and seen["heave_rate"] == u[INPUTS.top_velocity][2]
+    assert seen["tow_speed"] == pytest.approx(np.hypot(*u[INPUTS.top_velocity][:2]))
+    assert 0 < seen["tension"] < 1e6  # the rope pulls at the top (N)
+    under = seabed_height(scene.seabed, x[0], x[1])
+    assert seen["clearance_error"] == pytest.approx(x[2] - under - estimate.reference)
+    track = u[INPUTS.top_velocity][:2] / np.hypot(*u[INPUTS.top_velocity][:2])
+    for distance in LOOK_AHEAD:
+        point = x[:2] + distance * track
+        expected = seabed_height(scene.seabed, *point) - under
+        assert seen[f"seabed_ahead_{distance:g}m"] == pytest.approx(expected)
+    assert seen["seabed_ahead_30m"] > seen["seabed_ahead_5m"] > 0  # the hill ahead rises
