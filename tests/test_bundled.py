@@ -58,6 +58,7 @@ def test_pyproject_lists_every_subpackage_and_ships_the_data():
     assert setuptools["package-data"]["cable_ocp.models"] == [
         "*.toml",
         "sweeps/*.toml",
+        "families/*.toml",
         "data/*.nc",
     ]
     for pattern in setuptools["package-data"]["cable_ocp"]:

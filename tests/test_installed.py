@@ -39,6 +39,8 @@ survey = cable_ocp.load_scene(models_dir() / "survey.toml")  # its bathymetry gr
 assert Path(survey.seabed.grid.file) == models_dir() / "data" / "survey_grid.nc", survey.seabed
 from cable_ocp.control.step_end_tangent import SOURCE  # the closed loop's C kernel ships too
 assert SOURCE.is_file() and SOURCE.is_relative_to(site), SOURCE
+from cable_ocp.policy.family import bundled_families  # and the learned policy's families
+assert sorted(bundled_families()) == ["hill_tow", "landing_hold"], bundled_families()
 print("installed ok")
 """
 
