@@ -61,6 +61,21 @@ def add_model_options(parser: argparse.ArgumentParser, elements: str, step: str)
     parser.add_argument("--step", type=positive, help=step)
 
 
+def add_engine_options(parser: argparse.ArgumentParser) -> None:
+    """Add ``--scheduler`` and ``--workers``: where the Dask engine runs.
+
+    Both are checked by :func:`cable_ocp.sweep.runner.check_engine` before any work.
+    """
+    parser.add_argument(
+        "--scheduler", help="address of a running Dask scheduler, e.g. tcp://h:8786"
+    )
+    parser.add_argument(
+        "--workers",
+        type=int,
+        help="LocalCluster workers, at most one per core (default: one per core)",
+    )
+
+
 def add_set(parser: argparse.ArgumentParser, example: str, what: str = "a scene field") -> None:
     """Add ``--set KEY=VALUE`` (repeatable): override ``what``, e.g. ``--set example``."""
     parser.add_argument("--set", action="append", default=[], metavar="KEY=VALUE",

@@ -5,7 +5,7 @@ from __future__ import annotations
 import argparse
 from pathlib import Path
 
-from cable_ocp.cli.arguments import add_command, integer
+from cable_ocp.cli.arguments import add_command, add_engine_options, integer
 from cable_ocp.cli.exits import SUCCESS
 from cable_ocp.policy.defaults import C_NAME, HIDDEN, POLICY_FILE, ROUNDS, SCENES
 
@@ -40,12 +40,7 @@ def add_learn_command(commands) -> argparse.ArgumentParser:
     )
     learn.add_argument("family", help="the family TOML file, or a bundled family's name")
     learn.add_argument("--out", type=Path, required=True, help="results folder")
-    learn.add_argument("--scheduler", help="address of a running Dask scheduler, e.g. tcp://h:8786")
-    learn.add_argument(
-        "--workers",
-        type=int,
-        help="LocalCluster workers, at most one per core (default: one per core)",
-    )
+    add_engine_options(learn)
     learn.add_argument("--scenes", type=integer(2, 100_000), default=SCENES,
                        help="training scenes drawn from the family")  # fmt: skip
     learn.add_argument("--rounds", type=integer(0, 100), default=ROUNDS,

@@ -11,7 +11,7 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
-from cable_ocp.cli.arguments import add_command
+from cable_ocp.cli.arguments import add_command, add_engine_options
 from cable_ocp.cli.exits import INTERRUPTED, SUCCESS, failed
 
 if TYPE_CHECKING:
@@ -35,12 +35,7 @@ def add_sweep_command(commands) -> argparse.ArgumentParser:
         "sweep", type=Path, help="the sweep TOML file, or the name of a bundled example"
     )
     sweep.add_argument("--out", type=Path, required=True, help="sweep folder (resumed if present)")
-    sweep.add_argument("--scheduler", help="address of a running Dask scheduler, e.g. tcp://h:8786")
-    sweep.add_argument(
-        "--workers",
-        type=int,
-        help="LocalCluster workers, at most one per core (default: one per core)",
-    )
+    add_engine_options(sweep)
     sweep.add_argument(
         "--engine-timeout",
         type=float,
