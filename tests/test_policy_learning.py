@@ -129,6 +129,8 @@ def test_cable_ocp_learn_refuses_bad_input_before_any_work(tmp_path, capsys):
     not_a_policy.write_text("not netCDF")
     assert main(["mpc", "small_tow", "--out", str(out), "--policy", str(not_a_policy)]) == 2
     assert "policy.nc: not a readable netCDF file" in capsys.readouterr().err
+    assert main(["bench", "--only", "policy"]) == 2  # which policy to time is not said
+    assert "give --policy POLICY.nc" in capsys.readouterr().err
 
 
 @pytest.mark.skipif(shutil.which("cc") is None, reason="no C compiler")

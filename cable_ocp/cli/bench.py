@@ -11,7 +11,7 @@ from cable_ocp.cli.files import results_folder
 from cable_ocp.scene.bundled import models_dir
 
 PARTS = ("rk4", "simulate", "moordyn", "payout", "elastic", "ocp", "ocp-speed", "mpc")
-NAMED_ONLY = ("robustness", "lowering", "grid")  # long: run only when --only names them
+NAMED_ONLY = ("robustness", "lowering", "grid", "policy")  # run only when --only names them
 
 
 def add_bench_command(commands) -> None:
@@ -32,7 +32,8 @@ def add_bench_command(commands) -> None:
         " and lowering (random landings: 10 cases took 5 min on 2 cores) run only when named, and "
         "grid (the adaptive control grid against the uniform one on the whole-space scenes of "
         "seeds S and S + 1 and on paper_hill; with --out, its chart of Omega against the "
-        "parameters). "
+        "parameters), and policy (a learned policy's C function per sample beside the MPC's "
+        "median solve on its family's base scene; give --policy). "
         "Nothing is written without --out.",
     )
     parser.add_argument(
@@ -40,7 +41,7 @@ def add_bench_command(commands) -> None:
     )
     parser.add_argument(
         "--only", nargs="+", choices=[*PARTS, *NAMED_ONLY],
-        help="run only these parts (robustness, lowering and grid run only when named)",
+        help="run only these parts (robustness, lowering, grid and policy run only when named)",
     )  # fmt: skip
     parser.add_argument(
         "--cases", type=integer(1, 10_000), default=None,
@@ -51,6 +52,10 @@ def add_bench_command(commands) -> None:
         "--seed", type=int, default=0,
         help="robustness, lowering, grid: seed of the random scenes (default 0; grid takes it "
         "and the next)",
+    )  # fmt: skip
+    parser.add_argument(
+        "--policy", type=Path, metavar="POLICY.nc",
+        help="policy: the learned policy to time (cable-ocp learn's policy.nc)",
     )  # fmt: skip
     parser.add_argument(
         "--hessian", action="store_true", help="IPOPT exact vs limited-memory Hessian instead"
@@ -77,6 +82,8 @@ def run_bench_command(args: argparse.Namespace) -> int:
     if args.hessian:
         bench.hessian_report(models_dir())
         return SUCCESS
+    if "policy" in (args.only or ()) and args.policy is None:
+        raise ValueError("--only policy times a learned policy: give --policy POLICY.nc")
     parts = {
         "rk4": bench.rk4_report,
         "simulate": bench_simulate.report,
@@ -95,11 +102,24 @@ def run_bench_command(args: argparse.Namespace) -> int:
         "grid": lambda _, quick: _bench_grid(
             args.cases or (4 if quick else 50), args.seed, args.out
         ),
+        "policy": lambda _, quick: _bench_policy(args.policy),
     }
     for name in args.only or PARTS:
         parts[name](models_dir(), quick=args.quick)
         print()
     return SUCCESS
+
+
+def _bench_policy(path: Path) -> None:
+    """The learned policy's benchmark: its C function beside the MPC on its family's base.
+
+    The family is found by the name the policy keeps (a bundled family's, or a file's there).
+    """
+    from cable_ocp.policy.bench import bench_policy
+    from cable_ocp.policy.policy import load_policy
+
+    policy = load_policy(path)
+    bench_policy(policy, policy.family["name"])
 
 
 def _bench_grid(cases: int, seed: int, out: Path | None = None) -> None:
