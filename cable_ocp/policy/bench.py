@@ -1,9 +1,9 @@
 """The policy's speed: its C function's time per sample beside the MPC's median solve.
 
-:func:`bench_policy` compiles the policy's C export (:meth:`.policy.Policy.to_c`) with a timing
-loop (``cc -O2``), evaluates it on the policy's own training observations, and runs the closed
-loop (the MPC) on the family's base scene in the same process, so that the ratio is of one run
-on one machine.
+:func:`bench_policy` compiles the policy's C export
+(:meth:`cable_ocp.policy.policy.Policy.to_c`) with a timing loop (``cc -O2``), evaluates it on
+the policy's own training observations, and runs the closed loop (the MPC) on the family's base
+scene in the same process, so that the ratio is of one run on one machine.
 """
 
 from __future__ import annotations

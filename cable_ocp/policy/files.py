@@ -27,7 +27,7 @@ RATE = cf_units("rad/s")
 
 
 def to_dataset(policy) -> xr.Dataset:
-    """A :class:`~.policy.Policy` as a Dataset (module docstring)."""
+    """A :class:`~cable_ocp.policy.policy.Policy` as a Dataset (module docstring)."""
     net = policy.network
     variables: dict[str, xr.DataArray] = {}
     for k, (name, unit) in enumerate(zip(FEATURES, UNITS, strict=True)):

@@ -135,7 +135,7 @@ class Policy:
 
 
 def load_policy(path: str | Path, family=None) -> Policy:
-    """Read a policy written by :meth:`Policy.save`.
+    """Read a policy written by :meth:`cable_ocp.policy.policy.Policy.save`.
 
     Parameters
     ----------

@@ -3,9 +3,10 @@
 On ``n`` scenes drawn from the family with a seed that training did not use
 (:func:`held_out_seed`), each run on the scene's full model (the plant) on the Dask engine:
 
-- the MPC alone (:func:`cable_ocp.mpc`), the policy alone (:meth:`.policy.Policy.alone`), the
-  policy with its safety net, and the winch locked (:func:`~cable_ocp.control.closed_loop.
-  references.reference_runs`), each with its Omega (eq. 39);
+- the MPC alone (:func:`cable_ocp.mpc`), the policy alone
+  (:meth:`cable_ocp.policy.policy.Policy.alone`), the policy with its safety net, and the winch
+  locked (:func:`~cable_ocp.control.closed_loop.references.reference_runs`), each with its Omega
+  (eq. 39);
 - a run **succeeds** when the loop does (the plant ran to the end, its physics and the minimum
   clearance held, no solve failed) and its Omega is within :data:`OMEGA_FACTOR` times the MPC's
   on the same scene plus :data:`OMEGA_SLACK` (a policy that keeps the plant alive but lets the
