@@ -138,7 +138,9 @@ def engine(scheduler: str | None, workers: int | None, processes: bool = True):
             n_workers=workers or usable_cores(),
             threads_per_worker=1,
             processes=processes,
-            dashboard_address=None,
+            # Any free port: None meant Dask's 8787, and a second engine on this machine (two
+            # sweeps, a sweep beside a learning) printed Dask's "Port 8787 is already in use".
+            dashboard_address=":0",
             silence_logs=logging.ERROR,
         )
     return Client(cluster, set_as_default=False), cluster
