@@ -17,7 +17,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from cable_ocp.drive.controls import hermite_polynomials
+from cable_ocp.drive.controls import hermite_rows
 from cable_ocp.drive.winch import coming_to_rest
 
 # Share of the shortest interval within which a time counts as on a node.
@@ -93,19 +93,7 @@ class HermiteNodes:
         there (node 0 to the first); beyond the duration, the extension that comes to rest.
         """
         t_given, beyond, k, s = self._located(t, left)
-        width = self.widths[k]
-        h00, h10, h01, h11 = hermite_polynomials(s)
-        scale = np.stack([np.ones_like(width), 1.0 / width, 1.0 / width**2])
-        out = np.zeros((3, s.size, self.size))
-        rows = np.arange(s.size)
-        rates = self.intervals
-        for node, (value_basis, rate_basis) in ((k, (h00, h10)), (k + 1, (h01, h11))):
-            valid = node >= 1  # node 0 is held at rest
-            column = node[valid] - 1
-            for d in range(3):
-                factor = scale[d][valid]
-                out[d, rows[valid], column] += factor * value_basis[d][valid]
-                out[d, rows[valid], rates + column] += factor * width[valid] * rate_basis[d][valid]
+        out = hermite_rows(k, s, self.widths[k], 1, self.intervals, self.size)  # node 0 at rest
         if np.any(beyond):
             out[:, beyond] = self._extension(out[:, beyond], t_given[beyond] - self.duration)
         return out[0], out[1], out[2]

@@ -43,6 +43,41 @@ def hermite_polynomials(s: np.ndarray) -> tuple[np.ndarray, ...]:
     return rows[0], rows[1], rows[2], rows[3]
 
 
+def hermite_rows(
+    k: np.ndarray, s: np.ndarray, width, first: int, rates: int, size: int
+) -> np.ndarray:
+    """Basis rows (3, len(s), size) of a piecewise cubic Hermite angle: value, rate, acceleration.
+
+    Parameters
+    ----------
+    k : int array
+        Each time's interval (between nodes ``k`` and ``k + 1``).
+    s : array
+        Its place in that interval, 0 to 1.
+    width : float or array like ``s``, s
+        The intervals' widths (one, or each time's).
+    first : int
+        The first node with parameters (1 where node 0 is held at rest).
+    rates : int
+        Index of the first node's rate among the parameters (the nodes' angles come first).
+    size : int
+        Number of parameters.
+    """
+    width = np.broadcast_to(np.asarray(width, dtype=float), s.shape)
+    h00, h10, h01, h11 = hermite_polynomials(s)
+    scale = np.stack([np.ones_like(width), 1.0 / width, 1.0 / width**2])
+    out = np.zeros((3, s.size, size))
+    rows = np.arange(s.size)
+    for node, (value_basis, rate_basis) in ((k, (h00, h10)), (k + 1, (h01, h11))):
+        valid = node >= first
+        column = node[valid] - first
+        for d in range(3):
+            factor = scale[d][valid]
+            out[d, rows[valid], column] += factor * value_basis[d][valid]
+            out[d, rows[valid], rates + column] += factor * width[valid] * rate_basis[d][valid]
+    return out
+
+
 @dataclass(frozen=True)
 class KnotSpline:
     """The paper's cubic spline through ``knots`` values (rad) on ``[0, duration]`` (s)."""
@@ -120,19 +155,9 @@ class HermiteIntervals:
         ends there (node 0 to the first). Beyond ``duration``: the C2 extension (class docstring).
         """
         t_given, beyond, k, s = self._located(t, left)
-        width = self.duration / self.intervals
-        h00, h10, h01, h11 = hermite_polynomials(s)
-        scale = np.array([1.0, 1.0 / width, 1.0 / width**2])[:, None]
-        out = np.zeros((3, s.size, self.size))
-        rows = np.arange(s.size)
         first = 0 if self.free_start else 1  # node 0 is fixed at phi = phi' = 0 unless free
         rates = self.intervals + self.free_start
-        for node, (value_basis, rate_basis) in ((k, (h00, h10)), (k + 1, (h01, h11))):
-            valid = node >= first
-            column = node[valid] - first
-            for d in range(3):
-                out[d, rows[valid], column] += scale[d] * value_basis[d][valid]
-                out[d, rows[valid], rates + column] += scale[d] * width * rate_basis[d][valid]
+        out = hermite_rows(k, s, self.duration / self.intervals, first, rates, self.size)
         if np.any(beyond):
             out[:, beyond] = self._extension(out[:, beyond], (t_given[beyond] - self.duration))
         return out[0], out[1], out[2]
