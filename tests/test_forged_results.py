@@ -191,9 +191,7 @@ def test_a_forged_omega_in_an_optimum_or_a_closed_loop_is_refused(tmp_path):
     from cable_ocp.control.optimization import OcpResult
     from cable_ocp.result_files import netcdf
 
-    scene = co.load_scene("hanging").updated({"numerics.duration": 2.0})
-    run = co.simulate(scene)
-    optimum = made_optimum(run)
+    optimum, run = _hanging_made_optimum()
     data = optimum.to_xarray()
     data["omega"] = data["omega"] + 0.5
     path = netcdf.write(data, tmp_path / "forged" / "result.nc")
@@ -206,12 +204,15 @@ def test_a_forged_omega_in_an_optimum_or_a_closed_loop_is_refused(tmp_path):
         OcpResult.from_xarray(inner)
 
 
+def _hanging_made_optimum():
+    """A made-up optimum around a 2 s hanging run (default elements, no solve), and the run."""
+    run = co.simulate(co.load_scene("hanging").updated({"numerics.duration": 2.0}))
+    return made_optimum(run), run
+
+
 def _hanging_optimum(tmp_path):
     """A genuine result.nc of a 2 s hanging run on the default elements (no solve)."""
-
-    scene = co.load_scene("hanging").updated({"numerics.duration": 2.0})
-    run = co.simulate(scene)
-    optimum = made_optimum(run)
+    optimum, run = _hanging_made_optimum()
     return optimum.save(tmp_path / "optimum"), run
 
 
