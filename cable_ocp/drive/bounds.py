@@ -176,15 +176,20 @@ class LinearBounds:
         parameters: np.ndarray,
         lower: np.ndarray | None = None,
         upper: np.ndarray | None = None,
+        rows: np.ndarray | None = None,
     ) -> float:
         """Largest violation of the constraints by ``parameters`` (0 when they hold).
 
-        ``lower``, ``upper`` replace the limits (a closed loop's narrowed range).
+        ``lower``, ``upper`` replace the limits (a closed loop's narrowed range); ``rows`` (a
+        boolean mask) keeps only some constraints (those of a plan's first sample).
         """
         lower = self.lower if lower is None else lower
         upper = self.upper if upper is None else upper
-        values = self.matrix @ parameters
-        return float(max(np.max(lower - values), np.max(values - upper), 0.0))
+        matrix = self.matrix
+        if rows is not None:
+            matrix, lower, upper = matrix[rows], lower[rows], upper[rows]
+        values = matrix @ parameters
+        return float(max(np.max(lower - values, initial=0.0), np.max(values - upper, initial=0.0)))
 
     def scale_into(self, parameters: np.ndarray) -> np.ndarray:
         """``s * parameters`` with the largest ``s`` in [0, 1] that satisfies the constraints.

@@ -103,14 +103,9 @@ class PolicyController:
         control = self.parts.controller.control
         plan = ramp(control, angle, rate, rate_command, self.sample)
         if not reason and self.bounds:
-            problem = self.parts.controller.problem
-            lower, upper = problem.bounds.narrowed(estimate.margin, self.sample)
-            rows = problem.bounds.starts < self.sample - 1e-9
-            values = problem.bounds.matrix[rows] @ plan
-            excess = max(
-                float(np.max(lower[rows] - values, initial=0.0)),
-                float(np.max(values - upper[rows], initial=0.0)),
-            )
+            bounds = self.parts.controller.problem.bounds
+            lower, upper = bounds.narrowed(estimate.margin, self.sample)
+            excess = bounds.excess(plan, lower, upper, rows=bounds.starts < self.sample - 1e-9)
             if excess > BOUND_TOLERANCE:
                 reason = f"its plan leaves the winch bounds by {excess:.3g} over the next sample"
         return plan, reason
