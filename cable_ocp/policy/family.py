@@ -20,14 +20,13 @@ on it. :meth:`Family.draw` draws ``n`` scenes by a seeded Latin hypercube; its
 
 from __future__ import annotations
 
-import hashlib
 import json
 from dataclasses import dataclass
 from pathlib import Path
 
 from cable_ocp.scene.bundled import models_dir
 from cable_ocp.scene.schema import Scene, SceneError, load_scene
-from cable_ocp.sweep.spec import draw
+from cable_ocp.sweep.spec import draw, record_hash
 
 try:
     import tomllib
@@ -70,9 +69,7 @@ class Family:
     @property
     def fingerprint(self) -> str:
         """Hash of the base scene, the ranges and the hold (16 hex digits)."""
-        record = {"base": self.base.to_dict(), "ranges": self.ranges, "hold": self.hold}
-        text = json.dumps(record, sort_keys=True, default=str)
-        return hashlib.sha256(text.encode()).hexdigest()[:16]
+        return record_hash({"base": self.base.to_dict(), "ranges": self.ranges, "hold": self.hold})
 
     def record(self) -> dict:
         """What a policy keeps of its family: name, description, fingerprint, ranges, file."""

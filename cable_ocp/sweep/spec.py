@@ -394,6 +394,11 @@ def fingerprint(scene: Scene, task: str, method: str, settings: Any) -> str:
         "method": method if task == "optimize" else None,
         "settings": asdict(settings) if settings is not None else None,
     }
+    return record_hash(record)
+
+
+def record_hash(record: dict) -> str:
+    """16 hex digits of SHA-256 over ``record`` as sorted JSON (a sweep case's, a family's)."""
     text = json.dumps(record, sort_keys=True, default=str)
     return hashlib.sha256(text.encode()).hexdigest()[:16]
 
