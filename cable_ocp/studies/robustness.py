@@ -460,16 +460,15 @@ def _case_text(
     k: int,
     row: dict,
     scene: str,
-    waves: list[str],
     figures: Callable[[dict], str],
     real_time_factor: bool,
 ) -> str:
-    """A case's line: its scene and waves, then what became of it.
+    """A case's line: its ``scene`` and its waves, then what became of it.
 
     That is RAISED, or optimize's verdict, its ``figures`` and its status when it failed, then
     mpc's run if it had one (with its real-time factor when ``real_time_factor``).
     """
-    text = f"case {k:>3}: {scene}, {' + '.join(waves) or 'no heave'}: "
+    text = f"case {k:>3}: {scene}, {' + '.join(_waves(row['overrides'])) or 'no heave'}: "
     if row["raised"]:
         return text + f"RAISED {row['raised']}"
     text += ("ok" if row["success"] else "FAILED") + figures(row)
@@ -497,15 +496,21 @@ def _summary_opening(f: dict, cases: str) -> list[str]:
     ]
 
 
+def _waves(overrides: dict) -> list[str]:
+    """A case's regular heave and sea state, as its report line names them."""
+    heave = overrides.get("top.heave", {})
+    waves = []
+    if "amplitude" in heave:
+        waves.append(f"heave {heave['amplitude']:.2f} m/{heave['period']:.1f} s")
+    if "sea_state" in heave:
+        sea = heave["sea_state"]
+        waves.append(f"sea Hs {sea['significant_height']:.2f} m/Tp {sea['peak_period']:.1f} s")
+    return waves
+
+
 def _space_line(k: int, row: dict) -> str:
     o = row["overrides"]
     payload = o.get("end.payload", {}).get("mass", 0.0)
-    heave = o.get("top.heave", {})
-    waves = []
-    if "amplitude" in heave:
-        waves.append(f"heave {heave['amplitude']:.2f} m")
-    if "sea_state" in heave:
-        waves.append(f"Hs {heave['sea_state']['significant_height']:.1f} m")
     scene = (
         f"d {1e3 * o['cable.diameter']:.0f} mm, {o['cable.density']:.0f} kg/m3, "
         f"L {o['cable.length']:.0f} m, payload {payload / 1e3:.1f} t, n {o['model.elements']}, "
@@ -514,7 +519,7 @@ def _space_line(k: int, row: dict) -> str:
         f"{', grid' if 'grid' in o[PLACED] else ''}"
         f"{', rate limits' if 'winch.rate_max' in o else ''}"
     )
-    return _case_text(k, row, scene, waves, _space_figures, real_time_factor=True)
+    return _case_text(k, row, scene, _space_figures, real_time_factor=True)
 
 
 def _space_figures(row: dict) -> str:
@@ -548,18 +553,11 @@ def _space_summary_text(f: dict, seed: int) -> str:
 
 def _case_line(k: int, row: dict) -> str:
     o = row["overrides"]
-    heave = o.get("top.heave", {})
-    waves = []
-    if "amplitude" in heave:
-        waves.append(f"heave {heave['amplitude']:.2f} m/{heave['period']:.1f} s")
-    if "sea_state" in heave:
-        sea = heave["sea_state"]
-        waves.append(f"sea Hs {sea['significant_height']:.2f} m/Tp {sea['peak_period']:.1f} s")
     scene = (
         f"n = {o['model.elements']:>2}, U = {o['top.tow.surge_speed']:.2f}, "
         f"{len(o['seabed.hills'])} hill(s){', grid' if SITE in o else ''}"
     )
-    return _case_text(k, row, scene, waves, _case_figures, real_time_factor=False)
+    return _case_text(k, row, scene, _case_figures, real_time_factor=False)
 
 
 def _case_figures(row: dict) -> str:
