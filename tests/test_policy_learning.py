@@ -61,6 +61,8 @@ def test_the_same_seed_learns_the_same_policy_bit_for_bit(family_file, learned):
     assert again.digest == policy.digest
     np.testing.assert_array_equal(again.observations, policy.observations)
     assert set(np.unique(policy.rounds)) == {0, 1}  # the MPC's runs and one DAgger round
+    for round_ in policy.validation["training"]["rounds"]:  # 3 scenes of 20 samples: every
+        assert round_["pairs"] + round_["samples_skipped"] == 60  # sample a pair or counted
     saved = co.load_policy(out / "policy.nc", family=family_file)
     assert saved.digest == policy.digest
     assert (out / "policy.c").is_file() and (out / "policy.h").is_file()

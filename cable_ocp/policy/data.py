@@ -5,9 +5,13 @@ Each scene runs the closed loop (:func:`cable_ocp.mpc`) with a :class:`Recorder`
 next sample is the label, :func:`.action.label`) and the observation is recorded beside it.
 In round 0 the MPC's plan drives the plant (its own runs); in a DAgger round (Ross et al. 2011)
 the current network's action drives it, so that the pairs are the states the policy itself
-visits, labelled by the MPC's solve there. :func:`generate` runs the scenes on the sweep's Dask
-engine (:func:`cable_ocp.sweep.runner.engine`: a LocalCluster by default, a scheduler's address
-for a cluster) and returns the pairs in the scenes' order, whatever order they finished in.
+visits, labelled by the MPC's solve there. A sample whose label cannot be trusted (the MPC's
+solve failed there, or the observation or the label is not finite: a seabed point off the
+chart) gives no pair; it is counted and said why (:attr:`Recorder.skipped`, the records'
+``skipped``), never a crash of the round nor a pair that poisons the fit. :func:`generate` runs
+the scenes on the sweep's Dask engine (:func:`cable_ocp.sweep.runner.engine`: a LocalCluster by
+default, a scheduler's address for a cluster) and returns the pairs in the scenes' order,
+whatever order they finished in.
 """
 
 from __future__ import annotations
@@ -22,6 +26,8 @@ from cable_ocp.control.closed_loop.loop import mpc
 from cable_ocp.policy.action import label, ramp
 from cable_ocp.policy.observation import FEATURES, observe
 from cable_ocp.policy.safety import ACTED
+
+SKIPPED_SHOWN = 3  # reasons kept per scene for its samples without a pair
 
 
 @dataclass
@@ -68,6 +74,7 @@ class Recorder:
         self.network = network
         self.observations: list[np.ndarray] = []
         self.actions: list[float] = []
+        self.skipped: list[str] = []  # why each sample without a pair gave none
 
     def controller(self, parts) -> Recorder:
         """The loop's step (this object, bound to the loop's parts)."""
@@ -81,9 +88,7 @@ class Recorder:
                               rate)  # fmt: skip
         solve = parts.controller.make_step(now, estimate, angle, rate)
         sample = parts.settings.sample
-        if solve.success:
-            self.observations.append(observation)
-            self.actions.append(label(parts.controller.control, solve.parameters, sample))
+        self.record(now, observation, solve, sample)
         if self.network is None:
             return solve
         started = time.perf_counter()
@@ -92,12 +97,28 @@ class Recorder:
         return replace(solve, parameters=plan, status=ACTED, success=True, by_policy=True,
                        solve_time=time.perf_counter() - started)  # fmt: skip
 
+    def record(self, now: float, observation: np.ndarray, solve: Solve, sample: float) -> None:
+        """Keep the sample's pair, or say why it gives none (module docstring)."""
+        if not solve.success:
+            self.skipped.append(f"t = {now:g} s: the MPC's solve failed ({solve.status})")
+            return
+        action = label(self.parts.controller.control, solve.parameters, sample)
+        bad = [name for name, value in zip(FEATURES, observation, strict=True)
+               if not np.isfinite(value)]  # fmt: skip
+        if bad or not np.isfinite(action):
+            what = f"the observation's {', '.join(bad)}" if bad else "the label"
+            self.skipped.append(f"t = {now:g} s: {what} not finite")
+            return
+        self.observations.append(observation)
+        self.actions.append(action)
+
 
 def run_scene(scene, network=None, round_: int = 0) -> dict:
     """One scene's closed loop with a :class:`Recorder`: its pairs and how the run went.
 
     The task that :func:`generate` sends to a worker; a scene whose run raises gives no pairs
-    and says why.
+    and says why. ``skipped`` counts its samples that gave no pair, ``skipped_why`` says why
+    (the first :data:`SKIPPED_SHOWN`).
     """
     recorder = Recorder(network)
     try:
@@ -113,6 +134,8 @@ def run_scene(scene, network=None, round_: int = 0) -> dict:
         "success": success,
         "omega": omega,
         "status": status,
+        "skipped": len(recorder.skipped),
+        "skipped_why": recorder.skipped[:SKIPPED_SHOWN],
     }
 
 
@@ -147,5 +170,6 @@ def generate(
     pairs = Pairs.empty()
     for record in records:
         pairs = pairs + Pairs(record["observations"], record["actions"], record["rounds"])
-    summaries = [{key: record[key] for key in ("success", "omega", "status")} for record in records]
+    kept = ("success", "omega", "status", "skipped", "skipped_why")
+    summaries = [{key: record[key] for key in kept} for record in records]
     return pairs, summaries

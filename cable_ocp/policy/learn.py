@@ -18,6 +18,7 @@ from pathlib import Path
 
 import numpy as np
 
+from cable_ocp.policy.data import SKIPPED_SHOWN as SHOWN
 from cable_ocp.policy.data import generate
 from cable_ocp.policy.defaults import C_NAME, HIDDEN, POLICY_FILE, ROUNDS, SCENES
 from cable_ocp.policy.family import Family, load_family
@@ -103,6 +104,10 @@ def learn_policy(
             figures["rounds"].append({
                 "round": round_,
                 "pairs": int(new.actions.size),
+                # Samples that gave no pair (the MPC's solve failed there, a non-finite
+                # observation or label: data.Recorder), and why, on the first scenes they hit.
+                "samples_skipped": int(sum(r["skipped"] for r in records)),
+                "skipped_why": [why for r in records for why in r["skipped_why"]][:SHOWN],
                 "runs_succeeded": int(sum(bool(r["success"]) for r in records)),
                 "median_omega": float(np.nanmedian([r["omega"] for r in records])),
                 "fit_error": error,
