@@ -1,4 +1,4 @@
-"""The adaptive control grid (issue 43): Hermite nodes at any times, chosen by refinement."""
+"""The adaptive control grid (issue 43): Hermite nodes at any times, chosen by coarsening."""
 
 from __future__ import annotations
 
@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 
 import cable_ocp as co
-from cable_ocp.control.adaptive_grid import Indicators, on_nodes
+from cable_ocp.control.adaptive_grid import Quadratic, on_nodes
 from cable_ocp.control.hermite_nodes import HermiteNodes
 from cable_ocp.control.settings import GridSettings
 from cable_ocp.control.solvers import ocp_settings_from_record
@@ -54,39 +54,44 @@ def test_hermite_nodes_match_equal_intervals_and_stay_c1_on_unequal_ones():
     np.testing.assert_allclose(moved, unequal.evaluate(p, t.clip(0, 60)), atol=1e-9)
 
 
-def _fitted_indicators(target, times, chosen):
-    """The indicators of a least-squares fit of ``target`` by a Hermite angle on ``chosen``."""
+def _fitted_model(target, times):
+    """The Gauss-Newton model of a least-squares fit of ``target`` by the default Hermite grid.
+
+    The model is centred at the fit, as the coarsening's is at the default grid's optimum.
+    """
     base = HermiteIntervals(float(times[-1]), times.size - 1)
     samples = np.linspace(0.0, times[-1], 2001)
     basis = base.basis(samples)[0]
-    coarse = HermiteNodes(times[chosen])
-    fit, *_ = np.linalg.lstsq(coarse.basis(samples)[0], target(samples), rcond=None)
-    profile = on_nodes(coarse, fit, times)
     weight = np.sqrt(1.0 / samples.size)
-    residual = weight * (basis @ profile - target(samples))
-    return Indicators(residual, weight * basis, profile)
+    fit, *_ = np.linalg.lstsq(basis, target(samples), rcond=None)
+    return Quadratic(weight * (basis @ fit - target(samples)), weight * basis, fit)
 
 
-def test_refinement_splits_where_the_profile_bends_and_merges_where_it_is_straight():
+def test_coarsening_keeps_the_nodes_where_the_profile_bends_and_drops_them_where_it_is_straight():
     times = np.arange(0.0, 201.0, 5.0)  # the default grid: 40 intervals
 
-    def smooth(t):  # a pay-out from rest that one cubic holds
-        return 1e-4 * t**2
+    def target(t):  # a pay-out from rest that one cubic holds, with a sharp bend at 150 s
+        return 1e-4 * t**2 + 3.0 * np.exp(-(((t - 150.0) / 6.0) ** 2))
 
-    def target(t):  # the same, with a sharp bend over a hill at 150 s
-        return smooth(t) + 3.0 * np.exp(-(((t - 150.0) / 6.0) ** 2))
-
-    chosen = np.arange(0, 41, 4)
-    indicators = _fitted_indicators(target, times, chosen)
-    predicted, split, merged = indicators.decide(chosen, 0.02, times)
-    assert predicted < 0.1 * np.sqrt(indicators.objective)
-    assert split.size and np.all(np.abs(times[split] - 150.0) <= 25.0)
-    assert merged.size and np.all(times[merged] <= 100.0)  # the smooth stretch
-    # On the smooth pay-out alone the coarse grid is within the tolerance: nothing is split,
-    # and its interior nodes go (none two in a row).
-    straight = _fitted_indicators(smooth, times, chosen)
-    predicted, split, merged = straight.decide(chosen, 0.02, times)
-    assert split.size == 0 and merged.size >= 4 and np.all(np.diff(merged) > 4)
+    model = _fitted_model(target, times)
+    allowed = (1.02**2) * model.objective
+    kept, objective = model.coarsest(times, allowed)
+    assert model.objective <= objective <= allowed
+    assert kept[0] == 0 and kept[-1] == 40 and kept.size < 25
+    bend = np.abs(times[kept] - 150.0) <= 25.0
+    assert np.sum(bend) >= 8  # the bend keeps most of its 11 nodes
+    assert np.sum(times[kept] <= 100.0) <= 4  # the straight half keeps few of its 21
+    # The model's Omega^2 on the nodes kept is the exact quadratic of the interpolated profile.
+    coarse = HermiteNodes(times[kept])
+    moved = on_nodes(
+        coarse, on_nodes(HermiteIntervals(200.0, 40), model.profile, times[kept]), times
+    )
+    change = moved - model.profile
+    exact = model.objective + 2 * model.gradient @ change + change @ model.hessian @ change
+    assert objective == pytest.approx(exact, rel=1e-9)
+    # With no room at all, only the nodes that cost nothing go (none here: every node bends).
+    tight, _ = model.coarsest(times, model.objective * (1 - 1e-9))
+    assert tight.size == 41
 
 
 def test_adaptive_optimum_keeps_its_bounds_on_the_verified_run(bounded):
@@ -126,7 +131,7 @@ def test_node_times_are_saved_loaded_and_drawn(bounded, tmp_path):
     ("grid", "named"),
     [
         ({"adaptive_tolerance": 0.0}, "GridSettings.adaptive_tolerance"),
-        ({"adaptive_rounds": 0}, "GridSettings.adaptive_rounds"),
+        ({"adaptive_finest": 9}, "GridSettings.adaptive_finest"),
         ({"adaptive": "yes"}, "GridSettings.adaptive"),
         ({"nodes": (0.0, 20.0, 10.0)}, "GridSettings.nodes"),
         ({"nodes": (0.0,)}, "GridSettings.nodes"),
@@ -239,8 +244,12 @@ def test_the_finest_grid_of_an_adaptive_grid_is_finer_only_when_asked():
     assert plain.intervals == 42
 
 
-def test_out_of_solves_the_refinement_ends_on_the_default_grid(default_hill):
-    grid = GridSettings(adaptive=True, adaptive_rounds=1)  # 11 intervals, far off: no more solves
-    result = co.optimize("paper_hill", quiet=True, grid=grid)
-    assert result.control == "hermite(84)" and "11 -> 42 intervals" in result.notes
-    assert result.omega == pytest.approx(default_hill.omega, rel=1e-3)
+def test_the_adaptive_grid_costs_no_solve_beyond_the_default_ones_on_paper_hill(default_hill):
+    result = co.optimize("paper_hill", quiet=True, grid=GridSettings(adaptive=True))
+    assert result.success, result.status
+    assert result.parameters.size < 84 and "of the default grid's 42 intervals" in result.notes
+    assert result.omega <= 1.02 * default_hill.omega
+    # The first solve is the default grid's (the same verified Omega); the model-correction
+    # solves after it run on the nodes kept, no more of them than the default grid's.
+    assert result.refinements[0] == pytest.approx(default_hill.refinements[0], rel=1e-12)
+    assert len(result.refinements) <= len(default_hill.refinements)

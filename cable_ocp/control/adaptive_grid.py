@@ -1,44 +1,31 @@
 """An adaptive control grid: Hermite nodes where the winch needs them (issue 43, paper §6).
 
 ``GridSettings(adaptive=True)`` chooses the open loop's Hermite nodes among the default grid's
-(:func:`cable_ocp.control.defaults.control_grid`, about 5 s apart; every one of them on an RK4
-step end of every model, so that any subset is too) by refinement, as hp-adaptive direct
-transcription does (GPOPS-II's error per mesh interval, Betts' equidistribution), with the error
-measured in the objective itself:
+(:func:`cable_ocp.control.defaults.control_grid`, about 5 s apart, or ``adaptive_finest`` times
+finer; every one of them on an RK4 step end of every model, so that any subset is too) by
+coarsening, with the error measured in the objective itself (Betts' equidistribution, run from
+the fine end):
 
-The default grid here is the shooting grid: about 5 s, or ``adaptive_finest`` times finer.
+1. The model correction's first solve and its full-model run are the uniform default's (the
+   default grid, from the locked first guess): they give the reduced model's bias ``b``.
+2. At that optimum the corrected clearance error is linearised in the default grid's parameters
+   (the Gauss-Newton solver's last Jacobian; another solver's takes one sensitivity sweep):
+   ``r = W (e + b)``, ``A = W J``, Omega^2 ~ ``|r + A d|^2``. Its QP step within the winch bounds
+   (and the minimum clearance) is the corrected optimum on the default grid, predicted: ``p*``
+   and Omega*.
+3. Nodes go, cheapest first, while the model's Omega^2 of the profile that interpolates ``p*`` on
+   the nodes left stays within ``((1 + adaptive_tolerance) Omega* + OMEGA_ROUND_OFF)^2``. A
+   node's cost is the exact change of that quadratic when one cubic spans its two neighbours
+   (through their angles and rates); a pass removes no two neighbours, and passes repeat until
+   no node fits in what is left.
+4. The model-correction solves that remain run on the nodes left, from ``p*`` on them (no solve
+   of the coarse grid is re-solved on a finer one), and the verification is the usual one.
 
-1. Start coarse: every ``adaptive_start * adaptive_finest``-th node of the default grid (20 s
-   apart by default).
-2. Solve on the reduced model (the solver of the settings), warm-started from the last profile
-   (its angle and rate at the new nodes: exact where intervals were split).
-3. Linearise the clearance error at that optimum in the default grid's parameters (one
-   sensitivity sweep of the default grid's Gauss-Newton solver): residual ``r = W e`` and
-   ``A = W J`` with Omega^2 = ``|r|^2``. The Gauss-Newton decrease of Omega^2 from freeing a set
-   ``S`` of the default grid's parameters is ``g_S^T (A_S^T A_S)^-1 g_S``, ``g = A^T r``:
-
-   - the prediction: Omega on the default grid, from the decrease of its QP within the winch
-     bounds (and the minimum clearance), so that a winch that rides its bounds is not promised
-     what no grid can give;
-   - an interval's *split gain*: the decrease from freeing the default nodes inside it, those in
-     an active bound row left out (no gain where the winch rides a bound);
-   - a node's *merge cost*: the rise ``d^T A^T A d + 2 g^T d`` when one cubic spans its two
-     neighbours (``d`` the change of the default grid's parameters), without re-solving.
-
-4. Stop when Omega is within ``adaptive_tolerance`` of the prediction (and
-   :data:`OMEGA_ROUND_OFF`), after removing the nodes whose merge costs fit in what is left of
-   the tolerance (cheapest first, never two in a row; the caller's solve re-optimises on what
-   remains). After ``adaptive_rounds`` solves not within it, end on the whole default grid
-   (solved from the last optimum: Omega as the default grid's, at its cost). Otherwise split
-   each interval whose gain is above its share of the allowed excess of Omega^2
-   (``((1 + tol)^2 - 1)`` times the predicted one, over the intervals) and above
-   1/:data:`EXCESS_SHARES` of its share of the excess left (the largest gain at least): at every
-   default node inside it when its gain is above :data:`FULL_SPLIT` times that, at the one
-   nearest its middle otherwise. Nodes whose merge cost is under :data:`MERGE_SHARE` of that
-   threshold (not beside a split) go. Then go to 2.
-
-The last solve's optimum and its solver start :func:`cable_ocp.control.optimization.solve_verified`
-on the chosen grid (model correction and verification as on any grid). The winch bounds and the
+Why from the fine end: a solve's cost hardly depends on its parameters (the sensitivity sweep's
+cost is the model's Jacobians at every RK4 stage; 2-3 iterations of a 23-interval grid took as
+long as of a 90-interval one on whole-space seed 1 case 2), so refinement rounds from a coarse
+grid each cost about a default solve, and the coarse grid's model error (before any correction)
+misled them. Coarsening costs no solve beyond the uniform default's. The winch bounds and the
 minimum clearance are rows at every RK4 point of every grid, so no constraint is lost between
 coarse nodes (the verification checks the full model at its own steps). CONVENTIONS.md §5 states
 the rule and its measurements.
@@ -46,88 +33,19 @@ the rule and its measurements.
 
 from __future__ import annotations
 
-import time
 from dataclasses import dataclass, replace
 
 import numpy as np
 
-from cable_ocp.control.gauss_newton import DAMPING, GaussNewton, GaussNewtonSettings
+from cable_ocp.control.gauss_newton import GaussNewton, GaussNewtonSettings
 from cable_ocp.control.hermite_nodes import HermiteNodes
 from cable_ocp.control.problem import WinchProblem
 from cable_ocp.drive.bounds import LinearBounds
 from cable_ocp.drive.controls import hermite_polynomials
 
-# A node is removed when its merge cost is under this share of an interval's share of the
-# allowed excess of Omega^2.
-MERGE_SHARE = 0.1
 # m: an Omega within this of the prediction is within the tolerance, however small both are
-# (a straight profile that the coarse grid fits to round-off).
+# (a straight profile that a coarse grid fits to round-off).
 OMEGA_ROUND_OFF = 1e-7
-# A winch bound row within this of its limit (rad, rad/s, rad/s^2, m) is active.
-ACTIVE = 1e-3
-# A grid far off splits the intervals that carry more than 1/EXCESS_SHARES of their share of
-# the excess of Omega^2 over the prediction.
-EXCESS_SHARES = 8.0
-# An interval whose split gain is above this many shares takes all the default nodes inside it.
-FULL_SPLIT = 8.0
-
-
-@dataclass(frozen=True)
-class Round:
-    """One solve of the refinement.
-
-    Attributes
-    ----------
-    intervals : int
-        Intervals of its grid.
-    omega : float, m
-        Omega on the optimisation model at its optimum.
-    predicted : float, m
-        Omega on the default grid as predicted from its optimum (NaN where none was).
-    """
-
-    intervals: int
-    omega: float
-    predicted: float = float("nan")
-
-
-@dataclass(frozen=True, eq=False)
-class Refinement:
-    """What the refinement chose, and the solver and optimum on its last grid.
-
-    Attributes
-    ----------
-    problem : WinchProblem
-        The problem on the chosen nodes.
-    solver : ProblemSolver
-        Its solver, built (the last round's).
-    parameters : array
-        The profile on its nodes to start from (rad, rad/s): the last solve's optimum, on the
-        nodes that remain after the last merges.
-    rounds : list of Round
-    build_time, solve_time : float, s
-        Building and solving in the rounds before the last.
-    iterations : int
-        Solver iterations in the rounds before the last.
-    """
-
-    problem: WinchProblem
-    solver: object
-    parameters: np.ndarray
-    rounds: list[Round]
-    build_time: float
-    solve_time: float
-    iterations: int
-
-    def describe(self) -> str:
-        """One phrase: the grids, their Omega and the prediction."""
-        counts = [r.intervals for r in self.rounds]
-        final = self.problem.control.intervals
-        grids = " -> ".join(map(str, counts + ([final] if final != counts[-1] else [])))
-        omegas = ", ".join(f"{r.omega:.3g}" for r in self.rounds)
-        predicted = [r.predicted for r in self.rounds if np.isfinite(r.predicted)]
-        told = f"; the default grid's predicted {predicted[-1]:.3g} m" if predicted else ""
-        return f"adaptive grid of {grids} intervals (Omega on the model {omegas} m{told})"
 
 
 def with_nodes(problem: WinchProblem, times: np.ndarray) -> WinchProblem:
@@ -147,148 +65,74 @@ def on_nodes(control, parameters: np.ndarray, times: np.ndarray) -> np.ndarray:
     return np.concatenate([b0 @ parameters, b1 @ parameters])
 
 
-def refine(problem: WinchProblem, build, values, guess: np.ndarray, grid) -> Refinement:
-    """Choose the Hermite nodes of ``problem`` among its control's (module docstring).
+@dataclass(frozen=True, eq=False)
+class Coarsening:
+    """The nodes chosen among the default grid's, and where their solves start.
 
-    Parameters
+    Attributes
     ----------
     problem : WinchProblem
-        The problem on the default grid (a uniform Hermite control).
-    build : callable
-        ``problem -> solver`` (a build of :data:`cable_ocp.control.solvers.SOLVERS`, quiet).
-    values : ProblemParameters
-        The problem's named parameters.
-    guess : array
-        The first guess on the default grid (rad, rad/s).
-    grid : GridSettings
-        Its ``adaptive_start``, ``adaptive_tolerance`` and ``adaptive_rounds``.
-
-    Returns
-    -------
-    Refinement
-        Its times count every round's solve and indicators, and the builds before the last.
+        The problem on the chosen nodes.
+    parameters : array
+        The default grid's predicted corrected optimum ``p*`` on them (rad, rad/s).
+    intervals : int
+        Intervals of the default grid.
+    predicted : float, m
+        Omega* on the default grid, predicted (Gauss-Newton, corrected model).
+    omega : float, m
+        The model's Omega of ``p*`` interpolated on the chosen nodes (before their solves).
     """
-    base = problem.control.breakpoints
-    count = base.size - 1
-    start = grid.adaptive_start * grid.adaptive_finest
-    chosen = np.unique(np.r_[np.arange(0, count + 1, start), count])
-    # The default grid's Gauss-Newton model: its linearisation and its QP (the bounds).
-    model = GaussNewton(problem, GaussNewtonSettings())
-    rounds: list[Round] = []
-    build_time = solve_time = 0.0
-    iterations = 0
-    control, parameters = problem.control, guess
-    nothing = np.zeros(0, dtype=int)
-    while True:
-        trial = with_nodes(problem, base[chosen])
-        solver = build(trial)
-        outcome = solver.solve(values, on_nodes(control, parameters, base[chosen]))
-        control, parameters = trial.control, outcome.parameters
-        solve_time += outcome.solve_time
-        iterations += outcome.iterations
-        done, split, merged = Round(control.intervals, outcome.omega), nothing, nothing
-        if outcome.success:
-            started = time.perf_counter()
-            on_base = on_nodes(control, parameters, base)
-            linearised = model.linearisation(values, on_base)
-            if linearised.finite:
-                indicators = Indicators.at(model, linearised, on_base)
-                predicted, split, merged = indicators.decide(chosen, grid.adaptive_tolerance, base)
-                if split.size and len(rounds) + 1 >= grid.adaptive_rounds:
-                    # Out of solves and not within the tolerance: the whole default grid.
-                    split, merged = np.setdiff1d(np.arange(count + 1), chosen), nothing
-                done = Round(control.intervals, outcome.omega, predicted)
-            solve_time += time.perf_counter() - started
-        rounds.append(done)
-        if not split.size and not merged.size:
-            return Refinement(trial, solver, parameters, rounds, build_time, solve_time, iterations)
-        build_time += solver.build_time
-        chosen = np.union1d(np.setdiff1d(chosen, merged), split)
-        if not split.size or len(rounds) >= grid.adaptive_rounds:
-            # Within the tolerance (nodes merged), or out of solves (the whole default grid):
-            # the caller solves on it from this optimum.
-            return _on(problem, base, chosen, control, parameters, build, rounds, build_time,
-                       solve_time, iterations)  # fmt: skip
+
+    problem: WinchProblem
+    parameters: np.ndarray
+    intervals: int
+    predicted: float
+    omega: float
+
+    def describe(self) -> str:
+        """One phrase: the grids and their predicted Omega."""
+        return (
+            f"adaptive grid of {self.problem.control.intervals} of the default grid's "
+            f"{self.intervals} intervals (predicted Omega on the corrected model "
+            f"{self.omega:.3g} m against the default grid's {self.predicted:.3g} m)"
+        )
 
 
-def _on(problem, base, chosen, control, parameters, build, *figures) -> Refinement:
-    """The refinement that ends on the default nodes ``chosen``, unsolved, from ``parameters``.
-
-    ``figures``: the rounds, build time, solve time and iterations so far.
-    """
-    trial = with_nodes(problem, base[chosen])
-    return Refinement(trial, build(trial), on_nodes(control, parameters, base[chosen]), *figures)
-
-
-class Indicators:
-    """The Gauss-Newton model of Omega^2 in the default grid's parameters, at one optimum.
+class Quadratic:
+    """The Gauss-Newton model ``|r + A d|^2`` of Omega^2 (m^2) about a default-grid profile.
 
     Parameters
     ----------
     residual : array (K + 1,), m
-        ``W e``: Omega^2 is its square norm.
+        ``W (e + b)``: Omega^2 at ``profile`` is its square norm.
     jacobian : array (K + 1, 2 N), m/rad
         ``W J`` in the default grid's parameters ``[phi_1..phi_N, phi'_1..phi'_N]``.
     profile : array (2 N,)
-        The optimum on the default grid's nodes (rad, rad/s).
-    decrease : float or None, m^2
-        The decrease of Omega^2 that the default grid's QP predicts within the winch bounds (and
-        the minimum clearance): the prediction; None: the unbounded one.
-    pinned : array of bool (2 N,) or None
-        The parameters in a winch bound row that is active at ``profile``: a winch that rides
-        its bound gains nothing from more nodes there, so they count in no split gain.
+        The profile on the default grid's nodes (rad, rad/s).
     """
 
-    def __init__(self, residual, jacobian, profile, decrease=None, pinned=None):
+    def __init__(self, residual: np.ndarray, jacobian: np.ndarray, profile: np.ndarray):
         self.objective = float(residual @ residual)
         self.gradient = jacobian.T @ residual
         self.hessian = jacobian.T @ jacobian
         self.count = jacobian.shape[1] // 2
-        self.damping = DAMPING * max(float(np.max(np.diag(self.hessian))), 1e-30)
-        self.profile = profile
-        self.decrease = decrease
-        self.free = ~pinned if pinned is not None else np.ones(2 * self.count, dtype=bool)
+        self.profile = np.array(profile, dtype=float)
 
-    @classmethod
-    def at(cls, model: GaussNewton, linearised, profile: np.ndarray) -> Indicators:
-        """The indicators of the default grid's solver ``model`` at its linearisation."""
-        bounds = model.problem.bounds
-        _, decrease, status = model.step(linearised, profile, bounds.lower, bounds.upper, {})
-        values = bounds.matrix @ profile
-        active = (values - bounds.lower < ACTIVE) | (bounds.upper - values < ACTIVE)
-        pinned = np.any(bounds.matrix[active] != 0.0, axis=0)
-        return cls(
-            model.weights * linearised.error,
-            model.weights[:, None] * linearised.jacobian,
-            profile,
-            decrease if status == "solved" else None,
-            pinned,
-        )
-
-    def gain(self, columns: np.ndarray) -> float:
-        """The decrease of Omega^2 (m^2) from freeing the parameters ``columns`` (not pinned)."""
-        columns = columns[self.free[columns]]
-        if columns.size == 0:
-            return 0.0
-        block = self.hessian[np.ix_(columns, columns)] + self.damping * np.eye(columns.size)
-        g = self.gradient[columns]
-        return float(g @ np.linalg.solve(block, g))
+    def moved(self, step: np.ndarray) -> None:
+        """Centre the model at ``profile + step`` (exact: the model is quadratic)."""
+        self.objective += float(2 * self.gradient @ step + step @ self.hessian @ step)
+        self.gradient = self.gradient + self.hessian @ step
+        self.profile = self.profile + step
 
     def columns(self, nodes: np.ndarray) -> np.ndarray:
         """The angle and rate columns of the default grid's nodes ``nodes`` (1 .. N)."""
         return np.r_[nodes - 1, self.count + nodes - 1]
 
-    def predicted(self) -> float:
-        """Omega (m) on the default grid, predicted (within the bounds where the QP solved)."""
-        decrease = self.decrease
-        if decrease is None:
-            decrease = self.gain(np.arange(2 * self.count))
-        return float(np.sqrt(max(self.objective - decrease, 0.0)))
+    def spanned(self, left: int, right: int, times: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """The columns inside ``left..right`` and their values when one cubic spans them.
 
-    def merge_cost(self, left: int, right: int, times: np.ndarray) -> float:
-        """The rise of Omega^2 (m^2) when one cubic spans the default nodes ``left..right``.
-
-        ``times``: the default nodes (s).
+        The cubic runs through the angles and rates of :attr:`profile` at the default nodes
+        ``left`` and ``right`` (``times``: the default nodes, s).
         """
         angles = np.r_[0.0, self.profile[: self.count]]
         rates = np.r_[0.0, self.profile[self.count :]]
@@ -298,64 +142,102 @@ class Indicators:
         ends = (angles[left], width * rates[left], angles[right], width * rates[right])
         value = sum(h[0] * e for h, e in zip((h00, h10, h01, h11), ends, strict=True))
         slope = sum(h[1] * e for h, e in zip((h00, h10, h01, h11), ends, strict=True)) / width
-        change = np.zeros(2 * self.count)
-        change[self.columns(inside)] = np.r_[value - angles[inside], slope - rates[inside]]
-        return float(change @ self.hessian @ change + 2 * self.gradient @ change)
+        return self.columns(inside), np.r_[value, slope]
 
-    def decide(self, chosen: np.ndarray, tolerance: float, times: np.ndarray):
-        """The prediction (m), the default nodes to add and those to remove (none: stop).
+    def coarsest(
+        self, times: np.ndarray, allowed: float, bounds: LinearBounds | None = None
+    ) -> tuple[np.ndarray, float]:
+        """The default nodes kept (indices into ``times``, s) and the model's Omega^2 (m^2) then.
 
-        ``chosen``: the grid's nodes (indices of the default nodes ``times``, s).
+        The Omega^2 stays within ``allowed`` (m^2) where the model's at :attr:`profile` is.
+        Greedy passes (module docstring, 3): each removes the nodes whose exact cost at the
+        current profile fits in what is left, cheapest first, none beside one removed in the
+        same pass. With ``bounds`` (the default grid's winch bounds), a node whose spanning
+        cubic would break them stays: a winch that rides its bound cannot cut across it, and
+        the model (blind to the bounds) would count that as a gain.
         """
-        predicted = self.predicted()
-        nothing = np.zeros(0, dtype=int)
-        allowed = ((1 + tolerance) * predicted + OMEGA_ROUND_OFF) ** 2
-        if self.objective <= allowed:
-            return predicted, nothing, self._spare(chosen, times, allowed)
-        share = ((1 + tolerance) ** 2 - 1) * predicted**2 / (chosen.size - 1)
-        pairs = list(zip(chosen[:-1], chosen[1:], strict=True))
-        inside = [self.columns(np.arange(a + 1, b)) for a, b in pairs]
-        gains = np.array([self.gain(c) for c in inside])
-        # Split where an interval carries more than its share of the allowed excess, and more
-        # than an eighth of its share of the excess left now (so that a grid far off refines
-        # where it is furthest off first).
-        threshold = max(share, (self.objective - predicted**2) / (EXCESS_SHARES * gains.size))
-        splitting = gains > threshold
-        splitting[np.argmax(gains)] |= gains.max() > 0
-        splitting &= np.diff(chosen) > 1
-        if not splitting.any():
-            return predicted, nothing, nothing
-        merged = []
-        for i in range(1, chosen.size - 1):
-            if splitting[i - 1] or splitting[i] or (merged and merged[-1] == chosen[i - 1]):
-                continue
-            cost = self.merge_cost(chosen[i - 1], chosen[i + 1], times)
-            if cost < MERGE_SHARE * threshold:
-                merged.append(chosen[i])
-        # An interval that carries more than FULL_SPLIT shares takes every default node inside
-        # it at once; the others are halved.
-        split = [
-            np.arange(a + 1, b) if gain > FULL_SPLIT * threshold else [(a + b) // 2]
-            for (a, b), gain, chosen_one in zip(pairs, gains, splitting, strict=True)
-            if chosen_one
-        ]
-        return predicted, np.concatenate(split).astype(int), np.array(merged, dtype=int)
-
-    def _spare(self, chosen: np.ndarray, times: np.ndarray, allowed: float) -> np.ndarray:
-        """Nodes to remove from a grid within the tolerance, cheapest first, none two in a row.
-
-        Their merge costs add up to at most what is left of ``allowed`` Omega^2 (m^2).
-        """
-        costs = [
-            (self.merge_cost(chosen[i - 1], chosen[i + 1], times), i)
-            for i in range(1, chosen.size - 1)
-        ]
-        left, taken = allowed - self.objective, set()
-        for cost, i in sorted(costs):
-            if cost > left:
+        rows = None if bounds is None else [np.flatnonzero(c) for c in (bounds.matrix != 0).T]
+        kept = list(range(times.size))
+        current = self.profile.copy()
+        slope = self.gradient.copy()  # the gradient of the model at ``current``, halved
+        cost = self.objective
+        while len(kept) > 2:
+            costs = []
+            for j in range(1, len(kept) - 1):
+                columns, values = self.spanned(kept[j - 1], kept[j + 1], times)
+                change = values - current[columns]
+                if rows is not None and _breaks(bounds, rows, columns, current, change):
+                    continue
+                rise = change @ self.hessian[np.ix_(columns, columns)] @ change
+                costs.append((rise + 2 * change @ slope[columns], j, columns, change))
+            touched, removed = set(), []
+            for rise, j, columns, change in sorted(costs, key=lambda c: c[0]):
+                if cost + rise > allowed:
+                    break
+                if j - 1 in touched or j + 1 in touched:
+                    continue
+                touched.add(j)
+                removed.append(kept[j])
+                current[columns] += change
+                slope += self.hessian[:, columns] @ change
+                cost += rise
+            if not removed:
                 break
-            if i - 1 in taken or i + 1 in taken:
-                continue
-            taken.add(i)
-            left -= max(cost, 0.0)
-        return np.sort(chosen[list(taken)]).astype(int)
+            kept = [k for k in kept if k not in set(removed)]
+        return np.array(kept, dtype=int), cost
+
+
+def _breaks(bounds: LinearBounds, rows: list, columns, current, change) -> bool:
+    """Whether ``current`` moved by ``change`` in ``columns`` breaks a bound row they touch.
+
+    ``rows``: the bound rows that each parameter enters.
+    """
+    touched = np.unique(np.concatenate([rows[c] for c in columns]))
+    moved = current.copy()
+    moved[columns] += change
+    values = bounds.matrix[touched] @ moved
+    return bool(np.any(values < bounds.lower[touched]) or np.any(values > bounds.upper[touched]))
+
+
+def coarsen(
+    problem: WinchProblem, solver, values, parameters: np.ndarray, tolerance: float
+) -> Coarsening:
+    """The nodes of ``problem``'s default grid to keep, at its corrected optimum (docstring).
+
+    Parameters
+    ----------
+    problem : WinchProblem
+        The problem on the default grid (a uniform Hermite control).
+    solver : ProblemSolver
+        Its solver, which solved it last at ``parameters``: a Gauss-Newton solver's last
+        linearisation is taken again; another solver's problem is linearised anew.
+    values : ProblemParameters
+        The problem's named parameters with the model correction's bias.
+    parameters : array
+        The first solve's optimum on the default grid (rad, rad/s).
+    tolerance : float
+        ``GridSettings.adaptive_tolerance``.
+    """
+    model = solver
+    if not isinstance(model, GaussNewton):
+        model = GaussNewton(problem, GaussNewtonSettings())
+    linearised = model.linearised_at(values, parameters)
+    quadratic = Quadratic(
+        model.weights * linearised.error, model.weights[:, None] * linearised.jacobian, parameters
+    )
+    bounds = problem.bounds
+    step, _, _ = model.step(linearised, parameters, bounds.lower, bounds.upper, {})
+    if step is not None:
+        quadratic.moved(step)
+    predicted = float(np.sqrt(max(quadratic.objective, 0.0)))
+    times = problem.control.breakpoints
+    allowed = ((1 + tolerance) * predicted + OMEGA_ROUND_OFF) ** 2
+    kept, objective = quadratic.coarsest(times, allowed, bounds)
+    chosen = with_nodes(problem, times[kept])
+    return Coarsening(
+        chosen,
+        on_nodes(problem.control, quadratic.profile, times[kept]),
+        problem.control.intervals,
+        predicted,
+        float(np.sqrt(max(objective, 0.0))),
+    )

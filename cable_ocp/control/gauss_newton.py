@@ -314,7 +314,7 @@ class GaussNewton(ProblemSolver):
             # that the result holds them: start from the guess's nearest feasible point.
             parameters = self.feasible(parameters, lower, upper, fixed)
         begun = time.perf_counter()
-        current = self._linearised_start(values, parameters)
+        current = self.linearised_at(values, parameters)
         function_time += time.perf_counter() - begun
         history, status, success, iterations = [], "", False, 0
         refreshed = False  # the Jacobian in use was evaluated at the current point
@@ -449,11 +449,12 @@ class GaussNewton(ProblemSolver):
             return Linearised(after.states, after.error, before.jacobian, True)
         return self.linearisation(values, parameters)
 
-    def _linearised_start(self, values: ProblemParameters, parameters: np.ndarray) -> Linearised:
-        """The linearisation at the start of a solve, reusing the last solve's end if it is there.
+    def linearised_at(self, values: ProblemParameters, parameters: np.ndarray) -> Linearised:
+        """The linearisation at ``parameters``, reusing the last solve's end if it is there.
 
         A model-correction solve starts where the last one ended, with only the bias changed:
-        the run and the Jacobian are the same, the error moves by the change of the bias.
+        the run and the Jacobian are the same, the error moves by the change of the bias (the
+        adaptive grid's coarsening takes it so too, :mod:`cable_ocp.control.adaptive_grid`).
         """
         if self._last is not None:
             last_values, last_parameters, last = self._last

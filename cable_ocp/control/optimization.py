@@ -15,7 +15,9 @@ keeps score (CONVENTIONS.md §5, "reduced models for optimisation").
 from __future__ import annotations
 
 import time
+from collections.abc import Callable
 from dataclasses import dataclass, field, fields, replace
+from functools import partial
 from pathlib import Path
 from types import MappingProxyType
 
@@ -23,7 +25,7 @@ import numpy as np
 import xarray as xr
 
 from cable_ocp import result_files
-from cable_ocp.control.adaptive_grid import Refinement, refine
+from cable_ocp.control.adaptive_grid import Coarsening, coarsen
 from cable_ocp.control.hermite_nodes import HermiteNodes
 from cable_ocp.control.keywords import refuse_unknown
 from cable_ocp.control.problem import SolverOutcome, WinchProblem
@@ -435,7 +437,7 @@ def solve_verified(
     quiet: bool = False,
     verbose: bool = False,
     verify_compiled: bool | None = None,
-    start: Refinement | None = None,
+    adapt: Callable | None = None,
 ) -> OcpResult:
     """A solver of the registry on a problem, verified and refined on its scene.
 
@@ -453,9 +455,11 @@ def solve_verified(
         IPOPT's full log instead of one progress line per iteration.
     verify_compiled : bool, optional
         Verify on the compiled full model (default: as the transcription is compiled).
-    start : Refinement, optional
-        An adaptive grid's refinement on ``problem``: its solver and last optimum start the
-        solves, its rounds' times and iterations count in the result's.
+    adapt : callable, optional
+        An adaptive grid's coarsening (:func:`cable_ocp.control.adaptive_grid.coarsen` with its
+        tolerance bound): ``(problem, solver, values, parameters) -> Coarsening``, called once
+        after the first solve's full-model run with the corrected values; the solves after it
+        run on the problem it returns (at least one, also where the model is the scene's).
 
     Returns
     -------
@@ -466,20 +470,19 @@ def solve_verified(
     """
     started = time.perf_counter()
     solver = SOLVERS[settings.solver]
-    nlp = solver.build(problem, settings, quiet, verbose, 0.0) if start is None else start.solver
+    nlp = solver.build(problem, settings, quiet, verbose, 0.0)
+    build_time, compile_time = nlp.build_time, nlp.compile_time
     compiled = settings.compiled if verify_compiled is None else verify_compiled
     verify, verification_time = _timed_verify(problem, quiet, compiled)
+    coarsening = None
     outcomes: list[SolverOutcome] = []
     verified: list[float] = []
     best_outcome, best, checked, failure = None, None, None, None
     values = problem.parameter_values()
     landing_bias = values.bias  # a landing's reference (-e_ref), zero on other scenes
-    if start is None:
-        parameters = problem.first_guess(compiled=settings.compiled)
-    else:
-        parameters = start.parameters
+    parameters = problem.first_guess(compiled=settings.compiled)
     solver_name = solver.label
-    solves = 1 + (refinements if problem.reduced else 0)
+    solves = max(1 + (refinements if problem.reduced else 0), 1 + (adapt is not None))
     # Full-model runs that only steer the model correction take a coarser step; the profile
     # reported is verified at the scene's.
     correction = None
@@ -496,7 +499,19 @@ def solve_verified(
             if states is None:
                 states = problem.simulate(source.parameters, compiled=settings.compiled)
             parameters = source.parameters
-            values = replace(values, bias=landing_bias + full_error - problem.clearance(states))
+            if problem.reduced:
+                values = replace(values, bias=landing_bias + full_error - problem.clearance(states))
+            if adapt is not None and coarsening is None:
+                # The adaptive grid: the solves from here on run on the nodes kept, and only
+                # their profiles are the result's.
+                coarsening = adapt(problem, nlp, values, parameters)
+                problem, parameters = coarsening.problem, coarsening.parameters
+                nlp = solver.build(problem, settings, quiet, verbose, 0.0)
+                build_time += nlp.build_time
+                compile_time += nlp.compile_time
+                verify, timed = _timed_verify(problem, quiet, compiled)
+                verification_time = _summed(verification_time, timed)
+                best_outcome, best, checked, best_solve = None, None, None, None
         outcome = nlp.solve(values, parameters)
         outcomes.append(outcome)
         if not outcome.success:
@@ -550,18 +565,23 @@ def solve_verified(
         omega_model=shown.omega,
         success=failure is None,
         status=shown.status if failure is None else failure,
-        iterations=sum(o.iterations for o in outcomes) + (start.iterations if start else 0),
+        iterations=sum(o.iterations for o in outcomes),
         evaluations=sum(o.evaluations for o in outcomes),
         wall_time=time.perf_counter() - started,
-        build_time=nlp.build_time + (start.build_time if start else 0.0),
-        solve_time=sum(o.solve_time for o in outcomes) + (start.solve_time if start else 0.0),
+        build_time=build_time,
+        solve_time=sum(o.solve_time for o in outcomes),
         function_time=sum(o.function_time for o in outcomes),
         history=omega_history(history) if solver.history_unit == "m2" else history,
         refinements=verified,
-        compile_time=nlp.compile_time,
+        compile_time=compile_time,
         verification_time=verification_time(),
-        **_verification_fields(problem, checked, correction),
+        **_verification_fields(problem, checked, correction, coarsening),
     )
+
+
+def _summed(*timers):
+    """One timer (a callable returning seconds) that adds up ``timers``."""
+    return lambda: sum(timer() for timer in timers)
 
 
 def _run_step(
@@ -586,13 +606,19 @@ def _run_step(
 
 
 def _verification_fields(
-    problem: WinchProblem, checked: Verification | None, correction: float | None = None
+    problem: WinchProblem,
+    checked: Verification | None,
+    correction: float | None = None,
+    coarsening: Coarsening | None = None,
 ) -> dict:
     """The OcpResult fields that report the verification of the profile shown.
 
-    ``correction``: the step (s) of the model-correction runs, when there were any.
+    ``correction``: the step (s) of the model-correction runs, when there were any;
+    ``coarsening``: the adaptive grid's, described in the notes.
     """
     fields = {"heave_feedforward": problem.heave_feedforward}
+    if coarsening is not None:
+        fields["notes"] = coarsening.describe()
     if checked is None or checked.trajectory is None:
         return fields
     notes = []
@@ -604,6 +630,8 @@ def _verification_fields(
         notes.append(checked.note)
     if correction is not None and correction > problem.scene.numerics.step:
         notes.append(f"model correction learned from full-model runs at h = {correction:g} s")
+    if coarsening is not None:
+        notes.append(coarsening.describe())
     return {
         **fields,
         "bound_time": checked.bound_time,
@@ -711,41 +739,21 @@ def optimize(
             f"{'; ' + derived if derived else ''})"
         )
         problem = chosen.problem(scene, settings, entry.needs_compiled)
-        start, refining = None, 0.0
+        adapt = None
         if settings.grid.adaptive:
-            begun = time.perf_counter()
-            start = _refined(problem, settings, entry)
-            refining = time.perf_counter() - begun
-            problem = start.problem
-            derived = "; ".join(text for text in (start.describe(), derived) if text)
-            nodes = tuple(float(t) for t in problem.control.breakpoints)
-            settings = replace(settings, grid=replace(settings.grid, adaptive=False, nodes=nodes))
+            adapt = partial(coarsen, tolerance=settings.grid.adaptive_tolerance)
         result = solve_verified(
-            problem, settings, quiet=quiet, verbose=verbose, start=start, **options
+            problem, settings, quiet=quiet, verbose=verbose, adapt=adapt, **options
         )
     except RuntimeError as error:  # SimulationError, EquilibriumError, CasADi's errors
         elapsed = time.perf_counter() - started
         return failed_result(chosen.name, settings, error, elapsed, model_text)
+    if result.nodes:  # the adaptive grid's nodes: given, they solve on the same grid
+        grid = replace(settings.grid, adaptive=False, nodes=tuple(result.nodes))
+        settings = replace(settings, grid=grid)
     notes = "; ".join(text for text in (result.notes, derived) if text)
     ran = result.trajectory.scene_record if result.trajectory is not None else scene.to_dict()
-    return replace(
-        result,
-        notes=notes,
-        scene_record=ran,
-        settings=settings.record(),
-        wall_time=result.wall_time + refining,  # an adaptive grid's rounds before the last
-    )
-
-
-def _refined(problem: WinchProblem, settings: OcpSettings, entry: Solver) -> Refinement:
-    """The adaptive grid's refinement of a problem on the default grid (quiet solves)."""
-    return refine(
-        problem,
-        lambda trial: entry.build(trial, settings, True, False, 0.0),
-        problem.parameter_values(),
-        problem.first_guess(compiled=settings.compiled),
-        settings.grid,
-    )
+    return replace(result, notes=notes, scene_record=ran, settings=settings.record())
 
 
 def _solve_options(entry: Solver, refinements: int | None) -> dict:

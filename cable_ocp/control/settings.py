@@ -78,17 +78,13 @@ class GridSettings:
         (:mod:`cable_ocp.control.hermite_nodes`); None: equal intervals. Not with
         ``control_intervals``.
     adaptive : bool
-        Choose the nodes by refinement (:mod:`cable_ocp.control.adaptive_grid`): start coarse on
-        the default grid's nodes, split the intervals whose splitting pays and merge the nodes
-        that do not, re-solving warm-started, until Omega is within ``adaptive_tolerance`` of
-        the default grid's prediction or after ``adaptive_rounds`` solves. Hermite control and
-        the shooting solvers only.
+        Choose the nodes among the default grid's by coarsening
+        (:mod:`cable_ocp.control.adaptive_grid`): after the first solve on the default grid and
+        its full-model run, remove the nodes whose removal keeps the corrected model's predicted
+        Omega within ``adaptive_tolerance`` of the default grid's, and solve on the nodes left.
+        Hermite control and the shooting solvers only.
     adaptive_tolerance : float
-        The stopping rule's relative tolerance on Omega (CONVENTIONS.md §5).
-    adaptive_rounds : int
-        Most solves of the refinement.
-    adaptive_start : int
-        Default-grid intervals (about 5 s) in each interval of the first, coarse grid.
+        The coarsening's relative tolerance on Omega (CONVENTIONS.md §5).
     adaptive_finest : int
         The adaptive grid's nodes are chosen among those of a grid this many times finer than
         the default (its intervals about 5 s / ``adaptive_finest``; the shooting intervals when
@@ -101,8 +97,6 @@ class GridSettings:
     nodes: tuple[float, ...] | None = None
     adaptive: bool = False
     adaptive_tolerance: float = 0.02
-    adaptive_rounds: int = 4
-    adaptive_start: int = 4
     adaptive_finest: int = 1
 
     def __post_init__(self):
@@ -114,8 +108,6 @@ class GridSettings:
                 "control_intervals": Rule("integer", low=1, optional=True),
                 "adaptive": Rule("flag"),
                 "adaptive_tolerance": Rule("number", above=0, high=1),
-                "adaptive_rounds": Rule("integer", low=1),
-                "adaptive_start": Rule("integer", low=1),
                 "adaptive_finest": Rule("integer", low=1, high=8),
             },
         )
