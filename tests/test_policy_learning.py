@@ -150,8 +150,11 @@ def test_the_validation_runs_held_out_scenes_and_states_its_bound(family_file, l
     from cable_ocp.policy.validation import statement, success_bound, validate_policy
 
     policy, _ = learned
-    figures = validate_policy(policy, family_file, scenes=2, workers=2, quiet=True)
-    assert figures["scenes"] == 2 and len(figures["rows"]) == 2
+    # A chunk of a longer validation: scenes 1 and 2 of the 3 drawn.
+    figures = validate_policy(
+        policy, family_file, scenes=3, workers=2, quiet=True, indices=range(1, 3)
+    )
+    assert figures["scenes"] == 2 and [row["scene"] for row in figures["rows"]] == [1, 2]
     for kind in ("alone", "net"):
         successes = figures[kind]["successes"]
         assert figures[kind]["statement"] == statement(2, 2 - successes)
@@ -159,6 +162,14 @@ def test_the_validation_runs_held_out_scenes_and_states_its_bound(family_file, l
     assert np.isfinite(figures["locked"]["median_omega"])
     assert success_bound(100, 0) == pytest.approx(0.05 ** (1 / 100))  # the all-success case
     assert success_bound(10, 10) == 0.0
+
+
+@pytest.mark.parametrize("indices", [range(2, 5), range(3, 3), [0, 1], range(-1, 2)])
+def test_a_validation_chunk_outside_the_scenes_drawn_is_refused_before_any_run(indices):
+    from cable_ocp.policy.validation import validate_policy
+
+    with pytest.raises(ValueError, match=r"indices = .*within range\(3\)"):
+        validate_policy(None, "no_such_family", scenes=3, indices=indices)
 
 
 def test_the_observation_is_what_the_winch_controller_measures():

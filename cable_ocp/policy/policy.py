@@ -104,11 +104,12 @@ class Policy:
     def controller(self, parts, net: bool = True) -> PolicyController:
         """The closed loop's step of this policy (``co.mpc(scene, policy=self)`` calls it).
 
-        ``net``: with the safety net (the envelope and the bounds; the MPC where they fail);
+        ``net``: with the safety net (the envelope, the bounds and the reduced model's rollout;
+        the MPC where they fail);
         False: the policy alone, whatever it gives.
         """
         if not net:
-            return PolicyController(parts, self.network, None, bounds=False)
+            return PolicyController(parts, self.network, None, bounds=False, rollout=False)
         return PolicyController(parts, self.network, self.envelope)
 
     def alone(self) -> Alone:

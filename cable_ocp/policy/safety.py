@@ -1,6 +1,6 @@
 """The safety net: at every sample, trust the policy's action or hand the sample to the MPC.
 
-Two checks, cheap beside a solve, decide (Zhang, Bujarbaruah and Borrelli 2019: a check of each
+Three checks, cheap beside a solve, decide (Zhang, Bujarbaruah and Borrelli 2019: a check of each
 action, the MPC when it fails):
 
 1. **The envelope.** Every feature of the observation lies inside the range the training data
@@ -10,8 +10,13 @@ action, the MPC when it fails):
 2. **The bounds.** The plan the action makes (:func:`.action.ramp`) keeps, over the next
    sample, the controller's winch bounds as the MPC's solve must: the angle range narrowed by
    the heave feedback's room, the rate and acceleration limits.
+3. **The rollout.** The controller's reduced model runs one horizon from the estimate; the
+   policy's action, followed by the best plan after it, must predict an Omega over the horizon
+   within a margin of the MPC's own prediction, and keep the minimum clearance
+   (:mod:`.rollout`). The envelope and the bounds cannot see an action that keeps the plant
+   alive but lets the load wander; the rollout does.
 
-Where either fails, the controller solves the sample (:meth:`PolicyController.make_step`), and
+Where any fails, the controller solves the sample (:meth:`PolicyController.make_step`), and
 its solve's status says why it was handed over.
 """
 
@@ -25,6 +30,7 @@ import numpy as np
 from cable_ocp.control.closed_loop.controller import Solve
 from cable_ocp.policy.action import ramp
 from cable_ocp.policy.observation import FEATURES, UNITS, observe
+from cable_ocp.policy.rollout import RolloutCheck
 
 # Share of each feature's training range by which the envelope is widened on each side.
 MARGIN = 0.05
@@ -81,23 +87,30 @@ class PolicyController:
     network : callable
         Observation (d,) -> drum rate (rad/s), e.g. :class:`.network.Network`.
     envelope : Envelope or None
-        None: no envelope check (the bounds alone; for the policy without its net).
+        None: no envelope check (the policy without its net).
     bounds : bool
         Check the plan's bounds (False: the policy's action whatever it gives, the plant's
         limiter and drum clipping it as they clip any command).
+    rollout : bool
+        Check the action on the reduced model's rollout (the module docstring's third check;
+        made where the controller's solver has an RK4 map to roll out on, Gauss-Newton's).
     """
 
-    def __init__(self, parts, network, envelope: Envelope | None, bounds: bool = True):
-        self.parts, self.network, self.envelope, self.bounds = parts, network, envelope, bounds
+    def __init__(
+        self, parts, network, envelope: Envelope | None, bounds: bool = True, rollout: bool = True
+    ):
+        self.parts, self.network, self.envelope = parts, network, envelope
+        self.bounds = bounds
         self.scene = parts.plant.scene
         self.sample = parts.settings.sample
+        self.check = RolloutCheck(parts.controller, self.sample) if rollout else None
 
     def observe(self, measured, estimate, angle: float, rate: float) -> np.ndarray:
         """The observation at this sample (:func:`.observation.observe`)."""
         return observe(self.scene, self.parts.plant.model, measured, estimate, angle, rate)
 
-    def action(self, observation: np.ndarray, estimate, angle: float, rate: float):
-        """The policy's plan and the reason to hand it over (empty: trusted)."""
+    def action(self, now: float, observation: np.ndarray, estimate, angle: float, rate: float):
+        """The policy's plan at the sample ``now`` (s) and why to hand it over (empty: trusted)."""
         reason = self.envelope.outside(observation) if self.envelope is not None else ""
         rate_command = float(self.network(observation[None, :])[0])
         control = self.parts.controller.control
@@ -108,13 +121,15 @@ class PolicyController:
             excess = bounds.excess(plan, lower, upper, rows=bounds.starts < self.sample - 1e-9)
             if excess > BOUND_TOLERANCE:
                 reason = f"its plan leaves the winch bounds by {excess:.3g} over the next sample"
+        if not reason and self.check is not None and self.check.available:
+            reason = self.check.reason(now, estimate, angle, rate, rate_command)
         return plan, reason
 
     def make_step(self, now: float, measured, estimate, angle: float, rate: float) -> Solve:
         """The sample's plan: the policy's where trusted, else the controller's solve."""
         started = time.perf_counter()
         observation = self.observe(measured, estimate, angle, rate)
-        plan, reason = self.action(observation, estimate, angle, rate)
+        plan, reason = self.action(now, observation, estimate, angle, rate)
         if not reason:
             return Solve(plan, ACTED, True, 0, time.perf_counter() - started, by_policy=True)
         solve = self.parts.controller.make_step(now, estimate, angle, rate)

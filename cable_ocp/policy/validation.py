@@ -102,18 +102,38 @@ def _runs(scene, policy) -> dict:
 
 def validate_policy(
     policy, family, scenes: int = 100, scheduler: str | None = None,
-    workers: int | None = None, quiet: bool = False,
+    workers: int | None = None, quiet: bool = False, indices: range | None = None,
 ) -> dict:  # fmt: skip
     """Validate a policy on ``scenes`` held-out scenes of its family (module docstring).
 
+    ``indices``: run only these of the ``scenes`` drawn (a part of a long validation, run in
+    chunks; :func:`summarise` of the parts' ``rows`` together gives the whole's figures).
+
     Returns the figures (json-ready): per run kind the successes, the median Omega and its
-    ratio to the MPC's, the share handed to the MPC, and the statements.
+    ratio to the MPC's, the share handed to the MPC, and the statements; ``rows`` holds each
+    scene's, with its index in ``scene``.
+
+    Raises
+    ------
+    ValueError
+        ``indices`` not a range within ``range(scenes)``, or a policy of another family, before
+        any run.
     """
     from tqdm.auto import tqdm
 
     from cable_ocp.policy.family import load_family
     from cable_ocp.sweep.runner import mapped
 
+    indices = range(scenes) if indices is None else indices
+    if (
+        not isinstance(indices, range)
+        or not indices
+        or not (0 <= min(indices) and max(indices) < scenes)
+    ):
+        raise ValueError(
+            f"validate_policy: indices = {indices!r:.60}: expected a non-empty range within "
+            f"range({scenes}) (the scenes drawn)"
+        )
     family = load_family(family)
     if policy.family.get("fingerprint") != family.fingerprint:
         raise ValueError(
@@ -121,13 +141,13 @@ def validate_policy(
             f"for the family {family.name!r}"
         )
     drawn = family.draw(scenes, held_out_seed(policy.seed))
-    bar = tqdm(total=scenes, desc=f"validate {family.name}", disable=quiet)
+    bar = tqdm(total=len(indices), desc=f"validate {family.name}", disable=quiet)
     try:
-        rows = mapped(validate_scene, [(scene, policy) for scene in drawn], scheduler, workers,
+        rows = mapped(validate_scene, [(drawn[k], policy) for k in indices], scheduler, workers,
                       lambda done: bar.update(done - bar.n))  # fmt: skip
     finally:
         bar.close()
-    return summarise(rows)
+    return summarise([{"scene": k, **row} for k, row in zip(indices, rows, strict=True)])
 
 
 def summarise(rows: list[dict]) -> dict:

@@ -148,6 +148,27 @@ class RecedingHorizon:
             bias=-reference_error(self.scene, now + self.problem.grid, estimate.start_error),
         )
 
+    def rollout(
+        self, now: float, estimate: Estimate, parameters: np.ndarray, jacobian: bool = False
+    ):
+        """The reduced model's run over one horizon from the estimate under a plan.
+
+        The solver's own RK4 map, forecast and clearance error
+        (:class:`~cable_ocp.control.linearisation.ErrorLinearisation`): a
+        :class:`~cable_ocp.control.linearisation.Linearised` whose ``error`` (m, with the bias)
+        is at the problem's grid (``problem.grid``, s from ``now``), with its Jacobian in the
+        plan's parameters where ``jacobian`` (a sensitivity sweep, as a solve's; else a run
+        alone, a fraction of its cost). None when the solver has no such map (IPOPT's multiple
+        shooting).
+        """
+        linearisation = getattr(self.solver, "linearisation", None)
+        if linearisation is None:
+            return None
+        values = self.parameter_values(now, estimate)
+        if jacobian:
+            return linearisation(values, parameters)
+        return linearisation.error(values, parameters)
+
     def infeasible(self, status: str) -> bool:
         """Whether a failed solve's status says that its QP had no feasible point.
 
