@@ -143,7 +143,10 @@ def test_the_policy_bench_times_the_c_function_beside_the_mpc(learned, capsys):
     figures = bench_policy(policy, co.load_scene("small_tow", {"numerics.duration": 20.0}))
     assert 0 < figures["c_per_sample"] < 20e-6  # the bound on a sample's evaluation
     assert figures["ratio"] == figures["mpc_median_solve"] / figures["c_per_sample"]
-    assert "us per sample" in capsys.readouterr().out
+    assert 0 < figures["rollout_check_median"] < 10 * figures["mpc_median_solve"]
+    assert 0.0 <= figures["handed_share"] <= 1.0
+    out = capsys.readouterr().out
+    assert "us per sample" in out and "rollout check" in out and "Jacobian sweeps" in out
 
 
 def test_the_validation_runs_held_out_scenes_and_states_its_bound(family_file, learned):

@@ -3,7 +3,10 @@
 :func:`bench_policy` compiles the policy's C export
 (:meth:`cable_ocp.policy.policy.Policy.to_c`) with a timing loop (``cc -O2``), evaluates it on
 the policy's own training observations, and runs the closed loop (the MPC) on the family's base
-scene in the same process, so that the ratio is of one run on one machine.
+scene in the same process, so that the ratio is of one run on one machine. It then runs the
+policy with its safety net on that scene, and times its rollout check per sample
+(:mod:`.rollout`) and the whole step where the policy acted (the observation, the network in
+numpy and the three checks).
 """
 
 from __future__ import annotations
@@ -83,7 +86,10 @@ def bench_policy(policy, scene, quiet: bool = False) -> dict:
     -------
     dict
         ``c_per_sample``, ``numpy_per_sample``, ``casadi_per_sample`` and
-        ``mpc_median_solve`` (s), and ``ratio`` (the MPC's median solve over the C function's).
+        ``mpc_median_solve`` (s), ``ratio`` (the MPC's median solve over the C function's),
+        ``rollout_check_median`` and ``net_step_median`` (s, with the safety net: its rollout
+        check's median time per sample, and the median time of a step the policy acted at),
+        and ``handed_share``.
     """
     from cable_ocp.policy.family import load_family
 
@@ -96,12 +102,19 @@ def bench_policy(policy, scene, quiet: bool = False) -> dict:
         scene = load_family(scene).base
     result = mpc(scene, quiet=True)
     solve = float(np.median(result.solves.solve_time))
+    kept = _Kept(policy)
+    netted = mpc(scene, quiet=True, policy=kept)
+    checks = kept.made.check.seconds
+    acted = netted.solves.solve_time[netted.solves.by_policy]
     figures = {
         "c_per_sample": c_seconds,
         "numpy_per_sample": numpy_seconds,
         "casadi_per_sample": casadi_seconds,
         "mpc_median_solve": solve,
         "ratio": solve / c_seconds,
+        "rollout_check_median": float(np.median(checks)) if checks else float("nan"),
+        "net_step_median": float(np.median(acted)) if acted.size else float("nan"),
+        "handed_share": netted.handed_share,
     }
     if not quiet:
         print(f"policy {policy.name}: hidden {policy.network.hidden}, {len(FEATURES)} inputs")
@@ -110,7 +123,25 @@ def bench_policy(policy, scene, quiet: bool = False) -> dict:
         print(f"  CasADi Function   {casadi_seconds * 1e6:10.3f} us per sample")
         print(f"  MPC median solve  {solve * 1e6:10.1f} us ({scene.name}, the same run)")
         print(f"  ratio MPC / C     {figures['ratio']:10.0f}")
+        print(
+            f"  with its safety net on {scene.name} ({netted.handed_share:.1%} handed to the MPC):"
+        )
+        print(f"    rollout check   {figures['rollout_check_median'] * 1e6:10.1f} us per sample "
+              f"(median of {len(checks)}, {kept.made.check.sweeps} Jacobian sweeps)")  # fmt: skip
+        print(f"    policy's step   {figures['net_step_median'] * 1e6:10.1f} us per sample "
+              "(median: observation, network, checks)")  # fmt: skip
     return figures
+
+
+class _Kept:
+    """The policy, keeping the controller it made for the loop (to read its check's times)."""
+
+    def __init__(self, policy):
+        self.policy, self.name, self.made = policy, policy.name, None
+
+    def controller(self, parts):
+        self.made = self.policy.controller(parts)
+        return self.made
 
 
 def _per_call(function, observations: np.ndarray, repeats: int = 3) -> float:

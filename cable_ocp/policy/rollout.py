@@ -26,6 +26,8 @@ sample its Omega over the horizon is several times the one its solve predicted.
 
 from __future__ import annotations
 
+import time
+
 import numpy as np
 from scipy.linalg import cho_factor, cho_solve
 
@@ -59,7 +61,8 @@ class RolloutCheck:
         self.nodes = control.breakpoints
         self.made = -np.inf  # s: when the Jacobian in use was swept
         self.jacobian = self.factor = None
-        self.evaluations = self.sweeps = 0
+        self.sweeps = 0  # Jacobian sweeps made
+        self.seconds: list[float] = []  # wall time of each check (s)
 
     @property
     def available(self) -> bool:
@@ -68,6 +71,14 @@ class RolloutCheck:
 
     def reason(self, now: float, estimate, angle: float, rate: float, action: float) -> str:
         """Why the policy's ``action`` (rad/s) fails the check at ``now`` (empty: it passes)."""
+        started = time.perf_counter()
+        try:
+            return self._reason(now, estimate, angle, rate, action)
+        finally:
+            self.seconds.append(time.perf_counter() - started)
+
+    def _reason(self, now: float, estimate, angle: float, rate: float, action: float) -> str:
+        """:meth:`reason`, untimed."""
         controller, solver = self.controller, self.controller.solver
         # The plan in force moved on to now (the solve's guess: the control's resampled, by its
         # faster evaluation), started at the drum's angle and rate.
@@ -76,7 +87,6 @@ class RolloutCheck:
         plan[self.start] = angle, rate
         stale = now - self.made > (AGE - 0.5) * self.sample
         run = controller.rollout(now, estimate, plan, jacobian=stale)
-        self.evaluations += 1
         if not run.finite:
             return "the reduced model's rollout under the MPC's plan in force blew up"
         if stale:
