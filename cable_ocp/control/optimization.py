@@ -474,7 +474,7 @@ def solve_verified(
     build_time, compile_time = nlp.build_time, nlp.compile_time
     compiled = settings.compiled if verify_compiled is None else verify_compiled
     verify, verification_time = _timed_verify(problem, quiet, compiled)
-    coarsening = None
+    coarsening, reference = None, None
     outcomes: list[SolverOutcome] = []
     verified: list[float] = []
     best_outcome, best, checked, failure = None, None, None, None
@@ -511,7 +511,9 @@ def solve_verified(
                 compile_time += nlp.compile_time
                 verify, timed = _timed_verify(problem, quiet, compiled)
                 verification_time = _summed(verification_time, timed)
-                best_outcome, best, checked, best_solve = None, None, None, None
+                # The default grid's verified run judges the first gain (the model correction
+                # stops as it would on the default grid), but is not the answer.
+                reference, best_outcome, best, checked, best_solve = best, None, None, None, None
         outcome = nlp.solve(values, parameters)
         outcomes.append(outcome)
         if not outcome.success:
@@ -522,7 +524,8 @@ def solve_verified(
                 best_outcome = outcome if best is not None else None
                 verified.append(best.omega if best is not None else float("nan"))
             break
-        trial = verify(outcome.parameters, _run_step(correction, outcome, best, solve, solves))
+        last = best if best is not None else reference
+        trial = verify(outcome.parameters, _run_step(correction, outcome, last, solve, solves))
         if trial.trajectory is None:
             verified.append(float("nan"))
             failure = (
@@ -538,7 +541,7 @@ def solve_verified(
         verified.append(trial.trajectory.omega)
         if best is not None and trial.trajectory.omega >= best.omega:
             break
-        gain = trial.trajectory.omega / best.omega if best is not None else 0.0
+        gain = trial.trajectory.omega / last.omega if last is not None else 0.0
         best_outcome, best, checked, best_solve = outcome, trial.trajectory, trial, solve
         learned = (best, best_outcome)
         if gain > SMALL_GAIN:
