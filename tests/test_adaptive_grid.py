@@ -106,6 +106,16 @@ def test_adaptive_optimum_keeps_its_bounds_on_the_verified_run(bounded):
     assert np.abs(rate).max() <= scene.winch.rate_max * (1 + 1e-3)
 
 
+def test_a_winch_on_its_bounds_keeps_the_nodes_that_hold_it_there(bounded):
+    # The Gauss-Newton model is blind to the bounds: a cubic that cut across the angle bound
+    # looked free, and the coarse grid (3 intervals) came out 5 % worse than the uniform one.
+    scene, result = bounded
+    uniform = co.optimize(scene, quiet=True)
+    assert uniform.success and uniform.parameters.size == 84
+    assert result.omega <= 1.02 * uniform.omega
+    assert 10 < result.parameters.size < 42
+
+
 def test_node_times_are_saved_loaded_and_drawn(bounded, tmp_path):
     from cable_ocp import plots
 
