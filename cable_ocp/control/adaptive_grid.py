@@ -39,6 +39,7 @@ import numpy as np
 
 from cable_ocp.control.gauss_newton import GaussNewton, GaussNewtonSettings
 from cable_ocp.control.hermite_nodes import HermiteNodes
+from cable_ocp.control.linearisation import Linearised
 from cable_ocp.control.problem import WinchProblem
 from cable_ocp.drive.bounds import LinearBounds
 from cable_ocp.drive.controls import hermite_polynomials
@@ -47,6 +48,8 @@ from cable_ocp.drive.controls import hermite_polynomials
 # (a straight profile that a coarse grid fits to round-off). 0.1 um was 6 % of whole-space seed
 # 1 case 3's 1.8 um, and its adaptive Omega came out 4.3 % above the uniform one's.
 OMEGA_ROUND_OFF = 1e-9
+# Times the model is re-optimised on the nodes kept and coarsened again.
+REOPTIMISED = 3
 
 
 def with_nodes(problem: WinchProblem, times: np.ndarray) -> WinchProblem:
@@ -82,6 +85,8 @@ class Coarsening:
         Omega* on the default grid, predicted (Gauss-Newton, corrected model).
     omega : float, m
         The model's Omega of ``p*`` interpolated on the chosen nodes (before their solves).
+    candidates : array, s
+        The nodes they were chosen among (the model correction's step fits them all).
     """
 
     problem: WinchProblem
@@ -89,13 +94,16 @@ class Coarsening:
     intervals: int
     predicted: float
     omega: float
+    candidates: np.ndarray
 
     def describe(self) -> str:
         """One phrase: the grids and their predicted Omega."""
+        among = self.candidates.size - 1
+        finer = f" among {among} candidates" if among != self.intervals else ""
         return (
-            f"adaptive grid of {self.problem.control.intervals} of the default grid's "
-            f"{self.intervals} intervals (predicted Omega on the corrected model "
-            f"{self.omega:.3g} m against the default grid's {self.predicted:.3g} m)"
+            f"adaptive grid of {self.problem.control.intervals} intervals{finer} (the default "
+            f"grid's {self.intervals}; predicted Omega on the corrected model {self.omega:.3g} "
+            f"m against the default grid's {self.predicted:.3g} m)"
         )
 
 
@@ -146,19 +154,24 @@ class Quadratic:
         return self.columns(inside), np.r_[value, slope]
 
     def coarsest(
-        self, times: np.ndarray, allowed: float, bounds: LinearBounds | None = None
-    ) -> tuple[np.ndarray, float]:
-        """The default nodes kept (indices into ``times``, s) and the model's Omega^2 (m^2) then.
+        self,
+        times: np.ndarray,
+        allowed: float,
+        bounds: LinearBounds | None = None,
+        kept: np.ndarray | None = None,
+    ) -> np.ndarray:
+        """The nodes kept (indices into ``times``, s), among ``kept`` (None: all).
 
-        The Omega^2 stays within ``allowed`` (m^2) where the model's at :attr:`profile` is.
-        Greedy passes (module docstring, 3): each removes the nodes whose exact cost at the
-        current profile fits in what is left, cheapest first, none beside one removed in the
-        same pass. With ``bounds`` (the default grid's winch bounds), a node whose spanning
-        cubic would break them stays: a winch that rides its bound cannot cut across it, and
-        the model (blind to the bounds) would count that as a gain.
+        The model's Omega^2 stays within ``allowed`` (m^2) where it is at :attr:`profile`, which
+        should lie on the nodes ``kept``. Greedy passes (module docstring, 3): each removes the
+        nodes whose exact cost at the current profile fits in what is left, cheapest first,
+        none beside one removed in the same pass. With ``bounds`` (the candidate grid's winch
+        bounds), a node whose spanning cubic would break them stays: a winch that rides its
+        bound cannot cut across it, and the model (blind to the bounds) would count that as a
+        gain. The model is then centred at the profile on the nodes kept.
         """
         rows = None if bounds is None else [np.flatnonzero(c) for c in (bounds.matrix != 0).T]
-        kept = list(range(times.size))
+        kept = list(range(times.size)) if kept is None else list(kept)
         current = self.profile.copy()
         slope = self.gradient.copy()  # the gradient of the model at ``current``, halved
         cost = self.objective
@@ -185,7 +198,8 @@ class Quadratic:
             if not removed:
                 break
             kept = [k for k in kept if k not in set(removed)]
-        return np.array(kept, dtype=int), cost
+        self.moved(current - self.profile)
+        return np.array(kept, dtype=int)
 
 
 def _breaks(bounds: LinearBounds, rows: list, columns, current, change) -> bool:
@@ -200,15 +214,44 @@ def _breaks(bounds: LinearBounds, rows: list, columns, current, change) -> bool:
     return bool(np.any(values < bounds.lower[touched]) or np.any(values > bounds.upper[touched]))
 
 
+@dataclass(frozen=True, eq=False)
+class Adaptation:
+    """An adaptive grid's coarsening with its settings bound (what the model correction calls).
+
+    Attributes
+    ----------
+    tolerance : float
+        ``GridSettings.adaptive_tolerance``.
+    finer : WinchProblem or None
+        The problem on the candidate nodes where they are finer than the first solve's.
+    """
+
+    tolerance: float
+    finer: WinchProblem | None = None
+
+    def candidates(self, problem: WinchProblem) -> np.ndarray:
+        """The candidate nodes (s) of the first solve's ``problem``."""
+        return (problem if self.finer is None else self.finer).control.breakpoints
+
+    def __call__(self, problem: WinchProblem, solver, values, parameters) -> Coarsening:
+        """:func:`coarsen` with these settings."""
+        return coarsen(problem, solver, values, parameters, self.tolerance, self.finer)
+
+
 def coarsen(
-    problem: WinchProblem, solver, values, parameters: np.ndarray, tolerance: float
+    problem: WinchProblem,
+    solver,
+    values,
+    parameters: np.ndarray,
+    tolerance: float,
+    finer: WinchProblem | None = None,
 ) -> Coarsening:
-    """The nodes of ``problem``'s default grid to keep, at its corrected optimum (docstring).
+    """The nodes to keep, at the corrected optimum of ``problem``'s first solve (docstring).
 
     Parameters
     ----------
     problem : WinchProblem
-        The problem on the default grid (a uniform Hermite control).
+        The problem on the default grid, solved first.
     solver : ProblemSolver
         Its solver, which solved it last at ``parameters``: a Gauss-Newton solver's last
         linearisation is taken again; another solver's problem is linearised anew.
@@ -217,28 +260,65 @@ def coarsen(
     parameters : array
         The first solve's optimum on the default grid (rad, rad/s).
     tolerance : float
-        ``GridSettings.adaptive_tolerance``.
+        ``GridSettings.adaptive_tolerance``: the nodes kept predict Omega within it of the
+        default grid's prediction.
+    finer : WinchProblem, optional
+        The problem on the candidate nodes (a grid ``adaptive_finest`` times finer, holding the
+        default grid's nodes); None: the default grid's nodes are the candidates.
     """
     model = solver
     if not isinstance(model, GaussNewton):
         model = GaussNewton(problem, GaussNewtonSettings())
     linearised = model.linearised_at(values, parameters)
-    quadratic = Quadratic(
-        model.weights * linearised.error, model.weights[:, None] * linearised.jacobian, parameters
-    )
-    bounds = problem.bounds
-    step, _, _ = model.step(linearised, parameters, bounds.lower, bounds.upper, {})
-    if step is not None:
-        quadratic.moved(step)
+    quadratic = _optimum(model, linearised, parameters)
     predicted = float(np.sqrt(max(quadratic.objective, 0.0)))
-    times = problem.control.breakpoints
+    candidates = problem if finer is None else finer
+    times = candidates.control.breakpoints
+    start = parameters
+    if finer is not None:  # one sensitivity sweep on the candidates, from the same profile
+        model = GaussNewton(finer, GaussNewtonSettings())
+        start = on_nodes(problem.control, parameters, times)
+        linearised = model.linearisation(values, start)
+        quadratic = _optimum(model, linearised, start)
     allowed = ((1 + tolerance) * predicted + OMEGA_ROUND_OFF) ** 2
-    kept, objective = quadratic.coarsest(times, allowed, bounds)
-    chosen = with_nodes(problem, times[kept])
+    kept = np.arange(times.size)
+    for _ in range(REOPTIMISED + 1):
+        fewer = quadratic.coarsest(times, allowed, candidates.bounds, kept)
+        if fewer.size == kept.size and fewer.size < times.size:
+            break
+        kept = fewer
+        chosen = with_nodes(candidates, times[kept])
+        coarse = on_nodes(candidates.control, quadratic.profile, times[kept])
+        # The model's optimum on the nodes kept (a QP within their bounds), from which the
+        # next pass removes more: the interpolated profile overstates what they cost.
+        embedding = on_nodes(chosen.control, np.eye(chosen.control.size), times)
+        moved = linearised.jacobian @ (quadratic.profile - start)
+        on_chosen = Linearised(
+            linearised.states, linearised.error + moved, linearised.jacobian @ embedding, True
+        )
+        reduced = GaussNewton(chosen, GaussNewtonSettings())
+        bounds = chosen.bounds
+        step, _, _ = reduced.step(on_chosen, coarse, bounds.lower, bounds.upper, {})
+        if step is None:
+            break
+        quadratic.moved(embedding @ step)
     return Coarsening(
         chosen,
-        on_nodes(problem.control, quadratic.profile, times[kept]),
+        coarse + (step if step is not None else 0.0),
         problem.control.intervals,
         predicted,
-        float(np.sqrt(max(objective, 0.0))),
+        float(np.sqrt(max(quadratic.objective, 0.0))),
+        times,
     )
+
+
+def _optimum(model: GaussNewton, linearised, profile: np.ndarray) -> Quadratic:
+    """The Gauss-Newton model at ``profile``, moved to its QP's optimum within the bounds."""
+    quadratic = Quadratic(
+        model.weights * linearised.error, model.weights[:, None] * linearised.jacobian, profile
+    )
+    bounds = model.problem.bounds
+    step, _, _ = model.step(linearised, profile, bounds.lower, bounds.upper, {})
+    if step is not None:
+        quadratic.moved(step)
+    return quadratic

@@ -15,9 +15,7 @@ keeps score (CONVENTIONS.md §5, "reduced models for optimisation").
 from __future__ import annotations
 
 import time
-from collections.abc import Callable
 from dataclasses import dataclass, field, fields, replace
-from functools import partial
 from pathlib import Path
 from types import MappingProxyType
 
@@ -25,7 +23,7 @@ import numpy as np
 import xarray as xr
 
 from cable_ocp import result_files
-from cable_ocp.control.adaptive_grid import Coarsening, coarsen
+from cable_ocp.control.adaptive_grid import Adaptation, Coarsening, with_nodes
 from cable_ocp.control.hermite_nodes import HermiteNodes
 from cable_ocp.control.keywords import refuse_unknown
 from cable_ocp.control.problem import SolverOutcome, WinchProblem
@@ -437,7 +435,7 @@ def solve_verified(
     quiet: bool = False,
     verbose: bool = False,
     verify_compiled: bool | None = None,
-    adapt: Callable | None = None,
+    adapt: Adaptation | None = None,
 ) -> OcpResult:
     """A solver of the registry on a problem, verified and refined on its scene.
 
@@ -455,11 +453,11 @@ def solve_verified(
         IPOPT's full log instead of one progress line per iteration.
     verify_compiled : bool, optional
         Verify on the compiled full model (default: as the transcription is compiled).
-    adapt : callable, optional
-        An adaptive grid's coarsening (:func:`cable_ocp.control.adaptive_grid.coarsen` with its
-        tolerance bound): ``(problem, solver, values, parameters) -> Coarsening``, called once
-        after the first solve's full-model run with the corrected values; the solves after it
-        run on the problem it returns (at least one, also where the model is the scene's).
+    adapt : Adaptation, optional
+        An adaptive grid's coarsening (:class:`cable_ocp.control.adaptive_grid.Adaptation`),
+        called once after the first solve's full-model run with the corrected values; the
+        solves after it run on the problem it returns (at least one, also where the model is
+        the scene's), and the model correction's step fits every candidate node.
 
     Returns
     -------
@@ -487,7 +485,7 @@ def solve_verified(
     # reported is verified at the scene's.
     correction = None
     if solves > 1:
-        nodes = problem.control.breakpoints
+        nodes = problem.control.breakpoints if adapt is None else adapt.candidates(problem)
         correction = correction_step(problem.scene, compiled, nodes)
     learned = None  # (full-model run, outcome) the next model correction starts from
     best_solve = None
@@ -744,7 +742,7 @@ def optimize(
         problem = chosen.problem(scene, settings, entry.needs_compiled)
         adapt = None
         if settings.grid.adaptive:
-            adapt = partial(coarsen, tolerance=settings.grid.adaptive_tolerance)
+            problem, adapt = _adaptive(problem, settings.grid)
         result = solve_verified(
             problem, settings, quiet=quiet, verbose=verbose, adapt=adapt, **options
         )
@@ -757,6 +755,19 @@ def optimize(
     notes = "; ".join(text for text in (result.notes, derived) if text)
     ran = result.trajectory.scene_record if result.trajectory is not None else scene.to_dict()
     return replace(result, notes=notes, scene_record=ran, settings=settings.record())
+
+
+def _adaptive(problem: WinchProblem, grid: GridSettings) -> tuple[WinchProblem, Adaptation]:
+    """The adaptive grid's first problem (on the default grid) and its coarsening.
+
+    ``problem`` is on the candidate nodes (``grid.adaptive_finest`` times finer than the default
+    grid); the first solve takes every ``adaptive_finest``-th of them (and the last).
+    """
+    if grid.adaptive_finest == 1:
+        return problem, Adaptation(grid.adaptive_tolerance)
+    times = problem.control.breakpoints
+    first = with_nodes(problem, np.unique(np.r_[times[:: grid.adaptive_finest], times[-1]]))
+    return first, Adaptation(grid.adaptive_tolerance, problem)
 
 
 def _solve_options(entry: Solver, refinements: int | None) -> dict:
