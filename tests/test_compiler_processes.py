@@ -118,3 +118,35 @@ def test_background_compiles_still_finish_and_load(tmp_path, monkeypatch):
         assert report.library is not None and not report.cache_hit
         assert float(functions[0]([1.0, 2.0])[1]) == 2.0 * k
     assert not [p for p in tmp_path.iterdir() if p.name.startswith(".")]
+
+
+def test_a_ctrl_c_while_the_compiler_starts_still_kills_it(tmp_path, monkeypatch):
+    """SIGINT delivered inside ``Popen`` (after the fork) is held back, then kills the group.
+
+    On a loaded machine the stand-in compiler above was left running when the Ctrl-C arrived
+    before ``Popen`` had returned its handle: nothing knew its process to kill.
+    """
+    import signal
+
+    from cable_ocp.model import compile as compile_module
+
+    record = tmp_path / "compiler.pids"
+    real_popen = subprocess.Popen
+
+    def interrupted_popen(*args, **kwargs):
+        process = real_popen(*args, **kwargs)
+        while not record.is_file() or not record.read_text().strip():
+            time.sleep(0.01)
+        signal.raise_signal(signal.SIGINT)  # the compiler runs; its handle is not yet returned
+        return process
+
+    monkeypatch.setattr(compile_module.subprocess, "Popen", interrupted_popen)
+    script = f'sleep 600 & echo "$$ $!" > "{record}"; wait'
+    with pytest.raises(KeyboardInterrupt):
+        compile_module._run_compiler(["sh", "-c", script])
+    pids = [int(pid) for pid in record.read_text().split()]
+    deadline = time.monotonic() + 5
+    while any(map(_running, pids)) and time.monotonic() < deadline:
+        time.sleep(0.05)
+    assert not any(map(_running, pids)), "the compiler outlived the Ctrl-C"
+    assert not compile_module._RUNNING

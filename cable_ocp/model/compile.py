@@ -288,33 +288,61 @@ def _run_compiler(command: list[str]) -> tuple[int, str]:
 
     The whole group (the driver with its cc1, as and ld) is killed when the caller is interrupted
     (KeyboardInterrupt, which is raised again) or the process exits (:func:`_stop_compilers`),
-    so that no compiler outlives its run. Raises _CompilerFailed when the compiler cannot be
-    started or the process is exiting.
+    so that no compiler outlives its run. SIGINT is held back while the compiler starts: a
+    Ctrl-C between the fork and the handle's return would otherwise leave it running with no
+    one to kill it (seen on a loaded machine). Raises _CompilerFailed when the compiler cannot
+    be started or the process is exiting.
     """
-    with _RUNNING_LOCK:
-        if _exiting:
-            raise _CompilerFailed("not started: the process is exiting")
-        try:
-            process = subprocess.Popen(
-                command,
-                stdout=subprocess.PIPE,
-                stderr=subprocess.PIPE,
-                text=True,
-                start_new_session=True,
-            )
-        except OSError as error:
-            raise _CompilerFailed(f"cannot run {command[0]}: {error}") from error
-        _RUNNING.add(process)
-    with process:
-        try:
-            stdout, stderr = process.communicate()
-        except BaseException:
+    process = None
+    held = _hold_interrupts()
+    try:
+        with _RUNNING_LOCK:
+            if _exiting:
+                raise _CompilerFailed("not started: the process is exiting")
+            try:
+                process = subprocess.Popen(
+                    command,
+                    stdout=subprocess.PIPE,
+                    stderr=subprocess.PIPE,
+                    text=True,
+                    start_new_session=True,
+                )
+            except OSError as error:
+                raise _CompilerFailed(f"cannot run {command[0]}: {error}") from error
+            _RUNNING.add(process)
+        _release_interrupts(held)  # a Ctrl-C held back is raised from here on, and kills it
+        stdout, stderr = process.communicate()
+    except BaseException:
+        if process is not None:
             _kill_group(process)
-            raise
-        finally:
-            with _RUNNING_LOCK:
-                _RUNNING.discard(process)
+        raise
+    finally:
+        _release_interrupts(held)
+        if process is not None:
+            _reap(process)
     return process.returncode, stderr or stdout
+
+
+def _reap(process: subprocess.Popen) -> None:
+    """Forget a compiler that ended (or was killed): close its pipes and wait for its exit."""
+    with _RUNNING_LOCK:
+        _RUNNING.discard(process)
+    for pipe in (process.stdout, process.stderr):
+        pipe.close()
+    process.wait()
+
+
+def _hold_interrupts() -> set | None:
+    """Block SIGINT in this thread (POSIX); the mask to restore, None where nothing was blocked."""
+    if not hasattr(signal, "pthread_sigmask"):
+        return None
+    return signal.pthread_sigmask(signal.SIG_BLOCK, {signal.SIGINT})
+
+
+def _release_interrupts(held: set | None) -> None:
+    """Restore the signal mask :func:`_hold_interrupts` returned (a held SIGINT then arrives)."""
+    if held is not None:
+        signal.pthread_sigmask(signal.SIG_SETMASK, held)
 
 
 def _kill_group(process: subprocess.Popen) -> None:
