@@ -5,8 +5,8 @@
 the policy's own training observations, and runs the closed loop (the MPC) on the family's base
 scene in the same process, so that the ratio is of one run on one machine. It then runs the
 policy with its safety net on that scene, and times its rollout check per sample
-(:mod:`.rollout`) and the whole step where the policy acted (the observation, the network in
-numpy and the three checks).
+(:mod:`cable_ocp.policy.rollout`) and the whole step where the policy acted (the observation,
+the network in numpy and the three checks).
 """
 
 from __future__ import annotations

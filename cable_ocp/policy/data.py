@@ -7,7 +7,7 @@ In round 0 the MPC's plan drives the plant (its own runs); in a DAgger round (Ro
 the current network's action drives it, so that the pairs are the states the policy itself
 visits, labelled by the MPC's solve there. A sample whose label cannot be trusted (the MPC's
 solve failed there, or the observation or the label is not finite: a seabed point off the
-chart) gives no pair; it is counted and said why (:attr:`Recorder.skipped`, the records'
+chart) gives no pair; it is counted and said why (``Recorder.skipped``, the records'
 ``skipped``), never a crash of the round nor a pair that poisons the fit. :func:`generate` runs
 the scenes on the sweep's Dask engine (:func:`cable_ocp.sweep.runner.engine`: a LocalCluster by
 default, a scheduler's address for a cluster) and returns the pairs in the scenes' order,

@@ -13,8 +13,8 @@ action, the MPC when it fails):
 3. **The rollout.** The controller's reduced model runs one horizon from the estimate; the
    policy's action, followed by the best plan after it, must predict an Omega over the horizon
    within a margin of the MPC's own prediction, and keep the minimum clearance
-   (:mod:`.rollout`). The envelope and the bounds cannot see an action that keeps the plant
-   alive but lets the load wander; the rollout does.
+   (:mod:`cable_ocp.policy.rollout`). The envelope and the bounds cannot see an action that
+   keeps the plant alive but lets the load wander; the rollout does.
 
 Where any fails, the controller solves the sample (:meth:`PolicyController.make_step`), and
 its solve's status says why it was handed over.
