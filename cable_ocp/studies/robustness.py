@@ -31,7 +31,6 @@ from __future__ import annotations
 import tempfile
 import time
 import traceback
-from collections.abc import Callable
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -456,26 +455,30 @@ def space_summary(rows: list[dict]) -> dict:
     return figures
 
 
-def _case_text(
-    k: int,
-    row: dict,
-    scene: str,
-    figures: Callable[[dict], str],
-    real_time_factor: bool,
-) -> str:
+def _case_text(k: int, row: dict, scene: str, whole_space: bool) -> str:
     """A case's line: its ``scene`` and its waves, then what became of it.
 
-    That is RAISED, or optimize's verdict, its ``figures`` and its status when it failed, then
-    mpc's run if it had one (with its real-time factor when ``real_time_factor``).
+    That is RAISED, or optimize's verdict with its Omega (against the locked winch and the reach
+    floor), its time on a bound (paper-hill cases) or whether it met the goal (``whole_space``),
+    its wall time and its status when it failed; then mpc's run if it had one (with its
+    real-time factor on the whole space).
     """
     text = f"case {k:>3}: {scene}, {' + '.join(_waves(row['overrides'])) or 'no heave'}: "
     if row["raised"]:
         return text + f"RAISED {row['raised']}"
-    text += ("ok" if row["success"] else "FAILED") + figures(row)
+    text += "ok" if row["success"] else "FAILED"
+    if whole_space and not meets_space_goal(row):
+        text += " (goal not met)"
+    text += (
+        f" Omega {row['omega']:.3g} m (locked {row['locked']:.3g} m, floor {row['floor']:.3g} m), "
+    )
+    if not whole_space:
+        text += f"bound {row['bound_time']:.0f} s, "
+    text += f"{row['wall']:.1f} s"
     if not row["success"]:
         text += f" [{row['status']}]"
     if "mpc_success" in row:
-        rate = f"RTF {row.get('mpc_rtf', np.nan):.0f}, " if real_time_factor else ""
+        rate = f"RTF {row.get('mpc_rtf', np.nan):.0f}, " if whole_space else ""
         text += (
             f"; mpc {'RAISED ' + row['mpc_raised'] if row['mpc_raised'] else ''}"
             f"{'ok' if row['mpc_success'] else 'failed'} Omega {row.get('mpc_omega', np.nan):.3g}"
@@ -486,13 +489,15 @@ def _case_text(
     return text
 
 
-def _summary_opening(f: dict, cases: str) -> list[str]:
-    """The first lines of a summary: what ran, how many succeeded, how many raised."""
+def _summary_opening(f: dict, cases: str, goal: str) -> list[str]:
+    """A summary's first lines: what ran, how many succeeded, raised and met ``goal``, Omega."""
     return [
         f"robustness: {f['cases']} {cases}, default optimize(); mpc() on the heaving ones",
         f"  success            {f['success']}/{f['cases']} "
         f"({100 * f['success'] / max(f['cases'], 1):.0f} %)",
         f"  raised             {f['raised']}",
+        f"  goal met           {f['goal']}/{f['cases']} ({goal})",
+        f"  Omega              median {f['omega_median']:.3g} m, 90th pct {f['omega_p90']:.3g} m",
     ]
 
 
@@ -519,26 +524,18 @@ def _space_line(k: int, row: dict) -> str:
         f"{', grid' if 'grid' in o[PLACED] else ''}"
         f"{', rate limits' if 'winch.rate_max' in o else ''}"
     )
-    return _case_text(k, row, scene, _space_figures, real_time_factor=True)
-
-
-def _space_figures(row: dict) -> str:
-    return (
-        f"{'' if meets_space_goal(row) else ' (goal not met)'}"
-        f" Omega {row['omega']:.3g} m (locked {row['locked']:.3g}, floor {row['floor']:.3g}), "
-        f"{row['wall']:.1f} s"
-    )
+    return _case_text(k, row, scene, whole_space=True)
 
 
 def _space_summary_text(f: dict, seed: int) -> str:
     return "\n".join(
         [
-            *_summary_opening(f, f"scenes from the whole scene space (seed {seed})"),
-            f"  goal met           {f['goal']}/{f['cases']} (Omega <= {SPACE_OMEGA_GOAL} m, or "
-            f">= {SPACE_GAIN_GOAL:g}x better than locked, or within "
-            f"{100 * (SPACE_FLOOR_SHARE - 1):.0f} % of the reach floor)",
-            f"  Omega              median {f['omega_median']:.3g} m, "
-            f"90th pct {f['omega_p90']:.3g} m",
+            *_summary_opening(
+                f,
+                f"scenes from the whole scene space (seed {seed})",
+                f"Omega <= {SPACE_OMEGA_GOAL} m, or >= {SPACE_GAIN_GOAL:g}x better than locked, "
+                f"or within {100 * (SPACE_FLOOR_SHARE - 1):.0f} % of the reach floor",
+            ),
             f"  reach-limited      {f['reach_limited']} (floor > locked / {GAIN_GOAL:g})",
             f"  on a random grid   {f['grid_success']}/{f['grid_cases']} succeeded, "
             f"{f['grid_goal']} met the goal",
@@ -557,24 +554,17 @@ def _case_line(k: int, row: dict) -> str:
         f"n = {o['model.elements']:>2}, U = {o['top.tow.surge_speed']:.2f}, "
         f"{len(o['seabed.hills'])} hill(s){', grid' if SITE in o else ''}"
     )
-    return _case_text(k, row, scene, _case_figures, real_time_factor=False)
-
-
-def _case_figures(row: dict) -> str:
-    return (
-        f" Omega {row['omega']:.3g} m (locked {row['locked']:.3g} m, floor {row['floor']:.3g} m), "
-        f"bound {row['bound_time']:.0f} s, {row['wall']:.1f} s"
-    )
+    return _case_text(k, row, scene, whole_space=False)
 
 
 def _summary_text(f: dict, seed: int) -> str:
     return "\n".join(
         [
-            *_summary_opening(f, f"random variants of paper_hill (seed {seed})"),
-            f"  goal met           {f['goal']}/{f['cases']} (Omega <= {OMEGA_GOAL} m or "
-            f">= {GAIN_GOAL:g}x better than locked)",
-            f"  Omega              median {f['omega_median']:.3g} m, "
-            f"90th pct {f['omega_p90']:.3g} m",
+            *_summary_opening(
+                f,
+                f"random variants of paper_hill (seed {seed})",
+                f"Omega <= {OMEGA_GOAL} m or >= {GAIN_GOAL:g}x better than locked",
+            ),
             f"  Omega / locked     median {f['ratio_median']:.3g}, 90th pct {f['ratio_p90']:.3g}",
             f"  bound-limited      {f['bound_limited']} (the winch rode a bound), of which "
             f"{f['reach_limited']} reach-limited (floor > locked / {GAIN_GOAL:g})",
