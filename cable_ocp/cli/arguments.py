@@ -76,6 +76,11 @@ def add_engine_options(parser: argparse.ArgumentParser) -> None:
     )
 
 
+def add_quiet(parser: argparse.ArgumentParser) -> None:
+    """Add ``--quiet``: the command shows no progress (its results and its summary are the same)."""
+    parser.add_argument("--quiet", action="store_true", help="no progress bars or solver logs")
+
+
 def add_set(parser: argparse.ArgumentParser, example: str, what: str = "a scene field") -> None:
     """Add ``--set KEY=VALUE`` (repeatable): override ``what``, e.g. ``--set example``."""
     parser.add_argument("--set", action="append", default=[], metavar="KEY=VALUE",

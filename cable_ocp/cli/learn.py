@@ -5,7 +5,7 @@ from __future__ import annotations
 import argparse
 from pathlib import Path
 
-from cable_ocp.cli.arguments import add_command, add_engine_options, integer
+from cable_ocp.cli.arguments import add_command, add_engine_options, add_quiet, integer
 from cable_ocp.cli.exits import SUCCESS
 from cable_ocp.policy.defaults import C_NAME, HIDDEN, POLICY_FILE, ROUNDS, SCENES
 
@@ -49,7 +49,7 @@ def add_learn_command(commands) -> argparse.ArgumentParser:
                        help="seeds the scenes drawn and the network's initial weights")  # fmt: skip
     learn.add_argument("--hidden", type=hidden_layers, default=",".join(map(str, HIDDEN)),
                        help="hidden layer widths, comma-separated")  # fmt: skip
-    learn.add_argument("--quiet", action="store_true", help="no progress bar")
+    add_quiet(learn)
     learn.set_defaults(run=run_learn_command)
     return learn
 

@@ -6,7 +6,7 @@ import argparse
 import math
 from pathlib import Path
 
-from cable_ocp.cli.arguments import add_command, add_set, positive, scene_from
+from cable_ocp.cli.arguments import add_command, add_quiet, add_set, positive, scene_from
 from cable_ocp.cli.exits import SUCCESS, failed
 from cable_ocp.lowering.landing import HOVER
 
@@ -51,7 +51,7 @@ def add_lower_command(subparsers) -> None:
         "--animate", action="store_true",
         help="also write animation.gif: the rope growing as it is paid out",
     )  # fmt: skip
-    parser.add_argument("--quiet", action="store_true", help="no progress bars")
+    add_quiet(parser)
     parser.set_defaults(run=run_lower_command)
 
 

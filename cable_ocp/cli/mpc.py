@@ -9,6 +9,7 @@ from pathlib import Path
 from cable_ocp.cli.arguments import (
     add_command,
     add_model_options,
+    add_quiet,
     add_set,
     fraction,
     integer,
@@ -91,7 +92,7 @@ def add_mpc_command(subparsers) -> None:
         "elsewhere; summary.json's handed_share says how often the MPC did",
     )  # fmt: skip
     add_set(parser, "top.heave.amplitude=1")
-    parser.add_argument("--quiet", action="store_true", help="no progress bar")
+    add_quiet(parser)
     parser.set_defaults(run=run_mpc_command)
 
 

@@ -10,6 +10,7 @@ from cable_ocp.cli.arguments import (
     INTERPRETED_HELP,
     OUT_HELP,
     add_command,
+    add_quiet,
     add_set,
     parse_overrides,
 )
@@ -38,7 +39,7 @@ def add_replay_command(commands) -> None:
         + "; ".join(f"{name}: {text}" for name, text in RETIMES.items())
         + " (default: such a replay is refused)",
     )  # fmt: skip
-    parser.add_argument("--quiet", action="store_true", help="no progress bar")
+    add_quiet(parser)
     parser.add_argument("--interpreted", action="store_true", help=INTERPRETED_HELP)
     parser.add_argument("--animate", action="store_true", help=ANIMATE_HELP)
     parser.set_defaults(run=run_replay_command)

@@ -9,6 +9,7 @@ from cable_ocp.cli.arguments import (
     ANIMATE_HELP,
     INTERPRETED_HELP,
     add_command,
+    add_quiet,
     add_set,
     knot_angles,
     scene_from,
@@ -28,7 +29,7 @@ def add_simulate_command(commands) -> None:
     parser = add_command(commands, "simulate", "simulate a scene and write results and figures")
     parser.add_argument("--knots", type=knot_angles, help=KNOTS_HELP)
     add_set(parser, "model.elements=30")
-    parser.add_argument("--quiet", action="store_true", help="no progress bar")
+    add_quiet(parser)
     parser.add_argument("--interpreted", action="store_true", help=INTERPRETED_HELP)
     parser.add_argument("--animate", action="store_true", help=ANIMATE_HELP)
     parser.set_defaults(run=run_simulate_command)

@@ -5,7 +5,7 @@ from __future__ import annotations
 import argparse
 from pathlib import Path
 
-from cable_ocp.cli.arguments import OUT_HELP, add_command, add_set, scene_from
+from cable_ocp.cli.arguments import OUT_HELP, add_command, add_quiet, add_set, scene_from
 from cable_ocp.cli.exits import SUCCESS
 from cable_ocp.cli.files import results_folder
 from cable_ocp.scene.bundled import models_dir, scene_argument
@@ -33,7 +33,7 @@ def add_study_command(commands) -> None:
                         "bundled scene's name")  # fmt: skip
     parser.add_argument("--out", type=Path, required=True, help=OUT_HELP)
     add_set(parser, "numerics.step=0.02", "a field of SCENE")
-    parser.add_argument("--quiet", action="store_true", help="no progress bars")
+    add_quiet(parser)
     parser.add_argument("--compiled", action="store_true", help="end-force: model compiled to C")
     parser.add_argument(
         "--quick", action="store_true", help="speed-accuracy, stability, payout: a small version"

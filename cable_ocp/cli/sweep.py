@@ -11,7 +11,7 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
-from cable_ocp.cli.arguments import add_command, add_engine_options
+from cable_ocp.cli.arguments import add_command, add_engine_options, add_quiet
 from cable_ocp.cli.exits import INTERRUPTED, SUCCESS, failed
 
 if TYPE_CHECKING:
@@ -44,7 +44,7 @@ def add_sweep_command(commands) -> argparse.ArgumentParser:
         "(default: cable_ocp.sweep.runner.ENGINE_TIMEOUT)",
     )
     sweep.add_argument("--retry-failed", action="store_true", help="rerun cases saved as failed")
-    sweep.add_argument("--quiet", action="store_true", help="no progress bar")
+    add_quiet(sweep)
     sweep.set_defaults(run=run_sweep_command)
     return sweep
 
