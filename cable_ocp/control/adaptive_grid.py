@@ -1,34 +1,37 @@
 """An adaptive control grid: Hermite nodes where the winch needs them (issue 43, paper §6).
 
-``GridSettings(adaptive=True)`` chooses the open loop's Hermite nodes among the default grid's
-(:func:`cable_ocp.control.defaults.control_grid`, about 5 s apart, or ``adaptive_finest`` times
-finer; every one of them on an RK4 step end of every model, so that any subset is too) by
-coarsening, with the error measured in the objective itself (Betts' equidistribution, run from
-the fine end):
+``GridSettings(adaptive=True)`` chooses the open loop's Hermite nodes among candidates: the nodes
+of a grid ``adaptive_finest`` times finer than the default one
+(:func:`cable_ocp.control.defaults.control_grid`, about 5 s apart; every candidate on an RK4
+step end of every model, so that any subset is too). It coarsens, with the error measured in
+the objective itself (Betts' equidistribution, run from the fine end):
 
-1. The model correction's first solve and its full-model run are the uniform default's (the
-   default grid, from the locked first guess): they give the reduced model's bias ``b``.
-2. At that optimum the corrected clearance error is linearised in the default grid's parameters
-   (the Gauss-Newton solver's last Jacobian; another solver's takes one sensitivity sweep):
+1. The model correction's first solve and its full-model run are on the default grid (the
+   candidates' every ``adaptive_finest``-th node, the uniform default's grid when that is 1):
+   they give its optimum ``p0`` and the reduced model's bias ``b``.
+2. At ``p0`` the corrected clearance error is linearised in the default grid's parameters (the
+   Gauss-Newton solver's last Jacobian; another solver's takes one sensitivity sweep):
    ``r = W (e + b)``, ``A = W J``, Omega^2 ~ ``|r + A d|^2``. Its QP step within the winch bounds
-   (and the minimum clearance) is the corrected optimum on the default grid, predicted: ``p*``
-   and Omega*.
-3. Nodes go, cheapest first, while the model's Omega^2 of the profile that interpolates ``p*`` on
-   the nodes left stays within ``((1 + adaptive_tolerance) Omega* + OMEGA_ROUND_OFF)^2``. A
-   node's cost is the exact change of that quadratic when one cubic spans its two neighbours
-   (through their angles and rates); a pass removes no two neighbours, and passes repeat until
-   no node fits in what is left.
-4. The model-correction solves that remain run on the nodes left, from ``p*`` on them (no solve
-   of the coarse grid is re-solved on a finer one), and the verification is the usual one.
+   (and the minimum clearance) predicts the default grid's corrected optimum, Omega*. With
+   finer candidates, the same model is taken once more in theirs (one sweep at ``p0``) and
+   moved to its QP's optimum.
+3. Nodes go, cheapest first, while the model's Omega^2 of the profile that interpolates the
+   optimum on the nodes left stays within ``((1 + adaptive_tolerance) Omega* +
+   OMEGA_ROUND_OFF)^2``. A node's cost is the exact change of that quadratic when one cubic
+   spans its two neighbours (through their angles and rates); a cubic that would break a winch
+   bound row keeps its node; a pass removes no two neighbours, and passes repeat until no node
+   fits in what is left. The model is then re-optimised on the nodes kept (its QP within their
+   bounds) and coarsened again, up to :data:`REOPTIMISED` times.
+4. The model-correction solves that remain run on the nodes kept, from the model's optimum on
+   them, and the verification is the usual one.
 
-Why from the fine end: a solve's cost hardly depends on its parameters (the sensitivity sweep's
-cost is the model's Jacobians at every RK4 stage; 2-3 iterations of a 23-interval grid took as
-long as of a 90-interval one on whole-space seed 1 case 2), so refinement rounds from a coarse
-grid each cost about a default solve, and the coarse grid's model error (before any correction)
-misled them. Coarsening costs no solve beyond the uniform default's. The winch bounds and the
-minimum clearance are rows at every RK4 point of every grid, so no constraint is lost between
-coarse nodes (the verification checks the full model at its own steps). CONVENTIONS.md §5 states
-the rule and its measurements.
+Why from the fine end: a solve's cost hardly depends on its parameters (a sensitivity sweep of
+paper_hill's reduced model took 0.126 s on 22 parameters, 0.142 s on 84, 0.206 s on 168: the
+model's Jacobians at every RK4 stage dominate it), so refinement rounds from a coarse grid each
+cost about a default solve, and the coarse grid's model error (before any correction) misled
+them. The winch bounds and the minimum clearance are rows at every RK4 point of every grid, so
+no constraint is lost between coarse nodes (the verification checks the full model at its own
+steps). CONVENTIONS.md §5 states the rule and its measurements.
 """
 
 from __future__ import annotations
@@ -48,8 +51,9 @@ from cable_ocp.drive.controls import hermite_polynomials
 # (a straight profile that a coarse grid fits to round-off). 0.1 um was 6 % of whole-space seed
 # 1 case 3's 1.8 um, and its adaptive Omega came out 4.3 % above the uniform one's.
 OMEGA_ROUND_OFF = 1e-9
-# Times the model is re-optimised on the nodes kept and coarsened again.
-REOPTIMISED = 3
+# Times the model is re-optimised on the nodes kept and coarsened again (once: 150 -> 132
+# parameters on whole-space seed 1 case 9, a third pass 130 for 0.7 s more; 0-2 fewer on others).
+REOPTIMISED = 1
 
 
 def with_nodes(problem: WinchProblem, times: np.ndarray) -> WinchProblem:
