@@ -23,13 +23,23 @@ from cable_ocp.model.layout import INPUTS
 CANNOT = ": the scene's drum cannot turn so"  # the end of a failure's line
 
 
-def _beyond(time, values, low, high, what, unit, fields) -> str | None:
-    """The sample of ``values`` furthest outside ``[low, high]`` (beyond the tolerance), or None.
+def beyond(
+    time: np.ndarray,
+    values: np.ndarray,
+    low: float,
+    high: float,
+    what: str,
+    unit: str,
+    fields: tuple[str, str],
+    tolerance: float = BOUND_TOLERANCE,
+) -> str | None:
+    """The sample of ``values`` furthest outside ``[low, high]`` by more than ``tolerance``.
 
-    ``fields`` names the lower and the upper bound's scene field.
+    ``fields`` names the lower and the upper bound's ``winch`` field; None when no sample is
+    outside. The line reads ``the drum {what} {value} {unit} at t = ..., beyond winch.{field}``.
     """
     excess = np.maximum(low - values, values - high)
-    outside = excess > BOUND_TOLERANCE
+    outside = excess > tolerance
     if not outside.any():
         return None
     k = int(np.argmax(np.where(outside, excess, -np.inf)))
@@ -59,7 +69,7 @@ def drum_failure(winch, time: np.ndarray, angle: np.ndarray) -> str | None:
         sample furthest outside, with how long the drum stayed outside.
     """
     angle = np.asarray(angle, dtype=float)
-    found = _beyond(
+    found = beyond(
         time, angle, winch.angle_min, winch.angle_max, "turned to", "rad",
         ("angle_min", "angle_max"),
     )  # fmt: skip
@@ -107,7 +117,7 @@ def rate_findings(scene, time: np.ndarray, inputs: np.ndarray) -> tuple[str | No
     winch = scene.winch
     rate, acceleration = profile_rates(scene, time, inputs)
     found = [
-        None if bound is None else _beyond(time, values, -bound, bound, what, unit, (field, field))
+        None if bound is None else beyond(time, values, -bound, bound, what, unit, (field, field))
         for values, bound, what, unit, field in (
             (rate, winch.rate_max, "turned at", "rad/s", "rate_max"),
             (acceleration, winch.acceleration_max, "accelerated at", "rad/s^2",

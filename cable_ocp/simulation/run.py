@@ -13,6 +13,7 @@ from cable_ocp.model.layout import INPUTS
 from cable_ocp.scene.given import scene_given
 from cable_ocp.scene.rules import finite_array
 from cable_ocp.simulation.budget import check_simulation_memory
+from cable_ocp.simulation.drum_range import beyond
 from cable_ocp.simulation.integrate import TIME_BLOCK, integrate, step_times
 from cable_ocp.simulation.landing_reference import reference_error
 from cable_ocp.simulation.line_run import simulate_line
@@ -62,14 +63,10 @@ def _check_top_length(scene, drive: Drive, times: np.ndarray) -> None:
     if high is None:
         check_rod(length, scene.cable.length + length - drive.top_length, times, tolerance)
         high = np.inf
-    outside = (length < low - tolerance) | (length > high + tolerance)
-    if outside.any():
-        k = int(np.argmax(outside))
-        raise ValueError(
-            f"the winch sets the top-element length to {length[k]:.4g} m at t = {times[k]:.6g} s, "
-            f"outside [winch.top_length_min, winch.top_length_max] = [{low}, {high}] m by more "
-            f"than the tolerance {tolerance:.3g} m"
-        )
+    found = beyond(times, length, low, high, "sets the top element to", "m",
+                   ("top_length_min", "top_length_max"), tolerance)  # fmt: skip
+    if found:
+        raise ValueError(f"{found}, by more than the tolerance {tolerance:.3g} m")
 
 
 def check_rod(
