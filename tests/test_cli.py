@@ -393,6 +393,22 @@ def test_optimiser_defaults_are_the_registrys(monkeypatch):
     assert optimize_settings(given) == ocp_settings("ipopt", ipopt, ModelSettings(5, 0.25))
 
 
+def test_mpc_options_are_the_settings_fields_with_their_defaults():
+    """Unset mpc options are MpcSettings()'s own; --no-heave-feedback turns its True field off."""
+    from cable_ocp.cli.mpc import settings_from
+    from cable_ocp.control.closed_loop.settings import MpcSettings
+    from cable_ocp.control.settings import ModelSettings
+
+    parser = cli.build_parser()
+    unset = settings_from(parser.parse_args(["mpc", HANGING, "--out", "o"]))
+    assert unset == MpcSettings(model=ModelSettings())
+    given = ["mpc", HANGING, "--out", "o", "--no-heave-feedback", "--solver", "ipopt",
+             "--sample", "2", "--elements", "3"]  # fmt: skip
+    assert settings_from(parser.parse_args(given)) == MpcSettings(
+        sample=2.0, solver="ipopt", heave_feedback=False, model=ModelSettings(3)
+    )
+
+
 @pytest.mark.parametrize(
     ("options", "solver"),
     [([], "gauss-newton"), (["--shooting", "single"], "gauss-newton"),

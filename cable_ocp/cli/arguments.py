@@ -202,8 +202,8 @@ class Renamed(argparse.Action):
 class DefaultsShown(argparse.RawDescriptionHelpFormatter):
     """Help that ends each option with its default, unless the help already says it.
 
-    Flags (``store_true``) and options without a fixed default (None: it follows from the scene,
-    as the help says) show none.
+    Flags (``store_true``, ``store_false``) and options without a fixed default (None: it
+    follows from the scene, as the help says) show none.
     """
 
     def _get_help_string(self, action: argparse.Action) -> str:
@@ -211,7 +211,8 @@ class DefaultsShown(argparse.RawDescriptionHelpFormatter):
         default = action.default
         if (
             "default" in text
-            or default in (None, False, [], argparse.SUPPRESS)
+            or default in (None, [], argparse.SUPPRESS)
+            or isinstance(default, bool)
             or not action.option_strings
         ):
             return text

@@ -32,20 +32,37 @@ IDEAL_NOTE = (
 )
 
 
-# The options that set the MpcSettings field of their name: (argparse type, help).
+# The options that set the MpcSettings field of their name, with their argparse keywords; a
+# field that is True by default is turned off by --no-FIELD.
 SETTINGS_OPTIONS = {
-    "horizon": (positive, "prediction horizon [s] (default: about 20 s, a multiple of "
-                "--interval within the scene's duration)"),
-    "sample": (positive, "time between solves [s] (default: the duration's whole fraction "
-               "nearest 1 s that the plant's steps divide)"),
-    "interval": (positive, "interval of the plan [s] (default: the multiple of --sample nearest "
-                 "5 s)"),
-    "heave_filter": (positive, "time constant of the heave low-pass [s]"),
-    "heave_margin": (fraction, "room kept for the heave feedback, 0..1"),
-    "limiter_band": (positive, "width of the plant's soft limiter at each end of the winch "
-                     "range [rad] (default: 0.5 rad, or a quarter of a narrower range)"),
-    "rate_weight": (weight, "pay-out speed weight [s^2]"),
+    "horizon": dict(type=positive, help="prediction horizon [s] (default: about 20 s, a multiple "
+                    "of --interval within the scene's duration)"),
+    "sample": dict(type=positive, help="time between solves [s] (default: the duration's whole "
+                   "fraction nearest 1 s that the plant's steps divide)"),
+    "interval": dict(type=positive, help="interval of the plan [s] (default: the multiple of "
+                     "--sample nearest 5 s)"),
+    "heave_filter": dict(type=positive, help="time constant of the heave low-pass [s]"),
+    "heave_margin": dict(type=fraction, help="room kept for the heave feedback, 0..1"),
+    "limiter_band": dict(type=positive, help="width of the plant's soft limiter at each end of "
+                         "the winch range [rad] (default: 0.5 rad, or a quarter of a narrower "
+                         "range)"),
+    "rate_weight": dict(type=weight, help="pay-out speed weight [s^2]"),
+    "solver": dict(choices=tuple(CLOSED_LOOP_SOLVERS), help="gauss-newton: one Gauss-Newton "
+                   "step per sample (real-time iteration); ipopt: IPOPT"),
+    "heave_feedback": dict(help="apply the plan only (no pay-out of the measured heave)"),
 }  # fmt: skip
+
+
+def add_settings_options(parser: argparse.ArgumentParser) -> None:
+    """Add an option for each field of :data:`SETTINGS_OPTIONS`, its default the settings' own."""
+    defaults = MpcSettings()
+    for field, keywords in SETTINGS_OPTIONS.items():
+        default = getattr(defaults, field)
+        if default is True:
+            parser.add_argument(f"--no-{field.replace('_', '-')}", dest=field,
+                                action="store_false", **keywords)  # fmt: skip
+        else:
+            parser.add_argument(f"--{field.replace('_', '-')}", default=default, **keywords)
 
 
 def add_mpc_command(subparsers) -> None:
@@ -59,24 +76,13 @@ def add_mpc_command(subparsers) -> None:
         "e.g. --set top.heave.amplitude=1 --set top.heave.period=8) is the plant. Writes mpc.nc "
         "(the run, netCDF), summary.json and figures to --out.",
     )
-    defaults = MpcSettings()
-    for field, (kind, text) in SETTINGS_OPTIONS.items():
-        parser.add_argument(f"--{field.replace('_', '-')}", type=kind,
-                            default=getattr(defaults, field), help=text)  # fmt: skip
+    add_settings_options(parser)
     add_model_options(
         parser,
         elements="elements of the controller's reduced model (default: 2)",
         step="RK4 step of the reduced model [s] (default: the largest whole fraction of --sample "
         "within 0.7 of the reduced model's RK4 limit along the locked run, at most 1 s)",
     )
-    parser.add_argument(
-        "--solver", choices=tuple(CLOSED_LOOP_SOLVERS), default=defaults.solver,
-        help="gauss-newton: one Gauss-Newton step per sample (real-time iteration); ipopt: IPOPT",
-    )  # fmt: skip
-    parser.add_argument(
-        "--no-heave-feedback", action="store_true",
-        help="apply the plan only (no pay-out of the measured heave)",
-    )  # fmt: skip
     parser.add_argument(
         "--max-iter", type=integer(1, 10**6),
         help="iterations per solve (default: 1 with gauss-newton, the real-time iteration; "
@@ -109,9 +115,7 @@ def settings_from(args: argparse.Namespace) -> MpcSettings:
     return MpcSettings(
         **{field: getattr(args, field) for field in SETTINGS_OPTIONS},
         model=ModelSettings(args.elements, args.step),
-        solver=args.solver,
         solver_settings=solver_settings,
-        heave_feedback=not args.no_heave_feedback,
     )
 
 
