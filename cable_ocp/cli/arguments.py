@@ -26,7 +26,6 @@ OUT_HELP = (
 )
 
 SCENE_HELP = "the scene: a TOML file, or a bundled scene's name (cable-ocp scenes lists them)"
-ANIMATE_HELP = "also write animation.gif: the cable, the end's path and the seabed over time"
 INTERPRETED_HELP = "the interpreted model (default: compiled to C, the library cached on disk)"
 
 
@@ -73,6 +72,16 @@ def add_engine_options(parser: argparse.ArgumentParser) -> None:
         "--workers",
         type=int,
         help="LocalCluster workers, at most one per core (default: one per core)",
+    )
+
+
+def add_animate(parser: argparse.ArgumentParser) -> None:
+    """Add ``--animate``: also write the run as ``animation.gif`` (``plots.animate``)."""
+    parser.add_argument(
+        "--animate",
+        action="store_true",
+        help="also write animation.gif: the cable (paid out as it grows), the end's path and the "
+        "seabed over time",
     )
 
 

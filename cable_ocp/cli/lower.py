@@ -6,7 +6,14 @@ import argparse
 import math
 from pathlib import Path
 
-from cable_ocp.cli.arguments import add_command, add_quiet, add_set, positive, scene_from
+from cable_ocp.cli.arguments import (
+    add_animate,
+    add_command,
+    add_quiet,
+    add_set,
+    positive,
+    scene_from,
+)
 from cable_ocp.cli.exits import SUCCESS, failed
 from cable_ocp.lowering.landing import HOVER
 
@@ -47,10 +54,7 @@ def add_lower_command(subparsers) -> None:
         "--no-hover", action="store_true",
         help="leave out the optimised and the closed-loop landing from the hover",
     )  # fmt: skip
-    parser.add_argument(
-        "--animate", action="store_true",
-        help="also write animation.gif: the rope growing as it is paid out",
-    )  # fmt: skip
+    add_animate(parser)
     add_quiet(parser)
     parser.set_defaults(run=run_lower_command)
 

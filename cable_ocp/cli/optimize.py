@@ -7,8 +7,8 @@ import math
 from pathlib import Path
 
 from cable_ocp.cli.arguments import (
-    ANIMATE_HELP,
     Renamed,
+    add_animate,
     add_command,
     integer,
     scene_from,
@@ -37,7 +37,7 @@ def add_optimize_command(commands) -> None:
         help="model-correction solves of a shooting solver (default: optimize()'s)",
     )  # fmt: skip
     add_optimiser_options(parser)
-    parser.add_argument("--animate", action="store_true", help=ANIMATE_HELP)
+    add_animate(parser)
     parser.set_defaults(run=run_optimize_command)
 
 

@@ -6,9 +6,9 @@ import argparse
 from pathlib import Path
 
 from cable_ocp.cli.arguments import (
-    ANIMATE_HELP,
     INTERPRETED_HELP,
     OUT_HELP,
+    add_animate,
     add_command,
     add_quiet,
     add_set,
@@ -41,7 +41,7 @@ def add_replay_command(commands) -> None:
     )  # fmt: skip
     add_quiet(parser)
     parser.add_argument("--interpreted", action="store_true", help=INTERPRETED_HELP)
-    parser.add_argument("--animate", action="store_true", help=ANIMATE_HELP)
+    add_animate(parser)
     parser.set_defaults(run=run_replay_command)
 
 

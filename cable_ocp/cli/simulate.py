@@ -6,8 +6,8 @@ import argparse
 from pathlib import Path
 
 from cable_ocp.cli.arguments import (
-    ANIMATE_HELP,
     INTERPRETED_HELP,
+    add_animate,
     add_command,
     add_quiet,
     add_set,
@@ -31,7 +31,7 @@ def add_simulate_command(commands) -> None:
     add_set(parser, "model.elements=30")
     add_quiet(parser)
     parser.add_argument("--interpreted", action="store_true", help=INTERPRETED_HELP)
-    parser.add_argument("--animate", action="store_true", help=ANIMATE_HELP)
+    add_animate(parser)
     parser.set_defaults(run=run_simulate_command)
 
 
