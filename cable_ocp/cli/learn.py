@@ -5,7 +5,7 @@ from __future__ import annotations
 import argparse
 from pathlib import Path
 
-from cable_ocp.cli.arguments import add_command, add_engine_options, add_quiet, integer
+from cable_ocp.cli.arguments import OUT_HELP, add_command, add_engine_options, add_quiet, integer
 from cable_ocp.cli.exits import SUCCESS
 from cable_ocp.policy.defaults import C_NAME, HIDDEN, POLICY_FILE, ROUNDS, SCENES
 
@@ -39,7 +39,7 @@ def add_learn_command(commands) -> argparse.ArgumentParser:
         "policy.c/policy.h (the network as dependency-free C) and summary.json.",
     )
     learn.add_argument("family", help="the family TOML file, or a bundled family's name")
-    learn.add_argument("--out", type=Path, required=True, help="results folder")
+    learn.add_argument("--out", type=Path, required=True, help=OUT_HELP)
     add_engine_options(learn)
     learn.add_argument("--scenes", type=integer(2, 100_000), default=SCENES,
                        help="training scenes drawn from the family")  # fmt: skip
