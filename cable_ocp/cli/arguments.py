@@ -60,11 +60,18 @@ def add_model_options(parser: argparse.ArgumentParser, elements: str, step: str)
     parser.add_argument("--step", type=positive, help=step)
 
 
-def add_engine_options(parser: argparse.ArgumentParser) -> None:
-    """Add ``--scheduler`` and ``--workers``: where the Dask engine runs.
+def add_engine_command(
+    commands, name: str, summary: str, description: str, spec: tuple[str, str], out_help: str
+) -> argparse.ArgumentParser:
+    """A command that runs the cases of a TOML file on the Dask engine (``sweep``, ``learn``).
 
-    Both are checked by :func:`cable_ocp.sweep.runner.check_engine` before any work.
+    It takes the file (``spec``: its argument's name and help), ``--out`` (``out_help``), and
+    where the engine runs: ``--scheduler`` or ``--workers``, both checked by
+    :func:`cable_ocp.sweep.runner.check_engine` before any work.
     """
+    parser = add_command(commands, name, summary, description, scene=False)
+    parser.add_argument(spec[0], type=Path, help=spec[1])
+    parser.add_argument("--out", type=Path, required=True, help=out_help)
     parser.add_argument(
         "--scheduler", help="address of a running Dask scheduler, e.g. tcp://h:8786"
     )
@@ -73,6 +80,7 @@ def add_engine_options(parser: argparse.ArgumentParser) -> None:
         type=int,
         help="LocalCluster workers, at most one per core (default: one per core)",
     )
+    return parser
 
 
 def add_animate(parser: argparse.ArgumentParser) -> None:

@@ -5,7 +5,7 @@ from __future__ import annotations
 import argparse
 from pathlib import Path
 
-from cable_ocp.cli.arguments import OUT_HELP, add_command, add_engine_options, add_quiet, integer
+from cable_ocp.cli.arguments import OUT_HELP, add_engine_command, add_quiet, integer
 from cable_ocp.cli.exits import SUCCESS
 from cable_ocp.policy.defaults import C_NAME, HIDDEN, POLICY_FILE, ROUNDS, SCENES
 
@@ -27,20 +27,18 @@ def hidden_layers(text: str) -> tuple[int, ...]:
 
 def add_learn_command(commands) -> argparse.ArgumentParser:
     """Add ``learn`` to the subparsers of ``cable-ocp``."""
-    learn = add_command(
+    learn = add_engine_command(
         commands,
         "learn",
         "learn a winch policy for a scene family from the MPC's runs (DAgger, on Dask)",
-        scene=False,
-        description="Draw scenes of FAMILY (a base scene and ranges of its fields, see "
-        "models/families/), run the closed loop on each on a Dask LocalCluster or an existing "
-        "scheduler, record (observation, action) pairs, train a small network, and repeat on "
-        "the states the network visits (DAgger). DIR gets policy.nc (co.load_policy), "
-        "policy.c/policy.h (the network as dependency-free C) and summary.json.",
+        "Draw scenes of FAMILY (a base scene and ranges of its fields, see models/families/), run "
+        "the closed loop on each on a Dask LocalCluster or an existing scheduler, record "
+        "(observation, action) pairs, train a small network, and repeat on the states the "
+        "network visits (DAgger). DIR gets policy.nc (co.load_policy), policy.c/policy.h (the "
+        "network as dependency-free C) and summary.json.",
+        ("family", "the family TOML file, or a bundled family's name"),
+        OUT_HELP,
     )
-    learn.add_argument("family", help="the family TOML file, or a bundled family's name")
-    learn.add_argument("--out", type=Path, required=True, help=OUT_HELP)
-    add_engine_options(learn)
     learn.add_argument("--scenes", type=integer(2, 100_000), default=SCENES,
                        help="training scenes drawn from the family")  # fmt: skip
     learn.add_argument("--rounds", type=integer(0, 100), default=ROUNDS,

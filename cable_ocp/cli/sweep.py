@@ -6,12 +6,11 @@ import argparse
 import logging
 import math
 import sys
-from pathlib import Path
 from typing import TYPE_CHECKING
 
 import numpy as np
 
-from cable_ocp.cli.arguments import add_command, add_engine_options, add_quiet
+from cable_ocp.cli.arguments import add_engine_command, add_quiet
 from cable_ocp.cli.exits import INTERRUPTED, SUCCESS, failed
 
 if TYPE_CHECKING:
@@ -22,20 +21,16 @@ MAX_ROWS = 50  # beyond this many cases the table lists the cases that are not o
 
 def add_sweep_command(commands) -> argparse.ArgumentParser:
     """Add ``sweep`` to the subparsers of ``cable-ocp`` (its ``run`` is `run_sweep_command`)."""
-    sweep = add_command(
+    sweep = add_engine_command(
         commands,
         "sweep",
         "many simulations or OCPs of one scene on Dask, one xarray Dataset out",
-        scene=False,
-        description="Run the cases of SWEEP (a grid or sample of scene overrides, see "
-        "models/sweeps/) on a Dask LocalCluster or an existing scheduler. Every finished case "
-        "is saved in DIR/cases at once; a rerun skips them. All cases end up in DIR/sweep.nc.",
+        "Run the cases of SWEEP (a grid or sample of scene overrides, see models/sweeps/) on a "
+        "Dask LocalCluster or an existing scheduler. Every finished case is saved in DIR/cases "
+        "at once; a rerun skips them. All cases end up in DIR/sweep.nc.",
+        ("sweep", "the sweep TOML file, or the name of a bundled example"),
+        "sweep folder (resumed if present)",
     )
-    sweep.add_argument(
-        "sweep", type=Path, help="the sweep TOML file, or the name of a bundled example"
-    )
-    sweep.add_argument("--out", type=Path, required=True, help="sweep folder (resumed if present)")
-    add_engine_options(sweep)
     sweep.add_argument(
         "--engine-timeout",
         type=float,
