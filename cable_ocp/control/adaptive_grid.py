@@ -101,13 +101,13 @@ class Coarsening:
     candidates: np.ndarray
 
     def describe(self) -> str:
-        """One phrase: the grids and their predicted Omega."""
+        """One phrase (no "; ", which separates a result's notes): the grids and their Omega."""
         among = self.candidates.size - 1
         finer = f" among {among} candidates" if among != self.intervals else ""
         return (
             f"adaptive grid of {self.problem.control.intervals} intervals{finer} (the default "
-            f"grid's {self.intervals}; predicted Omega on the corrected model {self.omega:.3g} "
-            f"m against the default grid's {self.predicted:.3g} m)"
+            f"grid's {self.intervals}: predicted Omega on the corrected model {self.omega:.3g} "
+            f"m against its {self.predicted:.3g} m)"
         )
 
 
