@@ -356,3 +356,6 @@ def test_a_result_keeps_its_resolved_settings_and_solves_again_from_its_file(sho
     assert again.omega == pytest.approx(first.omega, rel=0, abs=1e-12)
     with pytest.raises(ValueError, match="not a record of OcpSettings"):
         ocp_settings_from_record({"solver": "ipopt"})
+    retired = {**kept.settings, "grid": {**kept.settings["grid"], "adaptive_start": 4,
+                                         "adaptive_rounds": 4}}  # fmt: skip
+    assert ocp_settings_from_record(retired) == settings  # a file of the first adaptive rule

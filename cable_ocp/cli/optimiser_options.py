@@ -136,8 +136,8 @@ def add_optimiser_options(parser: argparse.ArgumentParser) -> None:
         "--adaptive",
         action="store_const",
         const=True,
-        help="an adaptive control grid: Hermite nodes chosen among the default grid's, split "
-        "where they pay and merged where they do not (GridSettings(adaptive=True))",
+        help="an adaptive control grid: Hermite nodes chosen among the default grid's by "
+        "coarsening after its first solve (GridSettings(adaptive=True))",
     )
     parser.add_argument(
         "--solver",

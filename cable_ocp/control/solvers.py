@@ -87,6 +87,9 @@ SHOOTING = Transcription("shooting", resolved, winch_problem, True, None)
 KNOTS = Transcription("nelder-mead", resolved_nelder_mead, nelder_mead_problem, False, False)
 # Files and sweeps of before the solvers were named called shooting "ipopt", whichever ran.
 OLD_TRANSCRIPTIONS = {"ipopt": SHOOTING.name}
+# Grid fields of the adaptive grid's first rule (refinement from every 4th default node), which
+# its coarsening rule does without: the settings a file kept with them rebuild without them.
+RETIRED_GRID_FIELDS = ("adaptive_start", "adaptive_rounds")
 
 
 def _as_they_are(settings):
@@ -379,7 +382,9 @@ def ocp_settings_from_record(record: dict) -> OcpSettings:
             entry.name,
             entry.settings(**record["solver_settings"]),
             ModelSettings(**record["model"]),
-            GridSettings(**record["grid"]),
+            GridSettings(
+                **{k: v for k, v in record["grid"].items() if k not in RETIRED_GRID_FIELDS}
+            ),
             TranscriptionSettings(**record["transcription"]),
         )
     except (KeyError, TypeError) as error:
