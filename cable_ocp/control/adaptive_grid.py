@@ -271,7 +271,7 @@ def coarsen(
         default grid's nodes); None: the default grid's nodes are the candidates.
     """
     model = solver
-    if not isinstance(model, GaussNewton):
+    if not hasattr(model, "linearised_at"):  # a solver that keeps no linearisation of its own
         model = GaussNewton(problem, GaussNewtonSettings())
     linearised = model.linearised_at(values, parameters)
     quadratic = _optimum(model, linearised, parameters)
