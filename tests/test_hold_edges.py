@@ -63,10 +63,17 @@ def test_a_hold_takes_a_scene_files_path_and_a_line_out_equal_to_rounding(tmp_pa
     assert co.hold(path, line_out=50.0).success
 
 
-def test_lower_writes_everything_when_a_closed_loop_stops_before_its_landing(tmp_path, capsys):
+def test_lower_writes_everything_when_a_closed_loop_stops_before_its_landing(
+    tmp_path, capsys, monkeypatch
+):
     """A plant that fails at its first sample leaves no samples near the landing: the figure is
-    drawn on what ran, every file is written, and the command exits 3 (it raised on np.ptp)."""
+    drawn on what ran, every file is written, and the command exits 3 (it raised on np.ptp).
+
+    The plant fails on a 1e-12 m bond tolerance at its own step (at h / 64 it would hold it)."""
     from cable_ocp import cli
+    from cable_ocp.control.closed_loop import plant
+
+    monkeypatch.setattr(plant, "SUBSTEPS", (1,))
 
     axis = np.arange(-200.0, 201.0, 5.0)
     deep = np.full((axis.size, axis.size), -100.0)
