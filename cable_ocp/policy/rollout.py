@@ -60,7 +60,7 @@ class RolloutCheck:
         self.at_sample = control.basis(np.array([sample]))[0][0]  # phi(T_s) of the parameters
         self.nodes = control.breakpoints
         self.made = -np.inf  # s: when the Jacobian in use was swept
-        self.jacobian = self.factor = None
+        self.jacobian = self.rows = self.factor = None
         self.sweeps = 0  # Jacobian sweeps made
         self.seconds: list[float] = []  # wall time of each check (s)
 
@@ -91,9 +91,7 @@ class RolloutCheck:
             return "the reduced model's rollout under the MPC's plan in force blew up"
         if stale:
             self._refresh(run.jacobian, now)
-        jacobian = self.jacobian
-        weighted = solver.weights[:, None] * jacobian
-        rows = np.vstack([weighted, solver.rate_rows[:, self.free]])
+        jacobian, rows = self.jacobian, self.rows
         residual = np.concatenate([solver.weights * run.error, solver.rate_rows @ plan])
         step = -cho_solve(self.factor, rows.T @ residual)
         best = float(np.sum((residual + rows @ step) ** 2))
@@ -115,11 +113,11 @@ class RolloutCheck:
         return ""
 
     def _refresh(self, jacobian: np.ndarray, now: float) -> None:
-        """Keep a swept Jacobian's free columns and the least squares' factor."""
+        """Keep a swept Jacobian's free columns, the least squares' rows and their factor."""
         solver = self.controller.solver
         self.jacobian = jacobian[:, self.free]
         weighted = solver.weights[:, None] * self.jacobian
-        rows = np.vstack([weighted, solver.rate_rows[:, self.free]])
+        self.rows = rows = np.vstack([weighted, solver.rate_rows[:, self.free]])
         normal = rows.T @ rows
         normal[np.diag_indices_from(normal)] += DAMPING * max(np.max(np.diag(normal)), 1e-30)
         self.factor = cho_factor(normal)
