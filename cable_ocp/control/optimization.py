@@ -617,9 +617,8 @@ def _verification_fields(
     ``correction``: the step (s) of the model-correction runs, when there were any;
     ``coarsening``: the adaptive grid's, described in the notes.
     """
-    fields = {"heave_feedforward": problem.heave_feedforward}
-    if coarsening is not None:
-        fields["notes"] = coarsening.describe()
+    adapted = [] if coarsening is None else [coarsening.describe()]
+    fields = {"heave_feedforward": problem.heave_feedforward, "notes": "; ".join(adapted)}
     if checked is None or checked.trajectory is None:
         return fields
     notes = []
@@ -631,8 +630,7 @@ def _verification_fields(
         notes.append(checked.note)
     if correction is not None and correction > problem.scene.numerics.step:
         notes.append(f"model correction learned from full-model runs at h = {correction:g} s")
-    if coarsening is not None:
-        notes.append(coarsening.describe())
+    notes += adapted
     return {
         **fields,
         "bound_time": checked.bound_time,
