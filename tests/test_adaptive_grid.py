@@ -267,3 +267,58 @@ def test_the_adaptive_grid_costs_no_solve_beyond_the_default_ones_on_paper_hill(
     # solves after it run on the nodes kept, no more of them than the default grid's.
     assert result.refinements[0] == pytest.approx(default_hill.refinements[0], rel=1e-12)
     assert len(result.refinements) <= len(default_hill.refinements)
+
+
+def test_a_failed_first_solve_on_the_nodes_kept_falls_back_to_the_default_grid(
+    default_hill, monkeypatch
+):
+    """Whole-space seed 1 case 10: the nodes kept blew the model up; the default grid went on."""
+    from dataclasses import replace
+
+    from cable_ocp.control.gauss_newton import GaussNewton
+
+    run = GaussNewton.run
+
+    def failing_on_nodes(self, *arguments):
+        outcome = run(self, *arguments)
+        if isinstance(self.problem.control, HermiteNodes):
+            return replace(outcome, success=False, status="a forced failure")
+        return outcome
+
+    monkeypatch.setattr(GaussNewton, "run", failing_on_nodes)
+    result = co.optimize("paper_hill", quiet=True, grid=GridSettings(adaptive=True))
+    assert result.success, result.status
+    assert "abandoned (a forced failure): default grid kept" in result.notes
+    assert result.nodes == [] and result.control == default_hill.control
+    assert result.omega == pytest.approx(default_hill.omega, rel=1e-9)
+    # The failed attempt is listed, and the default grid still had all its corrections.
+    assert np.isnan(result.refinements[1])
+    finite = [omega for omega in result.refinements if np.isfinite(omega)]
+    assert finite == pytest.approx(default_hill.refinements, rel=1e-9)
+
+
+def test_the_solve_on_the_nodes_kept_starts_from_the_carried_jacobian_only_if_it_predicts():
+    """``GaussNewton.start_from``: one run checks the carried error; a wrong one is refused."""
+    from cable_ocp.control.gauss_newton import GaussNewton, GaussNewtonSettings
+    from cable_ocp.control.linearisation import Linearised
+    from cable_ocp.control.problem import WinchProblem
+
+    scene = co.load_scene("paper_hill", {"numerics.duration": 40.0})
+    problem = WinchProblem.from_scene(scene, HermiteIntervals(40.0, 8), elements=3, step=0.5)
+    solver = GaussNewton(problem, GaussNewtonSettings())
+    values = problem.parameter_values()
+    p = np.random.default_rng(0).normal(scale=0.05, size=problem.control.size)
+    exact = solver.linearisation(values, p)
+    sweeps = []
+    with pytest.MonkeyPatch.context() as patched:
+        call = type(solver.linearisation).__call__
+        patched.setattr(
+            type(solver.linearisation), "__call__", lambda s, *a: sweeps.append(1) or call(s, *a)
+        )
+        shifted = Linearised(exact.states, exact.error + 0.5, exact.jacobian, True)
+        assert not solver.start_from(values, p, shifted)  # it predicted the error badly
+        assert solver.start_from(values, p, exact)
+        reused = solver.linearised_at(values, p)
+    assert sweeps == []  # the kept Jacobian costs no sweep
+    np.testing.assert_array_equal(reused.jacobian, exact.jacobian)
+    np.testing.assert_allclose(reused.error, exact.error, atol=1e-12)

@@ -56,10 +56,21 @@ OMEGA_ROUND_OFF = 1e-9
 REOPTIMISED = 1
 
 
-def with_nodes(problem: WinchProblem, times: np.ndarray) -> WinchProblem:
-    """The problem with a Hermite control on the node times ``times`` (s), its bounds rebuilt."""
+def with_nodes(
+    problem: WinchProblem, times: np.ndarray, embedding: np.ndarray | None = None
+) -> WinchProblem:
+    """The problem with a Hermite control on the node times ``times`` (s), its bounds rebuilt.
+
+    ``embedding`` (``problem``'s parameters of each parameter of the new control, from
+    :func:`on_nodes`; for nodes among ``problem``'s own) maps ``problem``'s bound rows onto the
+    new control: on the same RK4 sub-intervals, each cubic is the other's, so the rows are the
+    same constraints (the heave's extremes are not sampled again).
+    """
     control = HermiteNodes(np.asarray(times, dtype=float))
-    bounds = LinearBounds.build(problem.scene, control, problem.grid)
+    if embedding is None:
+        bounds = LinearBounds.build(problem.scene, control, problem.grid)
+    else:
+        bounds = replace(problem.bounds, matrix=problem.bounds.matrix @ embedding)
     return replace(problem, control=control, bounds=bounds)
 
 
@@ -91,6 +102,10 @@ class Coarsening:
         The model's Omega of ``p*`` interpolated on the chosen nodes (before their solves).
     candidates : array, s
         The nodes they were chosen among (the model correction's step fits them all).
+    linearised : Linearised
+        The corrected error at ``parameters`` and its Jacobian in their parameters, predicted
+        from the default grid's linearisation (the first solve on the nodes starts from it when
+        a run confirms the error: :meth:`GaussNewton.start_from`).
     """
 
     problem: WinchProblem
@@ -99,6 +114,7 @@ class Coarsening:
     predicted: float
     omega: float
     candidates: np.ndarray
+    linearised: Linearised
 
     def describe(self) -> str:
         """One phrase (no "; ", which separates a result's notes): the grids and their Omega."""
@@ -179,12 +195,13 @@ class Quadratic:
         current = self.profile.copy()
         slope = self.gradient.copy()  # the gradient of the model at ``current``, halved
         cost = self.objective
+        rows_at = None if bounds is None else bounds.matrix @ current
         while len(kept) > 2:
             costs = []
             for j in range(1, len(kept) - 1):
                 columns, values = self.spanned(kept[j - 1], kept[j + 1], times)
                 change = values - current[columns]
-                if rows is not None and _breaks(bounds, rows, columns, current, change):
+                if rows is not None and _breaks(bounds, rows, columns, rows_at, change):
                     continue
                 rise = change @ self.hessian[np.ix_(columns, columns)] @ change
                 costs.append((rise + 2 * change @ slope[columns], j, columns, change))
@@ -198,6 +215,8 @@ class Quadratic:
                 removed.append(kept[j])
                 current[columns] += change
                 slope += self.hessian[:, columns] @ change
+                if rows_at is not None:
+                    rows_at += bounds.matrix[:, columns] @ change
                 cost += rise
             if not removed:
                 break
@@ -206,15 +225,14 @@ class Quadratic:
         return np.array(kept, dtype=int)
 
 
-def _breaks(bounds: LinearBounds, rows: list, columns, current, change) -> bool:
-    """Whether ``current`` moved by ``change`` in ``columns`` breaks a bound row they touch.
+def _breaks(bounds: LinearBounds, rows: list, columns, rows_at, change) -> bool:
+    """Whether a profile moved by ``change`` in ``columns`` breaks a bound row they touch.
 
-    ``rows``: the bound rows that each parameter enters.
+    ``rows``: the bound rows that each parameter enters; ``rows_at``: every row's value at the
+    profile before the move.
     """
     touched = np.unique(np.concatenate([rows[c] for c in columns]))
-    moved = current.copy()
-    moved[columns] += change
-    values = bounds.matrix[touched] @ moved
+    values = rows_at[touched] + bounds.matrix[np.ix_(touched, columns)] @ change
     return bool(np.any(values < bounds.lower[touched]) or np.any(values > bounds.upper[touched]))
 
 
@@ -291,11 +309,12 @@ def coarsen(
         if fewer.size == kept.size and fewer.size < times.size:
             break
         kept = fewer
-        chosen = with_nodes(candidates, times[kept])
+        nodes = HermiteNodes(times[kept])
+        embedding = on_nodes(nodes, np.eye(nodes.size), times)
+        chosen = with_nodes(candidates, times[kept], embedding)
         coarse = on_nodes(candidates.control, quadratic.profile, times[kept])
         # The model's optimum on the nodes kept (a QP within their bounds), from which the
         # next pass removes more: the interpolated profile overstates what they cost.
-        embedding = on_nodes(chosen.control, np.eye(chosen.control.size), times)
         moved = linearised.jacobian @ (quadratic.profile - start)
         on_chosen = Linearised(
             linearised.states, linearised.error + moved, linearised.jacobian @ embedding, True
@@ -306,13 +325,16 @@ def coarsen(
         if step is None:
             break
         quadratic.moved(embedding @ step)
+    parameters = coarse + (step if step is not None else 0.0)
+    error = linearised.error + linearised.jacobian @ (embedding @ parameters - start)
     return Coarsening(
         chosen,
-        coarse + (step if step is not None else 0.0),
+        parameters,
         problem.control.intervals,
         predicted,
         float(np.sqrt(max(quadratic.objective, 0.0))),
         times,
+        Linearised(linearised.states, error, on_chosen.jacobian, True),
     )
 
 

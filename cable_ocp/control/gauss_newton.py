@@ -449,6 +449,29 @@ class GaussNewton(ProblemSolver):
             return Linearised(after.states, after.error, before.jacobian, True)
         return self.linearisation(values, parameters)
 
+    def start_from(
+        self, values: ProblemParameters, parameters: np.ndarray, predicted: Linearised
+    ) -> bool:
+        """Let the next solve from ``parameters`` start with the Jacobian of ``predicted``.
+
+        ``predicted`` is an error and Jacobian at ``parameters`` carried over from another
+        linearisation (the adaptive grid's, from the default grid's). One run without
+        sensitivities (a twentieth of a sweep) gives the error; the Jacobian is kept, as in a
+        simplified Newton method, if it predicted that error within :data:`STALE_JACOBIAN`
+        (weighted 2-norms), and the solve then evaluates it again only where its line search
+        fails. Returns whether it was kept.
+        """
+        parameters = np.array(parameters, dtype=float)
+        run = self.linearisation.error(values, parameters)
+        if not run.finite:
+            return False
+        mismatch = np.linalg.norm(self.weights * (run.error - predicted.error))
+        if mismatch > STALE_JACOBIAN * np.linalg.norm(self.weights * run.error):
+            return False
+        kept = Linearised(run.states, run.error, predicted.jacobian, True)
+        self._last = (deepcopy(values), parameters, kept)
+        return True
+
     def linearised_at(self, values: ProblemParameters, parameters: np.ndarray) -> Linearised:
         """The linearisation at ``parameters``, reusing the last solve's end if it is there.
 

@@ -23,7 +23,7 @@ import numpy as np
 import xarray as xr
 
 from cable_ocp import result_files
-from cable_ocp.control.adaptive_grid import Adaptation, Coarsening, with_nodes
+from cable_ocp.control.adaptive_grid import Adaptation, with_nodes
 from cable_ocp.control.hermite_nodes import HermiteNodes
 from cable_ocp.control.keywords import refuse_unknown
 from cable_ocp.control.problem import SolverOutcome, WinchProblem
@@ -489,7 +489,9 @@ def solve_verified(
         correction = correction_step(problem.scene, compiled, nodes)
     learned = None  # (full-model run, outcome) the next model correction starts from
     best_solve = None
-    for solve in range(solves):
+    fallback, abandoned = None, ""  # the default grid's state while the adaptive grid is tried
+    solve = -1
+    while (solve := solve + 1) < solves:
         if learned is not None:
             run, source = learned
             full_error = np.interp(problem.grid, run.time, run.clearance_error)
@@ -503,8 +505,11 @@ def solve_verified(
                 # The adaptive grid: the solves from here on run on the nodes kept, and only
                 # their profiles are the result's.
                 coarsening = adapt(problem, nlp, values, parameters)
+                fallback = (problem, nlp, verify, best, best_outcome, checked, best_solve)
                 problem, parameters = coarsening.problem, coarsening.parameters
                 nlp = solver.build(problem, settings, quiet, verbose, 0.0)
+                if hasattr(nlp, "start_from"):  # the default grid's Jacobian, carried over
+                    nlp.start_from(values, parameters, coarsening.linearised)
                 build_time += nlp.build_time
                 compile_time += nlp.compile_time
                 verify, timed = _timed_verify(problem, quiet, compiled)
@@ -514,6 +519,14 @@ def solve_verified(
                 reference, best_outcome, best, checked, best_solve = best, None, None, None, None
         outcome = nlp.solve(values, parameters)
         outcomes.append(outcome)
+        if fallback is not None and best is None and not outcome.success:
+            # The first solve on the nodes kept failed: the default grid goes on, as it would
+            # have without them (one solve more, so that it still has all its corrections).
+            abandoned = f"{coarsening.describe()} abandoned ({outcome.status}): default grid kept"
+            problem, nlp, verify, best, best_outcome, checked, best_solve = fallback
+            fallback, coarsening, adapt, solves = None, None, None, solves + 1
+            verified.append(float("nan"))
+            continue
         if not outcome.success:
             failure = f"{solver_name} did not converge: {outcome.status}"
             if best is None:  # show where the failed solve got to, still marked as failed
@@ -576,7 +589,9 @@ def solve_verified(
         refinements=verified,
         compile_time=compile_time,
         verification_time=verification_time(),
-        **_verification_fields(problem, checked, correction, coarsening),
+        **_verification_fields(
+            problem, checked, correction, coarsening.describe() if coarsening else abandoned
+        ),
     )
 
 
@@ -610,14 +625,15 @@ def _verification_fields(
     problem: WinchProblem,
     checked: Verification | None,
     correction: float | None = None,
-    coarsening: Coarsening | None = None,
+    adaptive: str = "",
 ) -> dict:
     """The OcpResult fields that report the verification of the profile shown.
 
     ``correction``: the step (s) of the model-correction runs, when there were any;
-    ``coarsening``: the adaptive grid's, described in the notes.
+    ``adaptive``: what the adaptive grid did (:meth:`Coarsening.describe`, or why it was
+    abandoned), for the notes.
     """
-    adapted = [] if coarsening is None else [coarsening.describe()]
+    adapted = [adaptive] if adaptive else []
     fields = {"heave_feedforward": problem.heave_feedforward, "notes": "; ".join(adapted)}
     if checked is None or checked.trajectory is None:
         return fields
