@@ -247,7 +247,8 @@ def test_the_finest_grid_of_an_adaptive_grid_is_finer_only_when_asked():
 
     scene = co.load_scene("paper_hill")
     finer = GridSettings(adaptive=True, adaptive_finest=2)
-    for grid, intervals in ((finer, 84), (GridSettings(adaptive=True), 42), (None, 42)):
+    among_default = GridSettings(adaptive=True, adaptive_finest=1)
+    for grid, intervals in ((finer, 84), (among_default, 42), (None, 42)):
         chosen, _ = resolved(scene, ocp_settings(grid=grid))
         assert chosen.intervals == intervals
     # Not adaptive, the finest grid is not asked for: the default grid stays.
@@ -255,18 +256,22 @@ def test_the_finest_grid_of_an_adaptive_grid_is_finer_only_when_asked():
     assert plain.intervals == 42
 
 
-def test_the_adaptive_grid_costs_no_solve_beyond_the_default_ones_on_paper_hill(default_hill):
+def test_the_adaptive_grid_beats_the_default_on_paper_hill_with_fewer_parameters(default_hill):
+    """Issue 43, point 2: Omega at least as good as the default grid's, on fewer parameters."""
     result = co.optimize("paper_hill", quiet=True, grid=GridSettings(adaptive=True))
     assert result.success, result.status
-    assert result.parameters.size < 84 and "(the default grid's 42:" in result.notes
+    assert result.parameters.size < 84 and "among 84 candidates (the default grid's 42:" in (
+        result.notes
+    )
     # One note whole (the grid bench reads it so): "; " separates the notes.
     told = [part for part in result.notes.split("; ") if part.startswith("adaptive grid")]
     assert len(told) == 1 and told[0].endswith(" m)")
-    assert result.omega <= 1.02 * default_hill.omega
-    # The first solve is the default grid's (the same verified Omega); the model-correction
-    # solves after it run on the nodes kept, no more of them than the default grid's.
-    assert result.refinements[0] == pytest.approx(default_hill.refinements[0], rel=1e-12)
-    assert len(result.refinements) <= len(default_hill.refinements)
+    assert result.omega <= default_hill.omega  # measured: 6.23e-5 m against 1.302e-4 m
+    # The first solve is the default grid's (the same verified Omega, its run at a correction
+    # step that fits the candidates 2.5 s apart); the model-correction solves after it run on
+    # the nodes kept, within the model correction's own cap (1 + 3 solves).
+    assert result.refinements[0] == pytest.approx(default_hill.refinements[0], rel=1e-5)
+    assert len(result.refinements) <= 4
 
 
 def test_a_failed_first_solve_on_the_nodes_kept_falls_back_to_the_default_grid(
@@ -286,7 +291,9 @@ def test_a_failed_first_solve_on_the_nodes_kept_falls_back_to_the_default_grid(
         return outcome
 
     monkeypatch.setattr(GaussNewton, "run", failing_on_nodes)
-    result = co.optimize("paper_hill", quiet=True, grid=GridSettings(adaptive=True))
+    # Among the default grid's nodes, whose first solve is on equal intervals (not failed).
+    grid = GridSettings(adaptive=True, adaptive_finest=1)
+    result = co.optimize("paper_hill", quiet=True, grid=grid)
     assert result.success, result.status
     assert "abandoned (a forced failure): default grid kept" in result.notes
     assert result.nodes == [] and result.control == default_hill.control

@@ -78,17 +78,18 @@ class GridSettings:
         (:mod:`cable_ocp.control.hermite_nodes`); None: equal intervals. Not with
         ``control_intervals``.
     adaptive : bool
-        Choose the nodes among the default grid's by coarsening
-        (:mod:`cable_ocp.control.adaptive_grid`): after the first solve on the default grid and
-        its full-model run, remove the nodes whose removal keeps the corrected model's predicted
-        Omega within ``adaptive_tolerance`` of the default grid's, and solve on the nodes left.
-        Hermite control and the shooting solvers only.
+        Choose the nodes among candidates by coarsening (:mod:`cable_ocp.control.adaptive_grid`):
+        after the first solve on the default grid and its full-model run, remove the candidates
+        whose removal keeps the corrected model's predicted Omega within ``adaptive_tolerance``
+        of the candidates' own optimum, and solve on the nodes left. Hermite control and the
+        shooting solvers only.
     adaptive_tolerance : float
         The coarsening's relative tolerance on Omega (CONVENTIONS.md §5).
     adaptive_finest : int
-        The adaptive grid's nodes are chosen among those of a grid this many times finer than
-        the default (its intervals about 5 s / ``adaptive_finest``; the shooting intervals when
-        ``intervals`` is unset).
+        The candidates are the nodes of a grid this many times finer than the default one (its
+        intervals about 5 s / ``adaptive_finest``; the shooting intervals when ``intervals`` is
+        unset). 2 by default: among the default grid's own nodes (1) no choice reached the
+        default grid's Omega on paper_hill with fewer parameters (CONVENTIONS.md §5).
     """
 
     control: str | None = None
@@ -97,7 +98,7 @@ class GridSettings:
     nodes: tuple[float, ...] | None = None
     adaptive: bool = False
     adaptive_tolerance: float = 0.02
-    adaptive_finest: int = 1
+    adaptive_finest: int = 2
 
     def __post_init__(self):
         check_fields(
