@@ -117,6 +117,27 @@ def test_a_winch_on_its_bounds_keeps_the_nodes_that_hold_it_there(bounded):
     assert 10 < result.parameters.size < 42
 
 
+def test_the_nodes_kept_hold_the_same_bound_rows_as_a_grid_built_on_them():
+    """The candidates' rows mapped onto the nodes kept are the rows built on those nodes."""
+    from cable_ocp.control.adaptive_grid import with_nodes
+    from cable_ocp.control.problem import WinchProblem
+    from cable_ocp.drive.bounds import LinearBounds
+
+    scene = co.load_scene(
+        "paper_hill",
+        {"numerics.duration": 40.0, "winch.rate_max": 0.3, "winch.acceleration_max": 0.2},
+    )
+    problem = WinchProblem.from_scene(scene, HermiteIntervals(40.0, 16), elements=3, step=0.5)
+    times = problem.control.breakpoints[[0, 1, 4, 5, 9, 16]]
+    nodes = HermiteNodes(times)
+    embedding = on_nodes(nodes, np.eye(nodes.size), problem.control.breakpoints)
+    mapped = with_nodes(problem, times, embedding).bounds
+    built = LinearBounds.build(problem.scene, nodes, problem.grid)
+    np.testing.assert_allclose(mapped.matrix, built.matrix, rtol=0, atol=1e-12)
+    for field in ("lower", "upper", "derivatives", "starts"):
+        np.testing.assert_array_equal(getattr(mapped, field), getattr(built, field))
+
+
 def test_node_times_are_saved_loaded_and_drawn(bounded, tmp_path):
     from cable_ocp import plots
 
