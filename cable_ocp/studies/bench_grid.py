@@ -169,9 +169,9 @@ def chart_points(scene, quiet: bool = False) -> list[dict]:
         nodes = np.unique(np.r_[default[::spacing], duration])
         grids.append(("uniform", f"every {spacing}", GridSettings(nodes=tuple(nodes))))
     grids.append(("uniform", "twice as fine", GridSettings(intervals=2 * count)))
-    grids.append(("adaptive", "adaptive", GridSettings(adaptive=True)))
-    finest = GridSettings(adaptive=True, adaptive_finest=2)
-    grids.append(("adaptive", "adaptive, among a grid twice as fine", finest))
+    grids.append(("adaptive", "adaptive (among a grid twice as fine)", GridSettings(adaptive=True)))
+    among_default = GridSettings(adaptive=True, adaptive_finest=1)
+    grids.append(("adaptive", "adaptive, among the default grid's nodes", among_default))
     grids.append(("spline", f"{scene.winch.knots} knots", GridSettings(control="spline")))
     points = []
     for kind, label, grid in grids:
