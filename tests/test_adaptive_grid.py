@@ -115,6 +115,9 @@ def test_a_winch_on_its_bounds_keeps_the_nodes_that_hold_it_there(bounded):
     assert uniform.success and uniform.parameters.size == 84
     assert result.omega <= 1.02 * uniform.omega
     assert 10 < result.parameters.size < 42
+    # The winch's reach limits Omega (3.3 m), not the grid: the candidates twice as fine are
+    # left out, and the nodes are chosen among the default grid's 42 intervals.
+    assert "adaptive grid of" in result.notes and " candidates (" not in result.notes
 
 
 def test_the_nodes_kept_hold_the_same_bound_rows_as_a_grid_built_on_them():
