@@ -353,3 +353,16 @@ def test_the_solve_on_the_nodes_kept_starts_from_the_carried_jacobian_only_if_it
     assert sweeps == []  # the kept Jacobian costs no sweep
     np.testing.assert_array_equal(reused.jacobian, exact.jacobian)
     np.testing.assert_allclose(reused.error, exact.error, atol=1e-12)
+
+
+def test_the_candidates_split_each_default_interval_where_the_steps_allow():
+    from cable_ocp.control.defaults import candidate_grid, control_grid
+
+    # paper_hill: 42 default intervals of 100 steps, each split in two (its nodes among them).
+    assert control_grid(210.0, 0.05) == 42 and candidate_grid(210.0, 0.05, 2) == 84
+    assert candidate_grid(210.0, 0.05, 1) == 42
+    # 493 s at 0.05 s: 85 intervals of 116 steps, split into 170 (not 197, the count nearest
+    # 493 / 2.5 s, which would put the first solve on another grid than the default one).
+    assert control_grid(493.0, 0.05) == 85 and candidate_grid(493.0, 0.05, 2) == 170
+    # 75 steps in 3 intervals cannot split in two: the nearest count of about 2.5 s that fits.
+    assert control_grid(15.0, 0.2) == 3 and candidate_grid(15.0, 0.2, 2) == 5

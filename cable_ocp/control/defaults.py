@@ -175,6 +175,23 @@ def control_grid(duration: float, scene_step: float, interval: float = CONTROL_I
     return fitting if abs(fitting - wanted) <= GRID_SLACK * wanted else wanted
 
 
+def candidate_grid(duration: float, scene_step: float, finest: int) -> int:
+    """Intervals of an adaptive grid's candidates, ``finest`` times finer than the default grid.
+
+    Each default interval split in ``finest`` where that fits the scene's RK4 steps, so that
+    every ``finest``-th candidate is a node of the uniform default grid and the adaptive grid's
+    first solve is the uniform default's; otherwise, the count nearest ``duration /
+    (CONTROL_INTERVAL / finest)`` that fits (:func:`control_grid`). Measured: that count fell
+    between grids on 15 of the 34 whole-space scenes with finer candidates (2026-12-05), and on
+    seed 1 case 44 the first solve then ran on 96 intervals where the default grid has 115 (the
+    adaptive Omega 1.7 times the uniform one's).
+    """
+    default = control_grid(duration, scene_step)
+    if step_count(duration, scene_step) % (finest * default) == 0:
+        return finest * default
+    return control_grid(duration, scene_step, CONTROL_INTERVAL / finest)
+
+
 def on_nodes(scene, intervals: int):
     """The scene with its step shortened so that ``intervals`` nodes fall on step ends.
 

@@ -154,10 +154,9 @@ def resolved(scene, settings: OcpSettings, compiled: bool | None = None):
         # with h, on a whole-space case with nodes 5.04 s apart at h = 0.1 s). Where no grid
         # of about 5 s fits the scene's steps, the full model's step is shortened to fit it
         # (full_model_scene).
-        grid = settings.grid
-        interval = defaults.CONTROL_INTERVAL / (grid.adaptive_finest if grid.adaptive else 1)
-        intervals = settings.intervals or defaults.control_grid(
-            duration, scene.numerics.step, interval
+        finest = settings.grid.adaptive_finest if settings.grid.adaptive else 1
+        intervals = settings.intervals or defaults.candidate_grid(
+            duration, scene.numerics.step, finest
         )
         unit = duration / intervals
     open_loop, _ = WinchProblem.open_loop_scene(scene)
