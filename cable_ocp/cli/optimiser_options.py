@@ -136,8 +136,8 @@ def add_optimiser_options(parser: argparse.ArgumentParser) -> None:
         "--adaptive",
         action="store_const",
         const=True,
-        help="an adaptive control grid: Hermite nodes chosen among the default grid's by "
-        "coarsening after its first solve (GridSettings(adaptive=True))",
+        help="an adaptive control grid: Hermite nodes chosen among candidates twice as fine as "
+        "the default grid's by coarsening after its first solve (GridSettings(adaptive=True))",
     )
     parser.add_argument(
         "--solver",
