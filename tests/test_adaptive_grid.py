@@ -361,8 +361,10 @@ def test_the_candidates_split_each_default_interval_where_the_steps_allow():
     # paper_hill: 42 default intervals of 100 steps, each split in two (its nodes among them).
     assert control_grid(210.0, 0.05) == 42 and candidate_grid(210.0, 0.05, 2) == 84
     assert candidate_grid(210.0, 0.05, 1) == 42
-    # 493 s at 0.05 s: 85 intervals of 116 steps, split into 170 (not 197, the count nearest
-    # 493 / 2.5 s, which would put the first solve on another grid than the default one).
-    assert control_grid(493.0, 0.05) == 85 and candidate_grid(493.0, 0.05, 2) == 170
+    # Whole-space seed 0 case 2, 252 s at 0.1 s: 45 intervals of 56 steps, split into 90 (the
+    # count nearest 252 / 2.5 s that fits, 105, held only every third of the default grid's
+    # nodes: the first solve ran on 53 intervals where the default grid has 45).
+    assert control_grid(252.0, 0.1) == 45 and candidate_grid(252.0, 0.1, 2) == 90
+    assert control_grid(252.0, 0.1, 2.5) == 105
     # 75 steps in 3 intervals cannot split in two: the nearest count of about 2.5 s that fits.
     assert control_grid(15.0, 0.2) == 3 and candidate_grid(15.0, 0.2, 2) == 5

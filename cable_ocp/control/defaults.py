@@ -181,10 +181,13 @@ def candidate_grid(duration: float, scene_step: float, finest: int) -> int:
     Each default interval split in ``finest`` where that fits the scene's RK4 steps, so that
     every ``finest``-th candidate is a node of the uniform default grid and the adaptive grid's
     first solve is the uniform default's; otherwise, the count nearest ``duration /
-    (CONTROL_INTERVAL / finest)`` that fits (:func:`control_grid`). Measured: that count fell
-    between grids on 15 of the 34 whole-space scenes with finer candidates (2026-12-05), and on
-    seed 1 case 44 the first solve then ran on 96 intervals where the default grid has 115 (the
-    adaptive Omega 1.7 times the uniform one's).
+    (CONTROL_INTERVAL / finest)`` that fits (:func:`control_grid`). On the whole-space scenes
+    of seeds 0 and 1 (2026-12-05), 21 of the 34 with finer candidates split so (seed 0 case 2:
+    90 candidates, where the count nearest T / 2.5 s, 105, put the first solve on 53 intervals
+    against the default grid's 45); the other 13 have an odd number of steps in a default
+    interval, and their first solve runs on every other candidate (on seed 1 case 44, 96
+    intervals where the default grid has 115: the adaptive Omega came out 1.7 times the uniform
+    one's).
     """
     default = control_grid(duration, scene_step)
     if step_count(duration, scene_step) % (finest * default) == 0:
