@@ -164,6 +164,11 @@ class Quadratic:
         self.gradient = self.gradient + self.hessian @ step
         self.profile = self.profile + step
 
+    def unbounded(self) -> float:
+        """Omega (m) of the model's optimum without the winch bounds (wherever it is centred)."""
+        step = np.linalg.lstsq(self.hessian, -self.gradient, rcond=None)[0]
+        return float(np.sqrt(max(self.objective + self.gradient @ step, 0.0)))
+
     def columns(self, nodes: np.ndarray) -> np.ndarray:
         """The angle and rate columns of the default grid's nodes ``nodes`` (1 .. N)."""
         return np.r_[nodes - 1, self.count + nodes - 1]
@@ -305,7 +310,7 @@ def coarsen(
     linearised = model.linearised_at(values, parameters)
     quadratic = _optimum(model, linearised, parameters)
     predicted = float(np.sqrt(max(quadratic.objective, 0.0)))
-    if finer is not None and predicted > REACH_LIMITED * _unbounded(model, linearised):
+    if finer is not None and predicted > REACH_LIMITED * quadratic.unbounded():
         finer = None  # the winch's reach, not the grid, limits Omega: finer nodes cannot help
     candidates = problem if finer is None else finer
     times = candidates.control.breakpoints
@@ -339,7 +344,7 @@ def coarsen(
             break
         quadratic.moved(embedding @ step)
     parameters = coarse + (step if step is not None else 0.0)
-    error = linearised.error + linearised.jacobian @ (embedding @ parameters - start)
+    error = on_chosen.error + on_chosen.jacobian @ (parameters - coarse)
     return Coarsening(
         chosen,
         parameters,
@@ -349,14 +354,6 @@ def coarsen(
         times,
         Linearised(linearised.states, error, on_chosen.jacobian, True),
     )
-
-
-def _unbounded(model: GaussNewton, linearised: Linearised) -> float:
-    """Omega (m) of the Gauss-Newton model's optimum without the winch bounds."""
-    weighted = model.weights[:, None] * linearised.jacobian
-    residual = model.weights * linearised.error
-    step = np.linalg.lstsq(weighted, -residual, rcond=None)[0]
-    return float(np.linalg.norm(residual + weighted @ step))
 
 
 def _optimum(model: GaussNewton, linearised, profile: np.ndarray) -> Quadratic:

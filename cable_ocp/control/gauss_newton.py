@@ -443,11 +443,17 @@ class GaussNewton(ProblemSolver):
         it is kept, as in a simplified Newton method. A model-correction solve moves the winch by
         a fraction of a millimetre, along which the Jacobian does not change.
         """
-        predicted = before.error + before.jacobian @ step
-        mismatch = np.linalg.norm(self.weights * (after.error - predicted))
-        if mismatch <= STALE_JACOBIAN * np.linalg.norm(self.weights * after.error):
+        if self._predicts(before.error + before.jacobian @ step, after.error):
             return Linearised(after.states, after.error, before.jacobian, True)
         return self.linearisation(values, parameters)
+
+    def _predicts(self, predicted: np.ndarray, error: np.ndarray) -> bool:
+        """Whether ``predicted`` is within :data:`STALE_JACOBIAN` of ``error`` (weighted norms).
+
+        The test by which a Jacobian evaluated elsewhere is kept (simplified Newton).
+        """
+        mismatch = np.linalg.norm(self.weights * (error - predicted))
+        return bool(mismatch <= STALE_JACOBIAN * np.linalg.norm(self.weights * error))
 
     def start_from(
         self, values: ProblemParameters, parameters: np.ndarray, predicted: Linearised
@@ -463,10 +469,7 @@ class GaussNewton(ProblemSolver):
         """
         parameters = np.array(parameters, dtype=float)
         run = self.linearisation.error(values, parameters)
-        if not run.finite:
-            return False
-        mismatch = np.linalg.norm(self.weights * (run.error - predicted.error))
-        if mismatch > STALE_JACOBIAN * np.linalg.norm(self.weights * run.error):
+        if not run.finite or not self._predicts(predicted.error, run.error):
             return False
         kept = Linearised(run.states, run.error, predicted.jacobian, True)
         self._last = (deepcopy(values), parameters, kept)
