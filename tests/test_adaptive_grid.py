@@ -368,3 +368,11 @@ def test_the_candidates_split_each_default_interval_where_the_steps_allow():
     assert control_grid(252.0, 0.1, 2.5) == 105
     # 75 steps in 3 intervals cannot split in two: the nearest count of about 2.5 s that fits.
     assert control_grid(15.0, 0.2) == 3 and candidate_grid(15.0, 0.2, 2) == 5
+
+
+@pytest.mark.parametrize("name", ["hanging", "catenary"])
+def test_a_scene_with_nothing_to_hold_gives_its_zero_omega_on_the_adaptive_grid(name):
+    """Omega 0 on the default grid (a still scene): no gain to judge, no division by it."""
+    result = co.optimize(name, quiet=True, grid=GridSettings(adaptive=True))
+    assert result.success, result.status
+    assert result.omega == pytest.approx(0.0, abs=1e-9)

@@ -559,7 +559,7 @@ def solve_verified(
         if best is not None and trial.trajectory.omega >= best.omega:
             break
         achieved = corrected if first_on_nodes else trial.trajectory.omega
-        gain = achieved / last.omega if last is not None else 0.0
+        gain = 0.0 if last is None else _gain(achieved, last.omega)
         best_outcome, best, checked, best_solve = outcome, trial.trajectory, trial, solve
         learned = (best, best_outcome)
         if gain > SMALL_GAIN:
@@ -605,6 +605,15 @@ def solve_verified(
 def _summed(*timers):
     """One timer (a callable returning seconds) that adds up ``timers``."""
     return lambda: sum(timer() for timer in timers)
+
+
+def _gain(omega: float, before: float) -> float:
+    """A solve's gain on the last verified Omega, ``omega / before`` (m / m).
+
+    1 (nothing gained: the correction stops) where that was 0 already, on a scene with nothing
+    to hold (``hanging``: the adaptive grid divided by it).
+    """
+    return omega / before if before > 0 else 1.0
 
 
 def _run_step(
