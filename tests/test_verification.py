@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 
 from cable_ocp.control import verification
-from cable_ocp.control.verification import correction_step, verify_profile
+from cable_ocp.control.verification import correction_step, fitted_step, verify_profile
 from cable_ocp.drive.controls import HermiteIntervals
 from cable_ocp.drive.drive import Drive
 from cable_ocp.model.cable import CableModel
@@ -34,6 +34,15 @@ def test_the_correction_step_is_a_power_of_two_well_inside_the_stability_limit(h
     step = correction_step(hill, compiled=True)
     assert step == pytest.approx(4 * hill.numerics.step)
     assert step <= verification.CORRECTION_STABILITY_SHARE * limit
+
+
+def test_a_correction_step_is_halved_until_the_nodes_fall_on_its_step_ends():
+    """An adaptive grid's nodes kept (2.5 s apart here and there) take the correction step
+    that fits them, never one below the scene's."""
+    assert fitted_step(0.2, 0.05, [0.0, 5.0, 10.0]) == 0.2
+    assert fitted_step(0.2, 0.05, [0.0, 2.5, 5.0]) == 0.1
+    assert fitted_step(0.2, 0.05, [0.0, 2.55, 5.0]) == 0.05
+    assert fitted_step(0.2, 0.05, [0.0, 2.525]) == 0.05  # off every step: the scene's
 
 
 def test_a_correction_run_tracks_the_scenes_step(hill):

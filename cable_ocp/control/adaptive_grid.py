@@ -112,7 +112,7 @@ class Coarsening:
     omega : float, m
         The model's Omega of ``p*`` interpolated on the chosen nodes (before their solves).
     candidates : array, s
-        The nodes they were chosen among (the model correction's step fits them all).
+        The nodes they were chosen among.
     linearised : Linearised
         The corrected error at ``parameters`` and its Jacobian in their parameters, predicted
         from the default grid's linearisation (the first solve on the nodes starts from it when
@@ -266,10 +266,6 @@ class Adaptation:
 
     tolerance: float
     finer: WinchProblem | None = None
-
-    def candidates(self, problem: WinchProblem) -> np.ndarray:
-        """The candidate nodes (s) of the first solve's ``problem``."""
-        return (problem if self.finer is None else self.finer).control.breakpoints
 
     def __call__(self, problem: WinchProblem, solver, values, parameters) -> Coarsening:
         """:func:`coarsen` with these settings."""

@@ -23,7 +23,7 @@ import numpy as np
 import xarray as xr
 
 from cable_ocp import result_files
-from cable_ocp.control.adaptive_grid import Adaptation, with_nodes
+from cable_ocp.control.adaptive_grid import Adaptation, on_nodes, with_nodes
 from cable_ocp.control.hermite_nodes import HermiteNodes
 from cable_ocp.control.keywords import refuse_unknown
 from cable_ocp.control.problem import SolverOutcome, WinchProblem
@@ -35,7 +35,12 @@ from cable_ocp.control.settings import (
 )
 from cable_ocp.control.shooting import control_of, full_model_scene
 from cable_ocp.control.solvers import SHOOTING, SOLVERS, Solver, ocp_settings, transcription_named
-from cable_ocp.control.verification import Verification, correction_step, verify_profile
+from cable_ocp.control.verification import (
+    Verification,
+    correction_step,
+    fitted_step,
+    verify_profile,
+)
 from cable_ocp.drive.drive import Drive
 from cable_ocp.drive.winch import (
     RETIMES,
@@ -457,7 +462,8 @@ def solve_verified(
         An adaptive grid's coarsening (:class:`cable_ocp.control.adaptive_grid.Adaptation`),
         called once after the first solve's full-model run with the corrected values; the
         solves after it run on the problem it returns (at least one, also where the model is
-        the scene's), and the model correction's step fits every candidate node.
+        the scene's), and the model correction's runs on them take a step that fits their nodes
+        (:func:`cable_ocp.control.verification.fitted_step`).
 
     Returns
     -------
@@ -485,8 +491,7 @@ def solve_verified(
     # reported is verified at the scene's.
     correction = None
     if solves > 1:
-        nodes = problem.control.breakpoints if adapt is None else adapt.candidates(problem)
-        correction = correction_step(problem.scene, compiled, nodes)
+        correction = correction_step(problem.scene, compiled, problem.control.breakpoints)
     learned = None  # (full-model run, outcome) the next model correction starts from
     best_solve = None
     fallback, abandoned = None, ""  # the default grid's state while the adaptive grid is tried
@@ -505,8 +510,19 @@ def solve_verified(
                 # The adaptive grid: the solves from here on run on the nodes kept, and only
                 # their profiles are the result's.
                 coarsening = adapt(problem, nlp, values, parameters)
-                fallback = (problem, nlp, verify, best, best_outcome, checked, best_solve)
+                fallback = (
+                    problem,
+                    nlp,
+                    verify,
+                    best,
+                    best_outcome,
+                    checked,
+                    best_solve,
+                    correction,
+                )
                 problem, parameters = coarsening.problem, coarsening.parameters
+                nodes = problem.control.breakpoints
+                correction = fitted_step(correction, problem.scene.numerics.step, nodes)
                 nlp = solver.build(problem, settings, quiet, verbose, 0.0)
                 if hasattr(nlp, "start_from"):  # the default grid's Jacobian, carried over
                     nlp.start_from(values, parameters, coarsening.linearised)
@@ -523,7 +539,7 @@ def solve_verified(
             # The first solve on the nodes kept failed: the default grid goes on, as it would
             # have without them (one solve more, so that it still has all its corrections).
             abandoned = f"{coarsening.describe()} abandoned ({outcome.status}): default grid kept"
-            problem, nlp, verify, best, best_outcome, checked, best_solve = fallback
+            problem, nlp, verify, best, best_outcome, checked, best_solve, correction = fallback
             fallback, coarsening, adapt, solves = None, None, None, solves + 1
             verified.append(float("nan"))
             continue
@@ -796,7 +812,8 @@ def _adaptive(problem: WinchProblem, grid: GridSettings) -> tuple[WinchProblem, 
     if grid.adaptive_finest == 1:
         return problem, Adaptation(grid.adaptive_tolerance)
     times = problem.control.breakpoints
-    first = with_nodes(problem, np.unique(np.r_[times[:: grid.adaptive_finest], times[-1]]))
+    nodes = HermiteNodes(np.unique(np.r_[times[:: grid.adaptive_finest], times[-1]]))
+    first = with_nodes(problem, nodes.breakpoints, on_nodes(nodes, np.eye(nodes.size), times))
     return first, Adaptation(grid.adaptive_tolerance, problem)
 
 

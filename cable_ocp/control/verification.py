@@ -129,6 +129,17 @@ def correction_step(scene, compiled: bool = False, breakpoints=None) -> float:
     return factor * numerics.step
 
 
+def fitted_step(step: float, scene_step: float, breakpoints) -> float:
+    """A correction step (s) halved until ``breakpoints`` (s) fall on its step ends.
+
+    For a control whose nodes are not the ones :func:`correction_step` was fitted to (an
+    adaptive grid's nodes kept); never below ``scene_step`` (s), on whose step ends they are.
+    """
+    while step > scene_step and not _on_steps(breakpoints, step):
+        step /= 2
+    return max(step, scene_step)
+
+
 def _on_steps(times, step: float) -> bool:
     """Whether every time of ``times`` (s; None: none) is a whole multiple of ``step``."""
     if times is None:
