@@ -206,33 +206,28 @@ class Quadratic:
         bound cannot cut across it, and the model (blind to the bounds) would count that as a
         gain. The model is then centred at the profile on the nodes kept.
         """
-        rows = None if bounds is None else [np.flatnonzero(c) for c in (bounds.matrix != 0).T]
         kept = list(range(times.size)) if kept is None else list(kept)
         current = self.profile.copy()
         slope = self.gradient.copy()  # the gradient of the model at ``current``, halved
         cost = self.objective
-        rows_at = None if bounds is None else bounds.matrix @ current
+        spans = _Spans(self, times, current, bounds)
         while len(kept) > 2:
             costs = []
             for j in range(1, len(kept) - 1):
-                columns, values = self.spanned(kept[j - 1], kept[j + 1], times)
-                change = values - current[columns]
-                if rows is not None and _breaks(bounds, rows, columns, rows_at, change):
+                span = spans.at(kept[j - 1], kept[j + 1])
+                if span.breaks(spans.rows_at, bounds):
                     continue
-                rise = change @ self.hessian[np.ix_(columns, columns)] @ change
-                costs.append((rise + 2 * change @ slope[columns], j, columns, change))
+                costs.append((span.rise + 2 * span.change @ slope[span.columns], j, span))
             touched, removed = set(), []
-            for rise, j, columns, change in sorted(costs, key=lambda c: c[0]):
+            for rise, j, span in sorted(costs, key=lambda c: c[0]):
                 if cost + rise > allowed:
                     break
                 if j - 1 in touched or j + 1 in touched:
                     continue
                 touched.add(j)
                 removed.append(kept[j])
-                current[columns] += change
-                slope += self.hessian[:, columns] @ change
-                if rows_at is not None:
-                    rows_at += bounds.matrix[:, columns] @ change
+                slope += self.hessian[:, span.columns] @ span.change
+                spans.moved(span)
                 cost += rise
             if not removed:
                 break
@@ -241,15 +236,74 @@ class Quadratic:
         return np.array(kept, dtype=int)
 
 
-def _breaks(bounds: LinearBounds, rows: list, columns, rows_at, change) -> bool:
-    """Whether a profile moved by ``change`` in ``columns`` breaks a bound row they touch.
+@dataclass(frozen=True, eq=False)
+class _Span:
+    """One cubic across the nodes between two kept ones, as the greedy passes cost it.
 
-    ``rows``: the bound rows that each parameter enters; ``rows_at``: every row's value at the
-    profile before the move.
+    Attributes
+    ----------
+    columns : array
+        The parameters of the nodes inside.
+    change : array
+        Their move from the profile to the cubic (rad, rad/s).
+    rise : float, m^2
+        The model's curvature term of that move, ``change' H change``.
+    touched : array or None
+        The bound rows the move enters (None: no bounds).
+    shift : array or None
+        Those rows' change under the move.
     """
-    touched = np.unique(np.concatenate([rows[c] for c in columns]))
-    values = rows_at[touched] + bounds.matrix[np.ix_(touched, columns)] @ change
-    return bool(np.any(values < bounds.lower[touched]) or np.any(values > bounds.upper[touched]))
+
+    columns: np.ndarray
+    change: np.ndarray
+    rise: float
+    touched: np.ndarray | None
+    shift: np.ndarray | None
+
+    def breaks(self, rows_at: np.ndarray | None, bounds: LinearBounds | None) -> bool:
+        """Whether the move breaks a bound row it enters (``rows_at``: every row's value)."""
+        if self.touched is None:
+            return False
+        values = rows_at[self.touched] + self.shift
+        lower, upper = bounds.lower[self.touched], bounds.upper[self.touched]
+        return bool(np.any(values < lower) or np.any(values > upper))
+
+
+class _Spans:
+    """The spans of one coarsening, each made once (its move is fixed while its ends are kept).
+
+    A node's removal moves only the nodes inside its own span, so a span whose two ends are
+    both kept sees the same profile inside it in every pass; only the bound rows' values
+    (:attr:`rows_at`) and the gradient move.
+    """
+
+    def __init__(self, quadratic: Quadratic, times, current: np.ndarray, bounds):
+        self.quadratic, self.times, self.current, self.bounds = quadratic, times, current, bounds
+        self.rows = self.rows_at = None
+        if bounds is not None:
+            self.rows = [np.flatnonzero(column) for column in (bounds.matrix != 0).T]
+            self.rows_at = bounds.matrix @ current
+        self._made: dict[tuple[int, int], _Span] = {}
+
+    def at(self, left: int, right: int) -> _Span:
+        """The span from node ``left`` to node ``right`` (indices into the times)."""
+        if (left, right) not in self._made:
+            quadratic = self.quadratic
+            columns, values = quadratic.spanned(left, right, self.times)
+            change = values - self.current[columns]
+            rise = float(change @ quadratic.hessian[np.ix_(columns, columns)] @ change)
+            touched = shift = None
+            if self.bounds is not None:
+                touched = np.unique(np.concatenate([self.rows[c] for c in columns]))
+                shift = self.bounds.matrix[np.ix_(touched, columns)] @ change
+            self._made[left, right] = _Span(columns, change, rise, touched, shift)
+        return self._made[left, right]
+
+    def moved(self, span: _Span) -> None:
+        """Move the profile (shared with the caller) onto the cubic of ``span``."""
+        self.current[span.columns] += span.change
+        if self.rows_at is not None:
+            self.rows_at[span.touched] += span.shift
 
 
 @dataclass(frozen=True, eq=False)
