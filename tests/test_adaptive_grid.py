@@ -356,18 +356,36 @@ def test_the_solve_on_the_nodes_kept_starts_from_the_carried_jacobian_only_if_it
 
 
 def test_the_candidates_split_each_default_interval_where_the_steps_allow():
-    from cable_ocp.control.defaults import candidate_grid, control_grid
+    from cable_ocp.control.defaults import candidate_split, control_grid
 
-    # paper_hill: 42 default intervals of 100 steps, each split in two (its nodes among them).
-    assert control_grid(210.0, 0.05) == 42 and candidate_grid(210.0, 0.05, 2) == 84
-    assert candidate_grid(210.0, 0.05, 1) == 42
-    # Whole-space seed 0 case 2, 252 s at 0.1 s: 45 intervals of 56 steps, split into 90 (the
-    # count nearest 252 / 2.5 s that fits, 105, held only every third of the default grid's
-    # nodes: the first solve ran on 53 intervals where the default grid has 45).
-    assert control_grid(252.0, 0.1) == 45 and candidate_grid(252.0, 0.1, 2) == 90
-    assert control_grid(252.0, 0.1, 2.5) == 105
-    # 75 steps in 3 intervals cannot split in two: the nearest count of about 2.5 s that fits.
-    assert control_grid(15.0, 0.2) == 3 and candidate_grid(15.0, 0.2, 2) == 5
+    # paper_hill: 42 default intervals of 100 scene steps and 10 model steps of 0.5 s, each
+    # split in two (its nodes among them).
+    assert control_grid(210.0, 0.05) == 42 and candidate_split(210.0, 0.05, 0.5, 42, 2) == 2
+    assert candidate_split(210.0, 0.05, 0.5, 42, 1) == 1
+    # Whole-space seed 0 case 2, 252 s at 0.1 s: 45 intervals of 56 steps, split in two.
+    assert control_grid(252.0, 0.1) == 45 and candidate_split(252.0, 0.1, 0.4, 45, 2) == 2
+    # 75 scene steps in 3 intervals cannot split in two, nor 5 model steps of 1 s in 5 s: the
+    # candidates are the default grid's nodes.
+    assert control_grid(15.0, 0.2) == 3 and candidate_split(15.0, 0.2, 0.5, 3, 2) == 1
+    assert candidate_split(15.0, 0.1, 1.0, 3, 2) == 1 and candidate_split(15.0, 0.1, 0.5, 3, 2) == 2
+
+
+def test_candidates_that_cannot_split_leave_the_first_solve_on_the_default_grid():
+    """A scene whose default intervals hold an odd number of steps: the adaptive grid chooses
+    among the default grid's nodes, and says so, rather than among a grid of another count."""
+    from cable_ocp.control.shooting import resolved
+    from cable_ocp.control.solvers import ocp_settings
+
+    scene = co.load_scene("paper_hill", {"numerics.duration": 105.0, "numerics.step": 0.2})
+    settings, derived = resolved(scene, ocp_settings(grid=GridSettings(adaptive=True)))
+    default, _ = resolved(scene, ocp_settings())
+    assert settings.grid.intervals == default.grid.intervals == 21  # 25 steps of 0.2 s each
+    assert settings.step == default.step and settings.grid.adaptive_finest == 1
+    assert "candidates are the default grid's nodes" in derived
+    halved = co.load_scene("paper_hill", {"numerics.duration": 105.0, "numerics.step": 0.1})
+    settings, derived = resolved(halved, ocp_settings(grid=GridSettings(adaptive=True)))
+    assert settings.grid.intervals == 42 and settings.grid.adaptive_finest == 2
+    assert settings.step == default.step and "candidates" not in derived
 
 
 @pytest.mark.parametrize("name", ["hanging", "catenary"])

@@ -175,24 +175,24 @@ def control_grid(duration: float, scene_step: float, interval: float = CONTROL_I
     return fitting if abs(fitting - wanted) <= GRID_SLACK * wanted else wanted
 
 
-def candidate_grid(duration: float, scene_step: float, finest: int) -> int:
-    """Intervals of an adaptive grid's candidates, ``finest`` times finer than the default grid.
+def candidate_split(
+    duration: float, scene_step: float, model_step: float, intervals: int, finest: int
+) -> int:
+    """In how many an adaptive grid's candidates split each default interval: ``finest`` or 1.
 
-    Each default interval split in ``finest`` where that fits the scene's RK4 steps, so that
-    every ``finest``-th candidate is a node of the uniform default grid and the adaptive grid's
-    first solve is the uniform default's; otherwise, the count nearest ``duration /
-    (CONTROL_INTERVAL / finest)`` that fits (:func:`control_grid`). On the whole-space scenes
-    of seeds 0 and 1 (2026-12-05), 21 of the 34 with finer candidates split so (seed 0 case 2:
-    90 candidates, where the count nearest T / 2.5 s, 105, put the first solve on 53 intervals
-    against the default grid's 45); the other 13 have an odd number of steps in a default
-    interval, and their first solve runs on every other candidate (on seed 1 case 44, 96
-    intervals where the default grid has 115: the adaptive Omega came out 1.7 times the uniform
-    one's).
+    ``finest`` where the scene's RK4 steps (``scene_step``, s) and the optimisation model's
+    (``model_step``, s, derived for the default grid of ``intervals`` over ``duration``) in an
+    interval both divide by it, so that every candidate is a step end of every model and the
+    first solve, on every ``finest``-th candidate, is the uniform default's own (the same step
+    too); 1 otherwise: the candidates are the default grid's nodes. On the whole-space scenes of
+    seeds 0 and 1 (2026-12-05), 13 of the 34 with finer candidates had an odd number of scene
+    steps in an interval and took the count nearest ``duration / 2.5 s`` instead: their first
+    solve ran on every other candidate (seed 1 case 44: 96 intervals where the default grid has
+    115), and the adaptive Omega came out 1.7 times the uniform one's.
     """
-    default = control_grid(duration, scene_step)
-    if step_count(duration, scene_step) % (finest * default) == 0:
-        return finest * default
-    return control_grid(duration, scene_step, CONTROL_INTERVAL / finest)
+    model_steps = round(duration / intervals / model_step)
+    fits = step_count(duration, scene_step) % (finest * intervals) == 0
+    return finest if fits and model_steps % finest == 0 else 1
 
 
 def on_nodes(scene, intervals: int):

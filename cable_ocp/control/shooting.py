@@ -154,16 +154,25 @@ def resolved(scene, settings: OcpSettings, compiled: bool | None = None):
         # with h, on a whole-space case with nodes 5.04 s apart at h = 0.1 s). Where no grid
         # of about 5 s fits the scene's steps, the full model's step is shortened to fit it
         # (full_model_scene).
-        finest = settings.grid.adaptive_finest if settings.grid.adaptive else 1
-        intervals = settings.intervals or defaults.candidate_grid(
-            duration, scene.numerics.step, finest
-        )
+        intervals = settings.intervals or defaults.control_grid(duration, scene.numerics.step)
         unit = duration / intervals
     open_loop, _ = WinchProblem.open_loop_scene(scene)
     step, derived = defaults.model_step(
         open_loop, elements, settings.step, unit, defaults.STEP_CAP, compiled, "step"
     )
     notes += derived
+    grid = settings.grid
+    if grid.adaptive and settings.step is None and settings.intervals is None:
+        finest = defaults.candidate_split(
+            duration, scene.numerics.step, step, intervals, grid.adaptive_finest
+        )
+        if finest < grid.adaptive_finest:
+            notes.append(
+                f"the adaptive grid's candidates are the default grid's nodes (its intervals "
+                f"do not split in {grid.adaptive_finest} on the scene's and the model's steps)"
+            )
+        intervals *= finest
+        grid = replace(grid, adaptive_finest=finest)
     if settings.step is not None:
         steps_per_interval(duration, step, 1)
         intervals = settings.intervals or defaults.intervals_for(
@@ -178,7 +187,7 @@ def resolved(scene, settings: OcpSettings, compiled: bool | None = None):
     chosen = replace(
         settings,
         model=ModelSettings(elements, step),
-        grid=replace(settings.grid, control=settings.control, intervals=intervals),
+        grid=replace(grid, control=settings.control, intervals=intervals),
     )
     text = "derived settings: " + ", ".join(notes) if notes else ""
     return chosen, text
