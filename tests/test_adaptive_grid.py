@@ -358,16 +358,13 @@ def test_the_solve_on_the_nodes_kept_starts_from_the_carried_jacobian_only_if_it
 def test_the_candidates_split_each_default_interval_where_the_steps_allow():
     from cable_ocp.control.defaults import candidate_split, control_grid
 
-    # paper_hill: 42 default intervals of 100 scene steps and 10 model steps of 0.5 s, each
-    # split in two (its nodes among them).
-    assert control_grid(210.0, 0.05) == 42 and candidate_split(210.0, 0.05, 0.5, 42, 2) == 2
-    assert candidate_split(210.0, 0.05, 0.5, 42, 1) == 1
+    # paper_hill: 42 default intervals of 100 steps, each split in two (its nodes among them).
+    assert control_grid(210.0, 0.05) == 42 and candidate_split(210.0, 0.05, 42, 2) == 2
+    assert candidate_split(210.0, 0.05, 42, 1) == 1
     # Whole-space seed 0 case 2, 252 s at 0.1 s: 45 intervals of 56 steps, split in two.
-    assert control_grid(252.0, 0.1) == 45 and candidate_split(252.0, 0.1, 0.4, 45, 2) == 2
-    # 75 scene steps in 3 intervals cannot split in two, nor 5 model steps of 1 s in 5 s: the
-    # candidates are the default grid's nodes.
-    assert control_grid(15.0, 0.2) == 3 and candidate_split(15.0, 0.2, 0.5, 3, 2) == 1
-    assert candidate_split(15.0, 0.1, 1.0, 3, 2) == 1 and candidate_split(15.0, 0.1, 0.5, 3, 2) == 2
+    assert control_grid(252.0, 0.1) == 45 and candidate_split(252.0, 0.1, 45, 2) == 2
+    # 75 steps in 3 intervals cannot split in two: the candidates are the default grid's nodes.
+    assert control_grid(15.0, 0.2) == 3 and candidate_split(15.0, 0.2, 3, 2) == 1
 
 
 def test_candidates_that_cannot_split_leave_the_first_solve_on_the_default_grid():

@@ -174,9 +174,10 @@ def test_a_guess_far_outside_is_brought_inside_by_the_whole_qp_beside_clearance_
     held = WinchProblem.from_scene(scene, HermiteIntervals(30.0, 6), elements=2, step=0.5)
     monkeypatch.setattr(gauss_newton, "SCREENED_ROWS", (0,))  # straight to the whole QP
     solver = _solver(held)
-    assert solver.qp.size1_in(3) > held.bounds.matrix.shape[0]  # the clearance rows are in it
     guess = np.full(held.control.size, 50.0)  # rad and rad/s: far beyond every bound
     inside = solver.feasible(guess, held.bounds.lower, held.bounds.upper, {})
+    whole = max(solver._qps)  # built at its first use, here
+    assert solver._qps[whole].size1_in(3) == whole > held.bounds.matrix.shape[0]  # clearance rows
     assert held.bounds.excess(guess) > 10 and held.bounds.excess(inside) < 1e-5
 
 

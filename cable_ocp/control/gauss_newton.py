@@ -169,12 +169,11 @@ class GaussNewton(ProblemSolver):
         # at a price (:data:`SOFT_PRICE`), so that a start already under the floor (a heave, the
         # plant's error) still has a plan; the slack used is reported in the status.
         self.soft = settings.real_time and self.floor is not None
-        variables = size + self.soft
-        self.qp = _dense_qp("gauss_newton_qp", variables, rows)
-        self.screened_qps = [
-            _dense_qp(f"gauss_newton_screened_qp_{width}", variables, width)
-            for width in sorted({min(width, rows) for width in SCREENED_ROWS})
-        ]
+        self._qp_shape = (size + self.soft, rows)  # variables, rows
+        self._qps: dict[int, ca.Function] = {}  # by rows, built at their first use
+        if settings.real_time:  # a controller's every QP before its first sample
+            for width in {min(width, rows) for width in SCREENED_ROWS} | {rows}:
+                self._qp(width)
         self.softened = 0.0  # m: the slack of the last step
         self._last: tuple[ProblemParameters, np.ndarray, Linearised] | None = None
         self.build_time = time.perf_counter() - started
@@ -263,12 +262,13 @@ class GaussNewton(ProblemSolver):
         (:data:`SCREENED_ROWS`), and more than the largest holds to the whole QP.
         """
         kept = np.flatnonzero((-lba < SCREEN_DISTANCE) | (uba < SCREEN_DISTANCE))
-        for qp in self.screened_qps:
-            width = qp.size1_in(3)
+        whole = self._qp_shape[1]
+        for width in sorted({min(width, whole) for width in SCREENED_ROWS}):
             if matrix.shape[0] <= width:
                 kept = np.arange(matrix.shape[0])
             while kept.size <= width:
                 rows = _padded(matrix[kept], lba[kept], uba[kept], width)
+                qp = self._qp(width)
                 step, status = _solved(qp, h=hessian, g=gradient, **rows, lbx=lbx, ubx=ubx)
                 if step is None:
                     return None, status
@@ -280,8 +280,19 @@ class GaussNewton(ProblemSolver):
                 kept = np.union1d(kept, broken)
         # The whole QP holds every row of a step's QP (the clearance rows too); a QP on the
         # bounds alone (feasible) fills the rest.
-        rows = _padded(matrix, lba, uba, self.qp.size1_in(3))
-        return _solved(self.qp, h=hessian, g=gradient, **rows, lbx=lbx, ubx=ubx)
+        rows = _padded(matrix, lba, uba, whole)
+        return _solved(self._qp(whole), h=hessian, g=gradient, **rows, lbx=lbx, ubx=ubx)
+
+    def _qp(self, rows: int) -> ca.Function:
+        """The dense QP of ``rows`` constraint rows (DAQP), built at its first use.
+
+        A dense sparsity of 3000 rows takes milliseconds to build, and most solvers never need
+        the whole QP (nor the adaptive grid's coarsening, which only takes QP steps, its wider
+        screened ones).
+        """
+        if rows not in self._qps:
+            self._qps[rows] = _dense_qp(f"gauss_newton_qp_{rows}", self._qp_shape[0], rows)
+        return self._qps[rows]
 
     def run(self, values, guess, fixed, lower, upper) -> SolverOutcome:
         """Iterate from ``guess`` (:meth:`ProblemSolver.solve`).

@@ -146,6 +146,7 @@ def resolved(scene, settings: OcpSettings, compiled: bool | None = None):
     if settings.step is not None and settings.intervals is not None:
         steps_per_interval(duration, settings.step, settings.intervals)
     unit = None  # what a derived step divides: a control interval
+    grid = settings.grid
     if settings.step is not None:
         _check_memory(scene, settings, elements, settings.step, settings.intervals)
     else:
@@ -155,24 +156,23 @@ def resolved(scene, settings: OcpSettings, compiled: bool | None = None):
         # of about 5 s fits the scene's steps, the full model's step is shortened to fit it
         # (full_model_scene).
         intervals = settings.intervals or defaults.control_grid(duration, scene.numerics.step)
+        if grid.adaptive and settings.intervals is None:
+            finest = defaults.candidate_split(
+                duration, scene.numerics.step, intervals, grid.adaptive_finest
+            )
+            if finest < grid.adaptive_finest:
+                notes.append(
+                    f"the adaptive grid's candidates are the default grid's nodes (its "
+                    f"intervals do not split in {grid.adaptive_finest} on the scene's steps)"
+                )
+            intervals *= finest
+            grid = replace(grid, adaptive_finest=finest)
         unit = duration / intervals
     open_loop, _ = WinchProblem.open_loop_scene(scene)
     step, derived = defaults.model_step(
         open_loop, elements, settings.step, unit, defaults.STEP_CAP, compiled, "step"
     )
     notes += derived
-    grid = settings.grid
-    if grid.adaptive and settings.step is None and settings.intervals is None:
-        finest = defaults.candidate_split(
-            duration, scene.numerics.step, step, intervals, grid.adaptive_finest
-        )
-        if finest < grid.adaptive_finest:
-            notes.append(
-                f"the adaptive grid's candidates are the default grid's nodes (its intervals "
-                f"do not split in {grid.adaptive_finest} on the scene's and the model's steps)"
-            )
-        intervals *= finest
-        grid = replace(grid, adaptive_finest=finest)
     if settings.step is not None:
         steps_per_interval(duration, step, 1)
         intervals = settings.intervals or defaults.intervals_for(
