@@ -2,13 +2,16 @@
 
 ``GridSettings(adaptive=True)`` chooses the open loop's Hermite nodes among candidates: the nodes
 of a grid ``adaptive_finest`` (2 by default) times finer than the default one
-(:func:`cable_ocp.control.defaults.control_grid`, about 5 s apart; every candidate on an RK4
-step end of every model, so that any subset is too). It coarsens, with the error measured in
-the objective itself (Betts' equidistribution, run from the fine end):
+(:func:`cable_ocp.control.defaults.control_grid`, about 5 s apart), each default interval split
+where the scene's steps allow, the default grid's own nodes otherwise
+(:func:`cable_ocp.control.defaults.candidate_split`); every candidate is on an RK4 step end of
+every model, so that any subset is too. It coarsens, with the error measured in the objective
+itself (Betts' equidistribution, run from the fine end):
 
 1. The model correction's first solve and its full-model run are on the default grid (the
-   candidates' every ``adaptive_finest``-th node, the uniform default's grid when that is 1):
-   they give its optimum ``p0`` and the reduced model's bias ``b``.
+   candidates' every ``adaptive_finest``-th node, the uniform default's grid when that is 1;
+   the full-model run at the uniform grid's correction step): they give its optimum ``p0`` and
+   the reduced model's bias ``b``.
 2. At ``p0`` the corrected clearance error is linearised in the default grid's parameters (the
    Gauss-Newton solver's last Jacobian; another solver's takes one sensitivity sweep):
    ``r = W (e + b)``, ``A = W J``, Omega^2 ~ ``|r + A d|^2``. Its QP step within the winch bounds
@@ -23,13 +26,14 @@ the objective itself (Betts' equidistribution, run from the fine end):
    fits in what is left. The model is then re-optimised on the nodes kept (its QP within their
    bounds) and coarsened again, up to :data:`REOPTIMISED` times.
 4. The model-correction solves that remain run on the nodes kept, from the model's optimum on
-   them, and the verification is the usual one. The first of them starts with the default
-   grid's Jacobian carried onto the nodes kept (no sensitivity sweep) when one run confirms the
-   error it predicts (:meth:`GaussNewton.start_from`), and it is judged as the default grid's
-   next solve would have been, so that the correction stops as it would there. If it fails
-   (among the default grid's nodes, whole-space seed 1 case 10 blew the reduced model up at
-   the model's optimum on 14 intervals), the default grid goes on as it would have alone, and
-   the notes say so.
+   them, and the verification is the usual one (their correction runs at a step that fits the
+   nodes kept: :func:`cable_ocp.control.verification.fitted_step`). The first of them starts
+   with the default grid's Jacobian carried onto the nodes kept (no sensitivity sweep) when one
+   run confirms the error it predicts (:meth:`GaussNewton.start_from`), and it is judged as the
+   default grid's next solve would have been, so that the correction stops as it would there.
+   If it fails (among the default grid's nodes, whole-space seed 1 case 10 blew the reduced
+   model up at the model's optimum on 14 intervals), the default grid goes on as it would have
+   alone, and the notes say so.
 
 Why from the fine end: a solve's cost hardly depends on its parameters (a sensitivity sweep of
 paper_hill's reduced model took 0.126 s on 22 parameters, 0.142 s on 84, 0.206 s on 168: the

@@ -43,6 +43,24 @@ def hermite_polynomials(s: np.ndarray) -> tuple[np.ndarray, ...]:
     return rows[0], rows[1], rows[2], rows[3]
 
 
+def hermite_values(
+    k: np.ndarray, s: np.ndarray, width, angles: np.ndarray, rates: np.ndarray
+) -> np.ndarray:
+    """Value, rate and acceleration (3, len(s)) of a piecewise cubic Hermite angle.
+
+    ``basis @ parameters`` without the basis rows (3x fewer operations on the closed loop's
+    stage times, and a full-model run's): ``k`` each time's interval, ``s`` its place in it (0
+    to 1), ``width`` (s) the intervals' width (one, or each time's), ``angles`` and ``rates``
+    (rad, rad/s) at every node, node 0 included.
+    """
+    h00, h10, h01, h11 = hermite_polynomials(s)
+    width = np.asarray(width, dtype=float)
+    scale = np.stack(np.broadcast_arrays(1.0, 1.0 / width, 1.0 / width**2)).reshape(3, -1)
+    return scale * (
+        h00 * angles[k] + h01 * angles[k + 1] + width * (h10 * rates[k] + h11 * rates[k + 1])
+    )
+
+
 def hermite_rows(
     k: np.ndarray, s: np.ndarray, width, first: int, rates: int, size: int
 ) -> np.ndarray:
@@ -178,11 +196,7 @@ class HermiteIntervals:
         angles = np.zeros(nodes)
         rates = np.zeros(nodes)
         angles[first:], rates[first:] = parameters[: nodes - first], parameters[nodes - first :]
-        h00, h10, h01, h11 = hermite_polynomials(s)
-        scale = np.array([[1.0], [1.0 / width], [1.0 / width**2]])
-        out = scale * (
-            h00 * angles[k] + h01 * angles[k + 1] + width * (h10 * rates[k] + h11 * rates[k + 1])
-        )
+        out = hermite_values(k, s, width, angles, rates)
         if beyond.any():
             tail = self._extension(out[:, beyond, None], (t_given[beyond] - self.duration))
             out[:, beyond] = tail[..., 0]
