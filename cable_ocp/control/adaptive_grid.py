@@ -173,26 +173,6 @@ class Quadratic:
         step = np.linalg.lstsq(self.hessian, -self.gradient, rcond=None)[0]
         return float(np.sqrt(max(self.objective + self.gradient @ step, 0.0)))
 
-    def columns(self, nodes: np.ndarray) -> np.ndarray:
-        """The angle and rate columns of the default grid's nodes ``nodes`` (1 .. N)."""
-        return np.r_[nodes - 1, self.count + nodes - 1]
-
-    def spanned(self, left: int, right: int, times: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        """The columns inside ``left..right`` and their values when one cubic spans them.
-
-        The cubic runs through the angles and rates of :attr:`profile` at the default nodes
-        ``left`` and ``right`` (``times``: the default nodes, s).
-        """
-        angles = np.r_[0.0, self.profile[: self.count]]
-        rates = np.r_[0.0, self.profile[self.count :]]
-        inside = np.arange(left + 1, right)
-        width = times[right] - times[left]
-        h00, h10, h01, h11 = hermite_polynomials((times[inside] - times[left]) / width)
-        ends = (angles[left], width * rates[left], angles[right], width * rates[right])
-        value = sum(h[0] * e for h, e in zip((h00, h10, h01, h11), ends, strict=True))
-        slope = sum(h[1] * e for h, e in zip((h00, h10, h01, h11), ends, strict=True)) / width
-        return self.columns(inside), np.r_[value, slope]
-
     def coarsest(
         self,
         times: np.ndarray,
@@ -283,6 +263,10 @@ class _Spans:
 
     def __init__(self, quadratic: Quadratic, times, current: np.ndarray, bounds):
         self.quadratic, self.times, self.current, self.bounds = quadratic, times, current, bounds
+        count = quadratic.count
+        # Every node's angle and rate in the profile (rad, rad/s), node 0 at rest.
+        self.angles = np.concatenate([[0.0], quadratic.profile[:count]])
+        self.rates = np.concatenate([[0.0], quadratic.profile[count:]])
         self.rows = self.rows_at = None
         if bounds is not None:
             self.rows = [np.flatnonzero(column) for column in (bounds.matrix != 0).T]
@@ -292,16 +276,31 @@ class _Spans:
     def at(self, left: int, right: int) -> _Span:
         """The span from node ``left`` to node ``right`` (indices into the times)."""
         if (left, right) not in self._made:
-            quadratic = self.quadratic
-            columns, values = quadratic.spanned(left, right, self.times)
+            columns, values = self._spanned(left, right)
             change = values - self.current[columns]
-            rise = float(change @ quadratic.hessian[np.ix_(columns, columns)] @ change)
+            rise = float(change @ self.quadratic.hessian[np.ix_(columns, columns)] @ change)
             touched = shift = None
             if self.bounds is not None:
                 touched = np.unique(np.concatenate([self.rows[c] for c in columns]))
                 shift = self.bounds.matrix[np.ix_(touched, columns)] @ change
             self._made[left, right] = _Span(columns, change, rise, touched, shift)
         return self._made[left, right]
+
+    def _spanned(self, left: int, right: int) -> tuple[np.ndarray, np.ndarray]:
+        """The columns of the nodes inside ``left..right`` and their values on one cubic.
+
+        The cubic runs through the profile's angles and rates at ``left`` and ``right``.
+        """
+        times, angles, rates = self.times, self.angles, self.rates
+        inside = np.arange(left + 1, right)
+        width = times[right] - times[left]
+        h00, h10, h01, h11 = hermite_polynomials((times[inside] - times[left]) / width)
+        ends = (angles[left], width * rates[left], angles[right], width * rates[right])
+        value = h00[0] * ends[0] + h10[0] * ends[1] + h01[0] * ends[2] + h11[0] * ends[3]
+        slope = h00[1] * ends[0] + h10[1] * ends[1] + h01[1] * ends[2] + h11[1] * ends[3]
+        count = self.quadratic.count
+        columns = np.concatenate([inside - 1, inside - 1 + count])
+        return columns, np.concatenate([value, slope / width])
 
     def moved(self, span: _Span) -> None:
         """Move the profile (shared with the caller) onto the cubic of ``span``."""
