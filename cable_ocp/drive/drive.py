@@ -80,9 +80,18 @@ class Drive:
 
         ``left`` (bool array like ``t``): left limits there (see :func:`stage_times`).
         """
-        phi, rate, acc = self.angle(t, left)
-        if self.heave_compensation:
-            position, velocity, acceleration = self.top(t)
+        motion = self.top(t) if self.heave_compensation else None
+        return self._paid_out(self.angle(t, left), motion)
+
+    def _paid_out(self, angle: tuple, motion: tuple | None) -> tuple:
+        """The winch angle with its rates, plus the heave compensation's payout.
+
+        ``motion``: the top's position, velocity and acceleration at the angle's times (None:
+        no compensation).
+        """
+        phi, rate, acc = angle
+        if motion is not None:
+            position, velocity, acceleration = motion
             start = self.top(np.zeros(1))[0][2]
             payout = winch.heave_payout(
                 position[2] - start, velocity[2], acceleration[2], self.drum_radius
@@ -94,11 +103,14 @@ class Drive:
         """Input vector ``u`` at the times ``t`` (s): array (15, len(t)), see ``INPUT_NAMES``.
 
         ``left`` (bool array like ``t``): the winch's left limits there (see :func:`stage_times`).
+        The top's motion is evaluated once for both (a sea state's components made half of a
+        heave-compensated full-model run's time, evaluated twice).
         """
         t = np.atleast_1d(np.asarray(t, dtype=float))
-        position, velocity, acceleration = self.top(t)
-        length = winch.top_length(self.winch_angle, t, self.top_length, self.drum_radius, left)
-        return np.vstack([position, velocity, acceleration, length, end_force(self.end, t)])
+        motion = self.top(t)
+        angle = self._paid_out(self.angle(t, left), motion if self.heave_compensation else None)
+        length = winch.top_length(angle, self.top_length, self.drum_radius)
+        return np.vstack([*motion, length, end_force(self.end, t)])
 
     def stage_inputs(self, starts: np.ndarray, step: float) -> np.ndarray:
         """Inputs at the RK4 stages of the steps starting at ``starts``: array (15, 3 len)."""

@@ -250,18 +250,13 @@ def heave_payout(
     return departure / drum_radius, speed / drum_radius, acceleration / drum_radius
 
 
-def top_length(
-    angle: WinchAngleFunction,
-    t: np.ndarray,
-    nominal_length: float,
-    drum_radius: float,
-    left=None,
-) -> np.ndarray:
-    """Top-element length and its rates (3, len(t)): m, m/s, m/s^2 (``left`` as the angle's).
+def top_length(angle: tuple, nominal_length: float, drum_radius: float) -> np.ndarray:
+    """Top-element length and its rates (3, len): m, m/s, m/s^2, from the winch's ``angle``.
 
+    ``angle``: the angle, its rate and acceleration (rad, rad/s, rad/s^2), arrays alike;
     ``nominal_length`` (m) is the top element at ``phi = 0``.
     """
-    phi, rate, acceleration = angle(t, left)
+    phi, rate, acceleration = angle
     return np.vstack(
         [nominal_length + drum_radius * phi, drum_radius * rate, drum_radius * acceleration]
     )
