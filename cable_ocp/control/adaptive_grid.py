@@ -71,22 +71,18 @@ REOPTIMISED = 1
 REACH_LIMITED = 1.5
 
 
-def with_nodes(
-    problem: WinchProblem, times: np.ndarray, embedding: np.ndarray | None = None
-) -> WinchProblem:
-    """The problem with a Hermite control on the node times ``times`` (s), its bounds rebuilt.
+def with_nodes(problem: WinchProblem, times: np.ndarray) -> tuple[WinchProblem, np.ndarray]:
+    """The problem with a Hermite control on the node times ``times`` (s), among its own nodes.
 
-    ``embedding`` (``problem``'s parameters of each parameter of the new control, from
-    :func:`on_nodes`; for nodes among ``problem``'s own) maps ``problem``'s bound rows onto the
-    new control: on the same RK4 sub-intervals, each cubic is the other's, so the rows are the
-    same constraints (the heave's extremes are not sampled again).
+    Returns the problem and the embedding (``problem``'s parameters of each parameter of the
+    new control, :func:`on_nodes`). The embedding maps ``problem``'s bound rows onto the new
+    control: on the same RK4 sub-intervals, each cubic is the other's, so the rows are the same
+    constraints (the heave's extremes are not sampled again).
     """
     control = HermiteNodes(np.asarray(times, dtype=float))
-    if embedding is None:
-        bounds = LinearBounds.build(problem.scene, control, problem.grid)
-    else:
-        bounds = replace(problem.bounds, matrix=problem.bounds.matrix @ embedding)
-    return replace(problem, control=control, bounds=bounds)
+    embedding = on_nodes(control, np.eye(control.size), problem.control.breakpoints)
+    bounds = replace(problem.bounds, matrix=problem.bounds.matrix @ embedding)
+    return replace(problem, control=control, bounds=bounds), embedding
 
 
 def on_nodes(control, parameters: np.ndarray, times: np.ndarray) -> np.ndarray:
@@ -380,9 +376,7 @@ def coarsen(
         if fewer.size == kept.size and fewer.size < times.size:
             break
         kept = fewer
-        nodes = HermiteNodes(times[kept])
-        embedding = on_nodes(nodes, np.eye(nodes.size), times)
-        chosen = with_nodes(candidates, times[kept], embedding)
+        chosen, embedding = with_nodes(candidates, times[kept])
         coarse = on_nodes(candidates.control, quadratic.profile, times[kept])
         # The model's optimum on the nodes kept (a QP within their bounds), from which the
         # next pass removes more: the interpolated profile overstates what they cost.

@@ -23,7 +23,7 @@ import numpy as np
 import xarray as xr
 
 from cable_ocp import result_files
-from cable_ocp.control.adaptive_grid import Adaptation, on_nodes, with_nodes
+from cable_ocp.control.adaptive_grid import Adaptation, with_nodes
 from cable_ocp.control.hermite_nodes import HermiteNodes
 from cable_ocp.control.keywords import refuse_unknown
 from cable_ocp.control.problem import SolverOutcome, WinchProblem
@@ -812,8 +812,7 @@ def _adaptive(problem: WinchProblem, grid: GridSettings) -> tuple[WinchProblem, 
     if grid.adaptive_finest == 1:
         return problem, Adaptation(grid.adaptive_tolerance)
     times = problem.control.breakpoints
-    nodes = HermiteNodes(np.unique(np.r_[times[:: grid.adaptive_finest], times[-1]]))
-    first = with_nodes(problem, nodes.breakpoints, on_nodes(nodes, np.eye(nodes.size), times))
+    first, _ = with_nodes(problem, np.unique(np.r_[times[:: grid.adaptive_finest], times[-1]]))
     return first, Adaptation(grid.adaptive_tolerance, problem)
 
 
