@@ -181,6 +181,53 @@ def test_a_guess_far_outside_is_brought_inside_by_the_whole_qp_beside_clearance_
     assert held.bounds.excess(guess) > 10 and held.bounds.excess(inside) < 1e-5
 
 
+def test_a_qp_solution_just_outside_its_rows_is_not_moved_again(problem):
+    """A point up to half the QP margin inside the winch bounds counts as inside (DAQP leaves
+    its rows by up to 1.6e-5 rad; moving such a point again cost the adaptive grid's carried
+    Jacobian, a sensitivity sweep); a point nearer the bounds is brought back inside the QP's
+    margin."""
+    from cable_ocp.control.gauss_newton import QP_MARGIN
+    from cable_ocp.drive.bounds import shrunk
+
+    solver, bounds = _solver(problem), problem.bounds
+    live = np.max(np.abs(bounds.matrix), axis=1) > 1e-6  # the rows the parameters move
+    # Bounds that put the origin at the given depth under every live row's upper bound (rad).
+    for depth, kept in ((0.6 * QP_MARGIN, True), (0.4 * QP_MARGIN, False)):
+        lower, upper = np.full(live.size, -1.0), np.where(live, depth, 1.0)
+        guess = np.zeros(problem.control.size)
+        moved = solver.feasible(guess, lower, upper, {})
+        assert (moved is guess) == kept
+        held_lower, held_upper = shrunk(lower, upper, QP_MARGIN)
+        if not kept:  # the guess was QP_MARGIN - depth over the QP's rows: now a tenth of it
+            over = np.max(bounds.matrix @ moved - held_upper)
+            assert over < 0.1 * (QP_MARGIN - depth)
+
+
+def test_linearisations_of_one_shape_share_their_sweep_arrays_and_not_their_results(problem):
+    """Two linearisations of one model and horizon (two controls) share one set of work arrays
+    (:mod:`cable_ocp.control.sweep_scratch`); interleaved, each returns what it returns alone,
+    bit for bit."""
+    times, left = stage_times(problem.grid[:-1], problem.step)
+
+    def built(control):
+        return ErrorLinearisation(
+            problem.model, problem.step, problem.grid.size - 1, control,
+            problem.scene.winch.drum_radius, problem.scene.seabed, times, left,
+        )  # fmt: skip
+
+    coarse, fine = built(HermiteIntervals(30.0, 3)), built(HermiteIntervals(30.0, 6))
+    assert coarse._scratch is fine._scratch
+    values = problem.parameter_values()
+    rng = np.random.default_rng(3)
+    on_coarse, on_fine = (0.2 * rng.normal(size=n) for n in (coarse.winch.shape[2], 12))
+    alone = coarse(values, on_coarse)
+    fine(values, on_fine)
+    again = coarse(values, on_coarse)
+    np.testing.assert_array_equal(again.jacobian, alone.jacobian)
+    np.testing.assert_array_equal(again.states, alone.states)
+    assert not np.shares_memory(again.states, alone.states)
+
+
 def test_keeping_a_jacobian_that_predicts_the_error_finds_the_same_optimum(problem, monkeypatch):
     """The simplified Newton steps (the Jacobian kept while it predicts the error within 5 %)
     reach the optimum of a fresh Jacobian at every iterate: Omega within 1e-6 relative, the

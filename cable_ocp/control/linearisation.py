@@ -33,13 +33,13 @@ forward mode through the compiled step.
 from __future__ import annotations
 
 from dataclasses import dataclass
-from functools import cached_property
 
 import casadi as ca
 import numpy as np
 
 from cable_ocp.control.parameters import ProblemParameters
 from cable_ocp.control.step_end_tangent import StepEndTangent, step_end_kernel
+from cable_ocp.control.sweep_scratch import sweep_scratch
 from cable_ocp.model.cable import CableModel
 from cable_ocp.model.compile import (
     CompileReport,
@@ -332,37 +332,19 @@ class ErrorLinearisation:
         self.compile_report = rhs_jacobian(model)[1]
         # The sweep writes into numpy arrays in place (CasADi's column-major layout: a C-order
         # array of the transposed shape), which spares converting 1.7e6 numbers through DM; the
-        # views of every step are made once.
+        # arrays and the views of every step are shared by the linearisations of one shape.
         nx, width = model.state_size, model.state_size + WINCH_INPUTS
-        self._states = np.zeros((steps + 1, nx))  # the initial state first
-        self._inputs = np.zeros((steps, 3, INPUTS.end_force.stop))
+        self._scratch = sweep_scratch(steps, nx, INPUTS.end_force.stop, width, self.at_ends)
         if self.at_ends:
-            self._points = np.zeros((steps + 1, width, nx))
             kernel, size = step_end_kernel(nx), self.winch.shape[2]
             self._tangent = kernel and StepEndTangent(kernel, steps, nx, size, 3, step)
             return
-        self._jacobians = np.zeros((steps, 4, width, nx))
         self._buffer, self._run = sweep_step_function(model, step).buffer()
 
-    @cached_property
-    def _views(self) -> list[tuple[memoryview, ...]]:
-        """Each step's start, inputs, end and Jacobians, as the sweep writes them.
-
-        Made at the first sweep: a solver that only takes QP steps never makes them.
-        """
-        states, inputs, jacobians = self._states, self._inputs, self._jacobians
-        return [
-            tuple(
-                memoryview(array)
-                for array in (states[k], inputs[k], states[k + 1], jacobians[k])
-            )
-            for k in range(self.steps)
-        ]  # fmt: skip
-
     def _sweep(self) -> None:
-        """Step the model over the horizon from ``_states[0]`` under ``_inputs``."""
+        """Step the model over the horizon from the scratch's first state under its inputs."""
         buffer, run = self._buffer, self._run
-        for start, inputs, end, jacobians in self._views:
+        for start, inputs, end, jacobians in self._scratch.views:
             buffer.set_arg(0, start)
             buffer.set_arg(1, inputs)
             buffer.set_res(0, end)
@@ -370,26 +352,28 @@ class ErrorLinearisation:
             run()
 
     def _step_ends(self) -> bool:
-        """The run from ``_states[0]`` under ``_inputs`` and the Jacobians at its points.
+        """The run from the scratch's first state under its inputs and the Jacobians at its points.
 
         Evaluated at every other point (and the last); each between is the mean of its two
         neighbours. Returns whether the Jacobians are finite.
         """
-        flat = self._inputs.reshape(-1, INPUTS.end_force.stop)
-        evaluate_into(self.run, [self._states[0], flat], [self._states[1:]])
-        at_points = np.concatenate([self._inputs[:, 0], self._inputs[-1:, 2]])
+        scratch = self._scratch
+        states, inputs, points = scratch.states, scratch.inputs, scratch.jacobians
+        flat = inputs.reshape(-1, INPUTS.end_force.stop)
+        evaluate_into(self.run, [states[0], flat], [states[1:]])
+        at_points = np.concatenate([inputs[:, 0], inputs[-1:, 2]])
         chosen = self._evaluated
-        evaluated = np.empty((chosen.size, *self._points.shape[1:]))
-        evaluate_into(self.point_jacobians, [self._states[chosen], at_points[chosen]], [evaluated])
-        self._points[chosen] = evaluated
-        odd = self._points[1:-1:2][: self.steps // 2]
-        np.add(self._points[0:-2:2][: odd.shape[0]], self._points[2::2][: odd.shape[0]], out=odd)
+        evaluated = np.empty((chosen.size, *points.shape[1:]))
+        evaluate_into(self.point_jacobians, [states[chosen], at_points[chosen]], [evaluated])
+        points[chosen] = evaluated
+        odd = points[1:-1:2][: self.steps // 2]
+        np.add(points[0:-2:2][: odd.shape[0]], points[2::2][: odd.shape[0]], out=odd)
         odd *= 0.5
-        return bool(np.all(np.isfinite(self._points)))
+        return bool(np.all(np.isfinite(points)))
 
     def _step_end_sensitivities(self) -> np.ndarray:
         """``S_k`` (K + 1, size, 3) from the Jacobians at the points (compiled, or numpy)."""
-        points = self._points
+        points = self._scratch.jacobians
         if self._tangent:
             return self._tangent(points, self.winch)
         mean = 0.5 * (points[:-1] + points[1:])
@@ -422,22 +406,26 @@ class ErrorLinearisation:
 
     def __call__(self, values: ProblemParameters, parameters: np.ndarray) -> Linearised:
         """Error and Jacobian at ``parameters`` (rad, rad/s) for the parameter values."""
-        count = self.steps
-        self._states[0] = values.initial_state
-        self._inputs.reshape(-1, INPUTS.end_force.stop)[:] = self.stage_inputs(values, parameters).T
-        if self.at_ends:
-            finite = self._step_ends()
-        else:
-            self._sweep()
-            finite = np.all(np.isfinite(self._jacobians))
-        states = self._states.copy()
-        if not (np.all(np.isfinite(states)) and finite):
-            empty = np.zeros((count + 1, self.winch.shape[2]))
-            return Linearised(states, np.full(count + 1, np.nan), empty, False)
-        if self.at_ends:
-            sensitivities = self._step_end_sensitivities()
-        else:
-            sensitivities = propagate_sensitivities(self._jacobians, self.winch, self.step, kept=3)
+        count, scratch = self.steps, self._scratch
+        inputs = self.stage_inputs(values, parameters).T
+        with scratch.lock:  # another linearisation of this shape may share the arrays
+            scratch.states[0] = values.initial_state
+            scratch.inputs.reshape(-1, INPUTS.end_force.stop)[:] = inputs
+            if self.at_ends:
+                finite = self._step_ends()
+            else:
+                self._sweep()
+                finite = np.all(np.isfinite(scratch.jacobians))
+            states = scratch.states.copy()
+            if not (np.all(np.isfinite(states)) and finite):
+                empty = np.zeros((count + 1, self.winch.shape[2]))
+                return Linearised(states, np.full(count + 1, np.nan), empty, False)
+            if self.at_ends:
+                sensitivities = self._step_end_sensitivities()
+            else:
+                sensitivities = propagate_sensitivities(
+                    scratch.jacobians, self.winch, self.step, kept=3
+                )
         error, slope = self._error_and_slope(values, states)
         jacobian = np.einsum("ik,ksi->ks", slope, sensitivities)
         return Linearised(states, error, jacobian, True)
