@@ -263,19 +263,49 @@ def test_the_command_line_asks_for_the_adaptive_grid():
         optimize_settings(simplex)
 
 
-def test_the_finest_grid_of_an_adaptive_grid_is_finer_only_when_asked():
-    from cable_ocp.control.shooting import resolved
+def test_the_candidates_of_an_adaptive_grid_are_finer_only_when_asked():
+    """The first solve is always on the default grid (the same settings as without the adaptive
+    grid); the candidates split its intervals in ``adaptive_finest``."""
+    from cable_ocp.control.shooting import candidate_settings, resolved
     from cable_ocp.control.solvers import ocp_settings
 
     scene = co.load_scene("paper_hill")
+    default, _ = resolved(scene, ocp_settings())
     finer = GridSettings(adaptive=True, adaptive_finest=2)
     among_default = GridSettings(adaptive=True, adaptive_finest=1)
-    for grid, intervals in ((finer, 84), (among_default, 42), (None, 42)):
-        chosen, _ = resolved(scene, ocp_settings(grid=grid))
-        assert chosen.intervals == intervals
+    for grid, candidates in ((finer, 84), (among_default, 42)):
+        requested = ocp_settings(grid=grid)
+        chosen, _ = resolved(scene, requested)
+        assert (chosen.intervals, chosen.step) == (default.intervals, default.step) == (42, 0.5)
+        split = candidate_settings(scene, requested, chosen)
+        assert (split.intervals, split.step) == (candidates, 0.5)  # 10 steps split in two
     # Not adaptive, the finest grid is not asked for: the default grid stays.
     plain, _ = resolved(scene, ocp_settings(grid=GridSettings(adaptive_finest=2)))
     assert plain.intervals == 42
+
+
+def test_candidates_derive_their_own_step_where_the_default_one_does_not_split():
+    """An odd number of model steps in a default interval (paper_hill over 88 s: 9 of 0.489 s
+    in 4.4 s, as on 12 of seed 0's 50 whole-space scenes): the first solve keeps the default
+    grid's step, and the candidates take the step that resolving their own intervals gives."""
+    from dataclasses import replace
+
+    from cable_ocp.control.shooting import candidate_settings, resolved
+    from cable_ocp.control.solvers import ocp_settings
+
+    scene = co.load_scene("paper_hill", {"numerics.duration": 88.0, "numerics.step": 0.1})
+    requested = ocp_settings(grid=GridSettings(adaptive=True))
+    chosen, _ = resolved(scene, requested)
+    default, _ = resolved(scene, ocp_settings())
+    assert (chosen.step, chosen.intervals) == (default.step, default.intervals)
+    per_interval = round(88.0 / chosen.intervals / chosen.step)
+    assert per_interval % 2 == 1 and chosen.grid.adaptive_finest == 2
+    split = candidate_settings(scene, requested, chosen)
+    own_grid = replace(requested.grid, adaptive=False, intervals=split.intervals)
+    own, _ = resolved(scene, replace(requested, grid=own_grid))
+    assert split.intervals == 2 * chosen.intervals
+    assert split.step == pytest.approx(own.step, rel=1e-12) and split.step < chosen.step
+    assert round(88.0 / split.intervals / split.step) == (per_interval + 1) // 2
 
 
 def test_the_adaptive_grid_beats_the_default_on_paper_hill_with_fewer_parameters(default_hill):
@@ -379,7 +409,7 @@ def test_candidates_that_cannot_split_leave_the_first_solve_on_the_default_grid(
     assert "candidates are the default grid's nodes" in derived
     halved = co.load_scene("paper_hill", {"numerics.duration": 105.0, "numerics.step": 0.1})
     settings, derived = resolved(halved, ocp_settings(grid=GridSettings(adaptive=True)))
-    assert settings.grid.intervals == 42 and settings.grid.adaptive_finest == 2
+    assert settings.grid.intervals == 21 and settings.grid.adaptive_finest == 2
     assert settings.step == default.step and "candidates" not in derived
 
 

@@ -46,6 +46,7 @@ steps). CONVENTIONS.md §5 states the rule and its measurements.
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from dataclasses import dataclass, replace
 
 import numpy as np
@@ -53,6 +54,7 @@ import numpy as np
 from cable_ocp.control.gauss_newton import GaussNewton, GaussNewtonSettings
 from cable_ocp.control.hermite_nodes import HermiteNodes
 from cable_ocp.control.linearisation import Linearised
+from cable_ocp.control.parameters import ProblemParameters
 from cable_ocp.control.problem import WinchProblem
 from cable_ocp.drive.bounds import LinearBounds
 from cable_ocp.drive.controls import hermite_polynomials
@@ -117,6 +119,9 @@ class Coarsening:
         The corrected error at ``parameters`` and its Jacobian in their parameters, predicted
         from the default grid's linearisation (the first solve on the nodes starts from it when
         a run confirms the error: :meth:`GaussNewton.start_from`).
+    values : ProblemParameters
+        The named parameters of :attr:`problem`, with the model correction's bias: the first
+        problem's, or the candidates' own where their model step is shorter.
     """
 
     problem: WinchProblem
@@ -126,6 +131,7 @@ class Coarsening:
     omega: float
     candidates: np.ndarray
     linearised: Linearised
+    values: ProblemParameters
 
     def describe(self) -> str:
         """One phrase (no "; ", which separates a result's notes): the grids and their Omega."""
@@ -305,24 +311,35 @@ class _Spans:
             self.rows_at[span.touched] += span.shift
 
 
-@dataclass(frozen=True, eq=False)
 class Adaptation:
     """An adaptive grid's coarsening with its settings bound (what the model correction calls).
 
-    Attributes
+    Parameters
     ----------
     tolerance : float
         ``GridSettings.adaptive_tolerance``.
+    candidates : callable, optional
+        Builds the problem on the candidate nodes, where they are finer than the default grid's
+        (``adaptive_finest`` > 1); called only where the coarsening takes them.
+
+    Attributes
+    ----------
     finer : WinchProblem or None
-        The problem on the candidate nodes where they are finer than the first solve's.
+        The problem on the finer candidates, once a coarsening has taken them.
     """
 
-    tolerance: float
-    finer: WinchProblem | None = None
+    def __init__(self, tolerance: float, candidates: Callable[[], WinchProblem] | None = None):
+        self.tolerance, self._candidates, self.finer = tolerance, candidates, None
 
-    def __call__(self, problem: WinchProblem, solver, values, parameters) -> Coarsening:
+    def __call__(self, problem: WinchProblem, solver, values, parameters, corrected) -> Coarsening:
         """:func:`coarsen` with these settings."""
-        return coarsen(problem, solver, values, parameters, self.tolerance, self.finer)
+        finer = self._finer if self._candidates is not None else None
+        return coarsen(problem, solver, values, parameters, self.tolerance, corrected, finer)
+
+    def _finer(self) -> WinchProblem:
+        if self.finer is None:
+            self.finer = self._candidates()
+        return self.finer
 
 
 def coarsen(
@@ -331,7 +348,8 @@ def coarsen(
     values,
     parameters: np.ndarray,
     tolerance: float,
-    finer: WinchProblem | None = None,
+    corrected: Callable | None = None,
+    finer: Callable[[], WinchProblem] | None = None,
 ) -> Coarsening:
     """The nodes to keep, at the corrected optimum of ``problem``'s first solve (docstring).
 
@@ -349,9 +367,13 @@ def coarsen(
     tolerance : float
         ``GridSettings.adaptive_tolerance``: the nodes kept predict Omega within it of the
         default grid's prediction.
-    finer : WinchProblem, optional
-        The problem on the candidate nodes (a grid ``adaptive_finest`` times finer, holding the
-        default grid's nodes); None: the default grid's nodes are the candidates.
+    corrected : callable, optional
+        ``corrected(other, parameters)``: another problem's named parameters with the model
+        correction's bias on its own grid, from the same full-model run (needed with ``finer``
+        when its model step is not ``problem``'s).
+    finer : callable, optional
+        Builds the problem on the candidate nodes (a grid ``adaptive_finest`` times finer,
+        holding the default grid's nodes); None: the default grid's nodes are the candidates.
     """
     model = solver
     if not hasattr(model, "linearised_at"):  # a solver that keeps no linearisation of its own
@@ -361,12 +383,14 @@ def coarsen(
     predicted = float(np.sqrt(max(quadratic.objective, 0.0)))
     if finer is not None and predicted > REACH_LIMITED * quadratic.unbounded():
         finer = None  # the winch's reach, not the grid, limits Omega: finer nodes cannot help
-    candidates = problem if finer is None else finer
+    candidates = problem if finer is None else finer()
     times = candidates.control.breakpoints
     start = parameters
     if finer is not None:  # one sensitivity sweep on the candidates, from the same profile
-        model = GaussNewton(finer, GaussNewtonSettings())
+        model = GaussNewton(candidates, GaussNewtonSettings())
         start = on_nodes(problem.control, parameters, times)
+        if not np.array_equal(candidates.grid, problem.grid):  # a shorter model step
+            values = corrected(candidates, start)
         linearised = model.linearisation(values, start)
         quadratic = _optimum(model, linearised, start)
     allowed = ((1 + tolerance) * predicted + OMEGA_ROUND_OFF) ** 2
@@ -400,6 +424,7 @@ def coarsen(
         float(np.sqrt(max(quadratic.objective, 0.0))),
         times,
         Linearised(linearised.states, error, on_chosen.jacobian, True),
+        values,
     )
 
 

@@ -23,9 +23,10 @@ import numpy as np
 import xarray as xr
 
 from cable_ocp import result_files
-from cable_ocp.control.adaptive_grid import Adaptation, with_nodes
+from cable_ocp.control.adaptive_grid import Adaptation
 from cable_ocp.control.hermite_nodes import HermiteNodes
 from cable_ocp.control.keywords import refuse_unknown
+from cable_ocp.control.parameters import ProblemParameters
 from cable_ocp.control.problem import SolverOutcome, WinchProblem
 from cable_ocp.control.settings import (
     GridSettings,
@@ -33,7 +34,12 @@ from cable_ocp.control.settings import (
     OcpSettings,
     TranscriptionSettings,
 )
-from cable_ocp.control.shooting import control_of, full_model_scene
+from cable_ocp.control.shooting import (
+    candidate_settings,
+    control_of,
+    full_model_scene,
+    make_control,
+)
 from cable_ocp.control.solvers import SHOOTING, SOLVERS, Solver, ocp_settings, transcription_named
 from cable_ocp.control.verification import (
     Verification,
@@ -499,17 +505,15 @@ def solve_verified(
     while (solve := solve + 1) < solves:
         if learned is not None:
             run, source = learned
-            full_error = np.interp(problem.grid, run.time, run.clearance_error)
-            states = source.states
-            if states is None:
-                states = problem.simulate(source.parameters, compiled=settings.compiled)
             parameters = source.parameters
-            if problem.reduced:
-                values = replace(values, bias=landing_bias + full_error - problem.clearance(states))
+            values = _corrected(
+                problem, values, landing_bias, run, parameters, source.states, settings.compiled
+            )
             if adapt is not None and coarsening is None:
                 # The adaptive grid: the solves from here on run on the nodes kept, and only
                 # their profiles are the result's.
-                coarsening = adapt(problem, nlp, values, parameters)
+                corrected = _learned_from(run, settings.compiled)
+                coarsening = adapt(problem, nlp, values, parameters, corrected)
                 fallback = (
                     problem,
                     nlp,
@@ -519,8 +523,13 @@ def solve_verified(
                     checked,
                     best_solve,
                     correction,
+                    values,
+                    landing_bias,
                 )
                 problem, parameters = coarsening.problem, coarsening.parameters
+                if coarsening.values is not values:  # the candidates' own grid
+                    values = coarsening.values
+                    landing_bias = problem.landing_bias()
                 nodes = problem.control.breakpoints
                 correction = fitted_step(correction, problem.scene.numerics.step, nodes)
                 nlp = solver.build(problem, settings, quiet, verbose, 0.0)
@@ -539,7 +548,10 @@ def solve_verified(
             # The first solve on the nodes kept failed: the default grid goes on, as it would
             # have without them (one solve more, so that it still has all its corrections).
             abandoned = f"{coarsening.describe()} abandoned ({outcome.status}): default grid kept"
-            problem, nlp, verify, best, best_outcome, checked, best_solve, correction = fallback
+            (problem, nlp, verify, best, best_outcome, checked, best_solve, correction, values) = (
+                fallback[:9]
+            )
+            landing_bias = fallback[9]
             fallback, coarsening, adapt, solves = None, None, None, solves + 1
             verified.append(float("nan"))
             continue
@@ -616,6 +628,43 @@ def solve_verified(
             problem, checked, correction, coarsening.describe() if coarsening else abandoned
         ),
     )
+
+
+def _corrected(
+    problem: WinchProblem,
+    values: ProblemParameters,
+    landing_bias: np.ndarray,
+    run,
+    parameters: np.ndarray,
+    states: np.ndarray | None,
+    compiled: bool,
+) -> ProblemParameters:
+    """The problem's named parameters with the model correction learned from a full-model run.
+
+    The bias is the full model's clearance error on the problem's grid less the optimisation
+    model's under the run's profile (``parameters``; ``states`` its run on the grid, None:
+    simulated here), on top of a landing's own (``landing_bias``); none where the model is the
+    scene's.
+    """
+    if not problem.reduced:
+        return values
+    full_error = np.interp(problem.grid, run.time, run.clearance_error)
+    if states is None:
+        states = problem.simulate(parameters, compiled=compiled)
+    return replace(values, bias=landing_bias + full_error - problem.clearance(states))
+
+
+def _learned_from(run, compiled: bool):
+    """``corrected(problem, parameters)``: any problem's named parameters corrected by ``run``.
+
+    The bias on the problem's own grid (:func:`_corrected`), its model run under ``parameters``.
+    """
+
+    def corrected(problem: WinchProblem, parameters: np.ndarray) -> ProblemParameters:
+        bare = problem.parameter_values()
+        return _corrected(problem, bare, bare.bias, run, parameters, None, compiled)
+
+    return corrected
 
 
 def _summed(*timers):
@@ -772,6 +821,7 @@ def optimize(
     refuse_line_scene(scene, "optimize")
     check_scene_start(scene)
     settings = ocp_settings(solver, settings, model, grid, transcription)
+    requested = settings
     entry = SOLVERS[settings.solver]
     chosen = entry.transcription
     options = _solve_options(entry, refinements)
@@ -788,7 +838,7 @@ def optimize(
         problem = chosen.problem(scene, settings, entry.needs_compiled)
         adapt = None
         if settings.grid.adaptive:
-            problem, adapt = _adaptive(problem, settings.grid)
+            adapt = _adaptation(problem, chosen, requested, settings, entry.needs_compiled)
         result = solve_verified(
             problem, settings, quiet=quiet, verbose=verbose, adapt=adapt, **options
         )
@@ -798,22 +848,32 @@ def optimize(
     if result.nodes:  # the adaptive grid's nodes: given, they solve on the same grid
         grid = replace(settings.grid, adaptive=False, nodes=tuple(result.nodes))
         settings = replace(settings, grid=grid)
+        if adapt is not None and adapt.finer is not None:  # among finer candidates, on their step
+            settings = replace(settings, model=replace(settings.model, step=adapt.finer.step))
     notes = "; ".join(text for text in (result.notes, derived) if text)
     ran = result.trajectory.scene_record if result.trajectory is not None else scene.to_dict()
     return replace(result, notes=notes, scene_record=ran, settings=settings.record())
 
 
-def _adaptive(problem: WinchProblem, grid: GridSettings) -> tuple[WinchProblem, Adaptation]:
-    """The adaptive grid's first problem (on the default grid) and its coarsening.
+def _adaptation(problem: WinchProblem, chosen, requested, settings, compiled: bool) -> Adaptation:
+    """The adaptive grid's coarsening, with the problem on its candidates built only if taken.
 
-    ``problem`` is on the candidate nodes (``grid.adaptive_finest`` times finer than the default
-    grid); the first solve takes every ``adaptive_finest``-th of them (and the last).
+    ``problem`` is the first solve's, on the default grid of ``settings``; ``requested`` are the
+    settings before :meth:`resolve` made them. The candidates split each default interval in
+    ``adaptive_finest`` (:func:`cable_ocp.control.shooting.candidate_settings`); on the same
+    model step, their problem is ``problem`` with their control.
     """
-    if grid.adaptive_finest == 1:
-        return problem, Adaptation(grid.adaptive_tolerance)
-    times = problem.control.breakpoints
-    first, _ = with_nodes(problem, np.unique(np.r_[times[:: grid.adaptive_finest], times[-1]]))
-    return first, Adaptation(grid.adaptive_tolerance, problem)
+    if settings.grid.adaptive_finest == 1:
+        return Adaptation(settings.grid.adaptive_tolerance)
+    scene = problem.scene
+
+    def candidates() -> WinchProblem:
+        split = candidate_settings(scene, requested, settings)
+        if split.step == problem.step:
+            return problem.with_control(make_control(scene, split))
+        return chosen.problem(scene, split, compiled)
+
+    return Adaptation(settings.grid.adaptive_tolerance, candidates)
 
 
 def _solve_options(entry: Solver, refinements: int | None) -> dict:

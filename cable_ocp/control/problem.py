@@ -178,6 +178,12 @@ class WinchProblem:
             heave_feedforward=feedforward,
         )
 
+    def with_control(self, control: Control) -> WinchProblem:
+        """The problem on the same model and grid with another control (its own bound rows)."""
+        return replace(
+            self, control=control, bounds=LinearBounds.build(self.scene, control, self.grid)
+        )
+
     @property
     def duration(self) -> float:
         """The horizon (s): the scene's ``numerics.duration`` in the open loop."""
@@ -188,9 +194,15 @@ class WinchProblem:
         inputs = stage_inputs(self.drive, self.grid[:-1], self.step)
         reference = clearance_reference(self.scene.seabed, self.x0)
         values = ProblemParameters.from_stage_inputs(self.x0, inputs, reference)
+        return replace(values, bias=self.landing_bias())
+
+    def landing_bias(self) -> np.ndarray:
+        """The bias of :meth:`parameter_values` (m): ``-e_ref`` on the grid, zero off a landing.
+
+        A landing's error is the deviation from its reference.
+        """
         start_error = float(clearance_error(self.scene.seabed, self.x0[None, :3])[0])
-        # A landing's error is the deviation from its reference (the bias carries -e_ref).
-        return replace(values, bias=-reference_error(self.scene, self.grid, start_error))
+        return -reference_error(self.scene, self.grid, start_error)
 
     @property
     def reduced(self) -> bool:
