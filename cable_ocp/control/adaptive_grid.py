@@ -5,19 +5,22 @@ of a grid ``adaptive_finest`` (2 by default) times finer than the default one
 (:func:`cable_ocp.control.defaults.control_grid`, about 5 s apart), each default interval split
 where the scene's steps allow, the default grid's own nodes otherwise
 (:func:`cable_ocp.control.defaults.candidate_split`); every candidate is on an RK4 step end of
-every model, so that any subset is too. It coarsens, with the error measured in the objective
-itself (Betts' equidistribution, run from the fine end):
+the scene's model and of the candidates' optimisation model, so that any subset is too. It
+coarsens, with the error measured in the objective itself (Betts' equidistribution, run from the
+fine end):
 
-1. The model correction's first solve and its full-model run are on the default grid (the
-   candidates' every ``adaptive_finest``-th node, the uniform default's grid when that is 1;
-   the full-model run at the uniform grid's correction step): they give its optimum ``p0`` and
-   the reduced model's bias ``b``.
+1. The model correction's first solve and its full-model run are the uniform default grid's own
+   (its problem, model step and correction step): they give its optimum ``p0`` and the reduced
+   model's bias ``b``.
 2. At ``p0`` the corrected clearance error is linearised in the default grid's parameters (the
    Gauss-Newton solver's last Jacobian; another solver's takes one sensitivity sweep):
    ``r = W (e + b)``, ``A = W J``, Omega^2 ~ ``|r + A d|^2``. Its QP step within the winch bounds
    (and the minimum clearance) predicts the default grid's corrected optimum, Omega*. With
-   finer candidates, the same model is taken once more in theirs (one sweep at ``p0``) and
-   moved to its QP's optimum.
+   finer candidates, their problem is built then (its model step derived from their interval,
+   :func:`cable_ocp.control.shooting.candidate_settings`: a shorter one where the default step
+   does not split, the bias then taken again on its grid from the same full-model run), the
+   same model is taken once more in their parameters (one sweep at ``p0``) and moved to its
+   QP's optimum.
 3. Nodes go, cheapest first, while the model's Omega^2 of the profile that interpolates the
    optimum on the nodes left stays within ``((1 + adaptive_tolerance) Omega* +
    OMEGA_ROUND_OFF)^2``. A node's cost is the exact change of that quadratic when one cubic
@@ -122,6 +125,8 @@ class Coarsening:
     values : ProblemParameters
         The named parameters of :attr:`problem`, with the model correction's bias: the first
         problem's, or the candidates' own where their model step is shorter.
+    default_step : float, s
+        The first problem's model step.
     """
 
     problem: WinchProblem
@@ -132,11 +137,14 @@ class Coarsening:
     candidates: np.ndarray
     linearised: Linearised
     values: ProblemParameters
+    default_step: float
 
     def describe(self) -> str:
         """One phrase (no "; ", which separates a result's notes): the grids and their Omega."""
         among = self.candidates.size - 1
         finer = f" among {among} candidates" if among != self.intervals else ""
+        if self.problem.step != self.default_step:
+            finer += f" at h = {self.problem.step:.4g} s"
         return (
             f"adaptive grid of {self.problem.control.intervals} intervals{finer} (the default "
             f"grid's {self.intervals}: predicted Omega on the corrected model {self.omega:.3g} "
@@ -425,6 +433,7 @@ def coarsen(
         times,
         Linearised(linearised.states, error, on_chosen.jacobian, True),
         values,
+        problem.step,
     )
 
 

@@ -186,11 +186,11 @@ def candidate_split(duration: float, scene_step: float, intervals: int, finest: 
     odd number of steps in an interval and took the count nearest ``duration / 2.5 s`` instead:
     their first solve ran on every other candidate (seed 1 case 44: 96 intervals where the
     default grid has 115), and the adaptive Omega came out 1.7 times the uniform one's. The
-    optimisation model's step is derived from the candidates' interval (a whole fraction of it).
-    Requiring that step to be the default grid's as well (an even number of its steps in a
-    default interval) left finer candidates to 2 of the first 29 whole-space scenes of seeds 0
-    and 1 (10 before), and the median parameters of seed 1's first 16 at 106 of 186
-    (2026-12-06).
+    candidates' optimisation model derives its own step from their interval
+    (:func:`cable_ocp.control.shooting.candidate_settings`), the first solve keeping the default
+    grid's. Requiring the default step to split as well (an even number of it in a default
+    interval) left finer candidates to 2 of the first 29 whole-space scenes of seeds 0 and 1
+    (10 before), and the median parameters of seed 1's first 16 at 106 of 186 (2026-12-06).
     """
     fits = step_count(duration, scene_step) % (finest * intervals) == 0
     return finest if fits else 1
