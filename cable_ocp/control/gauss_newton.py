@@ -25,13 +25,19 @@ from __future__ import annotations
 import time
 from copy import deepcopy
 from dataclasses import dataclass
+from functools import cached_property
 
 import casadi as ca
 import numpy as np
 
 from cable_ocp.control.checks import Rule, check_fields
 from cable_ocp.control.interrupts import check, keeping_interrupts
-from cable_ocp.control.linearisation import STAGE_JACOBIANS, ErrorLinearisation, Linearised
+from cable_ocp.control.linearisation import (
+    STAGE_JACOBIANS,
+    ErrorLinearisation,
+    Linearised,
+    rhs_jacobian,
+)
 from cable_ocp.control.parameters import ProblemParameters
 from cable_ocp.control.problem import ProblemSolver, SolverOutcome, WinchProblem
 from cable_ocp.drive.bounds import shrunk
@@ -146,13 +152,7 @@ class GaussNewton(ProblemSolver):
         self.problem, self.settings, self.log = problem, settings, log
         steps = problem.grid.size - 1
         radius = problem.scene.winch.drum_radius
-        times, left = stage_times(problem.grid[:-1], problem.step)
-        self.linearisation = ErrorLinearisation(
-            problem.model, problem.step, steps, problem.control, radius,
-            problem.scene.seabed, times, left, settings.stage_jacobians,
-        )  # fmt: skip
-        report = self.linearisation.compile_report
-        self.compile_time = report.compile_time
+        self.compile_time = rhs_jacobian(problem.model)[1].compile_time  # waits for its compiler
         span = problem.grid[-1] - problem.grid[0]
         self.weights = np.sqrt(trapezoid_weights(problem.step, problem.grid.size) / span)
         rates = radius * problem.control.basis(problem.grid)[1]
@@ -171,12 +171,28 @@ class GaussNewton(ProblemSolver):
         self.soft = settings.real_time and self.floor is not None
         self._qp_shape = (size + self.soft, rows)  # variables, rows
         self._qps: dict[int, ca.Function] = {}  # by rows, built at their first use
-        if settings.real_time:  # a controller's every QP before its first sample
+        if settings.real_time:  # a controller's every QP and its sweep before its first sample
             for width in {min(width, rows) for width in SCREENED_ROWS} | {rows}:
                 self._qp(width)
+            self.linearisation  # noqa: B018 (built here, not at the first sample)
         self.softened = 0.0  # m: the slack of the last step
         self._last: tuple[ProblemParameters, np.ndarray, Linearised] | None = None
         self.build_time = time.perf_counter() - started
+
+    @cached_property
+    def linearisation(self) -> ErrorLinearisation:
+        """The error and its Jacobian along the problem's horizon, built at its first use.
+
+        Its map of the winch parameters onto every stage's inputs takes a share of a build (the
+        adaptive grid's coarsening takes QP steps only, on two or three problems).
+        """
+        problem = self.problem
+        times, left = stage_times(problem.grid[:-1], problem.step)
+        return ErrorLinearisation(
+            problem.model, problem.step, problem.grid.size - 1, problem.control,
+            problem.scene.winch.drum_radius, problem.scene.seabed, times, left,
+            self.settings.stage_jacobians,
+        )  # fmt: skip
 
     def objective(self, linearised: Linearised, parameters: np.ndarray) -> float:
         """Omega^2 (m^2), with the rate term."""

@@ -329,7 +329,6 @@ class ErrorLinearisation:
         self.point_jacobians = point_jacobian_function(model, evaluated) if self.at_ends else None
         self.winch = winch_map(control, times, left, radius)
         self.slope = error_slope_function(seabed, steps + 1)
-        self.compile_report = rhs_jacobian(model)[1]
         # The sweep writes into numpy arrays in place (CasADi's column-major layout: a C-order
         # array of the transposed shape), which spares converting 1.7e6 numbers through DM; the
         # arrays and the views of every step are shared by the linearisations of one shape.
