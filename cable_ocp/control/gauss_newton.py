@@ -155,8 +155,10 @@ class GaussNewton(ProblemSolver):
         self.compile_time = rhs_jacobian(problem.model)[1].compile_time  # waits for its compiler
         span = problem.grid[-1] - problem.grid[0]
         self.weights = np.sqrt(trapezoid_weights(problem.step, problem.grid.size) / span)
-        rates = radius * problem.control.basis(problem.grid)[1]
-        self.rate_rows = np.sqrt(rate_weight) * self.weights[:, None] * rates
+        self.rate_rows = np.zeros((0, problem.control.size))  # the open loop's: no rate term
+        if rate_weight > 0:
+            rates = radius * problem.control.basis(problem.grid)[1]
+            self.rate_rows = np.sqrt(rate_weight) * self.weights[:, None] * rates
         bounds, seabed = problem.bounds, problem.scene.seabed
         size = problem.control.size
         # The hard minimum clearance: delta + e >= c_min (+ a back-off) at every RK4 point after

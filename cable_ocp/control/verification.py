@@ -245,7 +245,7 @@ def bound_time(scene, control, parameters: np.ndarray, trajectory: Trajectory) -
     bound counts between the wave crests too.
     """
     low, high = angle_bounds(scene)
-    profile = control.basis(trajectory.time)[0] @ parameters
+    profile = control.angle_function(parameters)(trajectory.time)[0]
     reach = float(np.max(np.abs(trajectory.winch_angle - profile)))
     riding = (profile <= low + reach + BOUND_RIDE) | (profile >= high - reach - BOUND_RIDE)
     both = riding[:-1] & riding[1:]

@@ -206,15 +206,16 @@ class LinearBounds:
         return min(1.0, float(limits.min())) * parameters
 
 
-def _piece_extrema(control, parameters, starts, ends, derivative):
+def _piece_extrema(angle, starts, ends, derivative):
     """Times and values of the extrema of each polynomial piece of a derivative of the angle.
 
+    ``angle(t)`` gives the angle, rate and acceleration (a control's ``angle_function``).
     Candidates are both ends of each piece and the roots of its derivative inside it.
     """
     degree = 3 - derivative
     s = (np.arange(degree + 1) + 0.5) / (degree + 1)
     times = starts[:, None] + s[None, :] * (ends - starts)[:, None]
-    values = (control.basis(times.ravel())[derivative] @ parameters).reshape(times.shape)
+    values = angle(times.ravel())[derivative].reshape(times.shape)
     power = values @ np.linalg.inv(np.vander(s, degree + 1, increasing=True)).T  # c0 + c1 s + ...
     candidates = [np.zeros(starts.size), np.ones(starts.size)]
     if degree == 3:  # roots of c1 + 2 c2 s + 3 c3 s^2
@@ -240,15 +241,15 @@ def violation(scene, control, parameters, grid: np.ndarray | None = None) -> str
     Checks the exact extrema of the angle, rate and acceleration of every polynomial piece; with
     heave compensation, the angle also at 17 samples per piece or ``grid`` step.
     """
-    parameters = np.asarray(parameters, dtype=float).ravel()
+    angle = control.angle_function(np.asarray(parameters, dtype=float).ravel())
     starts, ends = subintervals(control, np.zeros(0) if grid is None else grid)
     for derivative, low, high, fields in winch_limits(scene):
-        times, values = _piece_extrema(control, parameters, starts, ends, derivative)
+        times, values = _piece_extrema(angle, starts, ends, derivative)
         if derivative == 0 and scene.top.heave_compensated:
             dense = starts[:, None] + np.linspace(0, 1, HEAVE_SAMPLES) * (ends - starts)[:, None]
             dense = dense.ravel()
             times = np.concatenate([times, dense])
-            values = np.concatenate([values, control.basis(dense)[0] @ parameters])
+            values = np.concatenate([values, angle(dense)[0]])
             values = values + _heave(scene, times)
         excess = np.maximum(low - values, values - high)
         k = int(np.argmax(excess))
