@@ -48,6 +48,22 @@ def test_bernstein_constraints_bound_the_control_everywhere():
             assert rows.max() - values.max() < 0.01 * np.ptp(values)
 
 
+def test_a_profile_evaluates_as_its_basis_rows_on_every_control():
+    """The bound checks evaluate the profile (``angle_function``), not its basis rows: the same
+    angle, rate and acceleration, breakpoints included, on each control."""
+    from cable_ocp.control.hermite_nodes import HermiteNodes
+
+    rng = np.random.default_rng(7)
+    nodes = HermiteNodes(np.array([0.0, 3.5, 10.0, 12.0, 25.0, 40.0]))
+    for control in (HermiteIntervals(40.0, 8), nodes, KnotSpline(40.0, 4)):
+        p = rng.normal(size=control.size)
+        t = np.concatenate([np.linspace(0.0, 40.0, 1001), control.breakpoints])
+        evaluated = control.angle_function(p)(t)
+        for derivative in range(3):
+            rows = control.basis(t)[derivative] @ p
+            np.testing.assert_allclose(evaluated[derivative], rows, rtol=0, atol=1e-11)
+
+
 def test_a_dip_between_samples_is_caught(short):
     """A Hermite profile within the bound at every 0.5 s sample but 3e-4 rad above it between."""
     scene = short.updated({"winch.angle_max": 0.5168})
