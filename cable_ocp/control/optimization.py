@@ -548,10 +548,8 @@ def solve_verified(
             # The first solve on the nodes kept failed: the default grid goes on, as it would
             # have without them (one solve more, so that it still has all its corrections).
             abandoned = f"{coarsening.describe()} abandoned ({outcome.status}): default grid kept"
-            (problem, nlp, verify, best, best_outcome, checked, best_solve, correction, values) = (
-                fallback[:9]
-            )
-            landing_bias = fallback[9]
+            (problem, nlp, verify, best, best_outcome, checked, best_solve, correction, values,
+             landing_bias) = fallback  # fmt: skip
             fallback, coarsening, adapt, solves = None, None, None, solves + 1
             verified.append(float("nan"))
             continue
