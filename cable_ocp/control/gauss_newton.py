@@ -29,6 +29,7 @@ from functools import cached_property
 
 import casadi as ca
 import numpy as np
+from scipy.ndimage import maximum_filter1d
 
 from cable_ocp.control.checks import Rule, check_fields
 from cable_ocp.control.interrupts import check, keeping_interrupts
@@ -46,13 +47,19 @@ from cable_ocp.simulation.progress import IterationLog
 from cable_ocp.simulation.seabed import trapezoid_weights
 
 # The QP is first solved on the constraint rows within this distance of their limits (rad, rad/s,
-# rad/s^2), with room for this many rows, then (when more are near or broken) for the second
-# count; rows its solution breaks are added (constraint screening,
-# :meth:`GaussNewton._screened_solve`). A winch that rides its bound for minutes keeps more than
-# 120 rows near their limits: the whole QP of a 415 s whole-space case (about 3000 rows) took
-# 0.6 s a solve, the one of 480 rows a tenth of it.
+# rad/s^2), in the smallest of these QPs that holds them; rows its solution breaks are added, and
+# a QP too small for them gives way to the next (constraint screening,
+# :meth:`GaussNewton._screened_solve`). A QP's cost grows with its rows (DAQP scales every row by
+# the Hessian's factor): on whole-space seed 0 case 6 (120 parameters) the whole QP of 16200
+# rows took 0.31-0.63 s, one of 3840 rows 0.05 s, one of 960 rows 0.014-0.025 s.
 SCREEN_DISTANCE = 1e-2
-SCREENED_ROWS = (120, 480, 1920)
+SCREENED_ROWS = (120, 240, 480, 960, 1920, 3840, 7680)
+# Broken rows that do not fit in the QP at hand are thinned to those that break theirs most within
+# this many rows either side (a step that cuts across a bound breaks a run of neighbouring rows,
+# which one of them holds nearly as well): on that case a Gauss-Newton step broke more rows than
+# 7680, and the whole QP (0.63 s) gave way to seven thinned rounds of 960 and 1920 rows (0.24 s);
+# all broken rows are added where they fit.
+SCREEN_NEIGHBOURS = 4
 # Levenberg-Marquardt damping of the QP's Hessian, relative to its largest diagonal entry: it
 # keeps the QP strictly convex where a parameter barely moves the error (the horizon's last rate).
 DAMPING = 1e-9
@@ -280,8 +287,9 @@ class GaussNewton(ProblemSolver):
         Of the winch bounds' Bernstein rows (1680 on paper_hill) few are ever near active: the QP
         is solved on the rows within :data:`SCREEN_DISTANCE` of their limits, and rows that its
         solution breaks are added until none is (the relaxed QP's solution then solves the whole
-        QP). More rows than a screened QP holds go on to the next, larger one
-        (:data:`SCREENED_ROWS`), and more than the largest holds to the whole QP.
+        QP). Broken rows that do not fit are thinned (:func:`_worst_nearby`) and the QP goes on
+        to the next, larger one (:data:`SCREENED_ROWS`); more rows than the largest holds go on
+        to the whole QP.
         """
         kept = np.flatnonzero((-lba < SCREEN_DISTANCE) | (uba < SCREEN_DISTANCE))
         whole = self._qp_shape[1]
@@ -295,10 +303,13 @@ class GaussNewton(ProblemSolver):
                 if step is None:
                     return None, status
                 values = matrix @ step
-                broken = np.flatnonzero((values < lba) | (values > uba))
-                broken = np.setdiff1d(broken, kept)
-                if broken.size == 0:
+                excess = np.maximum(lba - values, values - uba)
+                excess[kept] = 0.0
+                if not np.any(excess > 0):
                     return step, status
+                broken = np.flatnonzero(excess > 0)
+                if kept.size + broken.size > width:
+                    broken = _worst_nearby(excess)
                 kept = np.union1d(kept, broken)
         # The whole QP holds every row of a step's QP (the clearance rows too); a QP on the
         # bounds alone (feasible) fills the rest.
@@ -560,6 +571,17 @@ def _with_slack(hessian, gradient, matrix, bound_rows: int, lbx, ubx):
         np.append(lbx, 0.0),
         np.append(ubx, np.inf),
     )
+
+
+def _worst_nearby(excess: np.ndarray) -> np.ndarray:
+    """The broken rows (``excess > 0``) that break theirs most among their neighbours.
+
+    Rows are in order of time within each bound (sub-intervals, then Bernstein coefficients)
+    and within the clearance rows; a neighbour is within :data:`SCREEN_NEIGHBOURS` rows. Ties
+    keep all of them, so every run of broken rows gives at least one.
+    """
+    peaks = maximum_filter1d(excess, 2 * SCREEN_NEIGHBOURS + 1, mode="constant")
+    return np.flatnonzero((excess > 0) & (excess >= peaks))
 
 
 def _dense_qp(name: str, size: int, rows: int) -> ca.Function:
