@@ -280,6 +280,7 @@ class _Spans:
         self.rows = self.rows_at = None
         if bounds is not None:
             self.rows = [np.flatnonzero(column) for column in (bounds.matrix != 0).T]
+            self.mask = np.zeros(bounds.matrix.shape[0], dtype=bool)  # the rows a span enters
             self.rows_at = bounds.matrix @ current
         self._made: dict[tuple[int, int], _Span] = {}
 
@@ -291,7 +292,10 @@ class _Spans:
             rise = float(change @ self.quadratic.hessian[np.ix_(columns, columns)] @ change)
             touched = shift = None
             if self.bounds is not None:
-                touched = np.unique(np.concatenate([self.rows[c] for c in columns]))
+                self.mask[:] = False
+                for column in columns:
+                    self.mask[self.rows[column]] = True
+                touched = np.flatnonzero(self.mask)
                 shift = self.bounds.matrix[np.ix_(touched, columns)] @ change
             self._made[left, right] = _Span(columns, change, rise, touched, shift)
         return self._made[left, right]
