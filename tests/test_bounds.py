@@ -64,6 +64,37 @@ def test_a_profile_evaluates_as_its_basis_rows_on_every_control():
             np.testing.assert_allclose(evaluated[derivative], rows, rtol=0, atol=1e-11)
 
 
+def test_bounds_carried_onto_a_control_on_the_same_sub_intervals_are_built_ones(short):
+    """``on_control`` (the adaptive grid's candidates) keeps the limits, heave compensation
+    included, where the sub-intervals are the same, and builds anew where they are not: both
+    equal to :meth:`LinearBounds.build` on the new control, to the bit."""
+    from cable_ocp.control.hermite_nodes import HermiteNodes
+
+    scene = short.updated(
+        {
+            "top.heave.sea_state.significant_height": 0.5,
+            "top.heave.sea_state.peak_period": 7.0,
+            "top.heave.compensation": True,
+            "winch.rate_max": 1.0,
+            "winch.acceleration_max": 0.5,
+        }
+    )
+    grid = np.arange(41) * 0.5
+    bounds = LinearBounds.build(scene, HermiteIntervals(20.0, 4), grid)
+    angle_rows = bounds.derivatives == 0
+    assert np.ptp(bounds.lower[angle_rows]) > 1e-3  # the heave's extremes are in the limits
+    on_grid = HermiteNodes(np.arange(9) * 2.5)  # nodes on RK4 step ends: the same sub-intervals
+    off_grid = HermiteNodes(np.array([0.0, 2.25, 20.0]))  # a node between them
+    for control in (on_grid, off_grid):
+        carried, built = (
+            bounds.on_control(scene, control, grid),
+            LinearBounds.build(scene, control, grid),
+        )
+        for field in ("matrix", "lower", "upper", "derivatives", "starts"):
+            np.testing.assert_array_equal(getattr(carried, field), getattr(built, field))
+    assert bounds.on_control(scene, off_grid, grid).matrix.shape[0] > bounds.matrix.shape[0]
+
+
 def test_a_dip_between_samples_is_caught(short):
     """A Hermite profile within the bound at every 0.5 s sample but 3e-4 rad above it between."""
     scene = short.updated({"winch.angle_max": 0.5168})

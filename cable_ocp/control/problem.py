@@ -180,9 +180,8 @@ class WinchProblem:
 
     def with_control(self, control: Control) -> WinchProblem:
         """The problem on the same model and grid with another control (its own bound rows)."""
-        return replace(
-            self, control=control, bounds=LinearBounds.build(self.scene, control, self.grid)
-        )
+        bounds = self.bounds.on_control(self.scene, control, self.grid)
+        return replace(self, control=control, bounds=bounds)
 
     @property
     def duration(self) -> float:
