@@ -74,3 +74,19 @@ def test_ocp_speed_report_runs_the_default_solver_cold_then_warm_against_ipopt(
     assert calls[0][1] == calls[1][1] != calls[2][1] == calls[3][1]
     printed = capsys.readouterr().out
     assert printed.count("2.0x") == 2 and printed.count("1.0x") == 2
+
+
+def test_qp_bench_solves_each_qp_of_a_solve_both_ways_to_the_same_step(capsys):
+    """``bench --only qp --quick`` (paper_hill's first Gauss-Newton solve): every QP is timed
+    screened and whole, the two steps agree to the QP's margin, and the table is printed."""
+    from cable_ocp.control.gauss_newton import QP_MARGIN
+    from cable_ocp.studies import bench_qp
+
+    timings = bench_qp.report(quick=True)["paper_hill"]
+    assert len(timings) >= 2  # a step and the QP that finds nothing left to gain
+    for timing in timings:
+        assert timing.rows > timing.near >= 0 and timing.parameters == 84
+        assert timing.screened > 0 and timing.whole > 0
+        assert timing.difference <= QP_MARGIN
+    assert "screened against" in capsys.readouterr().out
+    assert build_parser().parse_args(["bench", "--only", "qp"]).only == ["qp"]

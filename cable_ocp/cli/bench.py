@@ -10,7 +10,7 @@ from cable_ocp.cli.exits import SUCCESS
 from cable_ocp.cli.files import results_folder
 from cable_ocp.scene.bundled import models_dir
 
-PARTS = ("rk4", "simulate", "moordyn", "payout", "elastic", "ocp", "ocp-speed", "mpc")
+PARTS = ("rk4", "simulate", "moordyn", "payout", "elastic", "ocp", "ocp-speed", "qp", "mpc")
 NAMED_ONLY = ("robustness", "lowering", "grid", "policy")  # run only when --only names them
 
 
@@ -26,7 +26,8 @@ def add_bench_command(commands) -> None:
         "command end to end), moordyn (MoorDyn at the same accuracy), payout (a line paid out "
         "by elements against fixed n), elastic (the elastic rope beside the rigid one and "
         "MoorDyn on a 2000 m deep lift, about a minute), ocp (IPOPT against Nelder-Mead), ocp-"
-        "speed (the default optimize, cold and warm), mpc (the closed loop's solve times). The "
+        "speed (the default optimize, cold and warm), qp (the Gauss-Newton QP screened against "
+        "whole), mpc (the closed loop's solve times). The "
         "default parts run for tens of minutes on 2 cores (MoorDyn and the optimisers "
         "dominate); --quick runs short versions; --only picks parts. robustness (random scenes)"
         " and lowering (random landings: 10 cases took 5 min on 2 cores) run only when named, and "
@@ -74,6 +75,7 @@ def run_bench_command(args: argparse.Namespace) -> int:
         bench_elastic,
         bench_lowering,
         bench_payout,
+        bench_qp,
         bench_simulate,
         robustness,
     )
@@ -92,6 +94,7 @@ def run_bench_command(args: argparse.Namespace) -> int:
         "elastic": bench_elastic.report,
         "ocp": bench.ocp_report,
         "ocp-speed": bench.ocp_speed_report,
+        "qp": bench_qp.report,
         "mpc": lambda models, quick: _bench_mpc(models, quick, args.out),
         "robustness": lambda _, quick: robustness.report(
             args.cases or (6 if quick else 50), args.seed

@@ -311,10 +311,17 @@ class GaussNewton(ProblemSolver):
                 if kept.size + broken.size > width:
                     broken = _worst_nearby(excess)
                 kept = np.union1d(kept, broken)
-        # The whole QP holds every row of a step's QP (the clearance rows too); a QP on the
-        # bounds alone (feasible) fills the rest.
-        rows = _padded(matrix, lba, uba, whole)
-        return _solved(self._qp(whole), h=hessian, g=gradient, **rows, lbx=lbx, ubx=ubx)
+        return self._whole_solve(hessian, gradient, matrix, lba, uba, lbx, ubx)
+
+    def _whole_solve(self, hessian, gradient, matrix, lba, uba, lbx, ubx):
+        """The QP on every row at once (what screening falls back on, and its benchmark's base).
+
+        The whole QP holds every row of a step's QP (the clearance rows too); a QP on the
+        bounds alone (feasible) fills the rest.
+        """
+        rows = _padded(matrix, lba, uba, self._qp_shape[1])
+        qp = self._qp(self._qp_shape[1])
+        return _solved(qp, h=hessian, g=gradient, **rows, lbx=lbx, ubx=ubx)
 
     def _qp(self, rows: int) -> ca.Function:
         """The dense QP of ``rows`` constraint rows (DAQP), built at its first use.
