@@ -305,9 +305,9 @@ class GaussNewton(ProblemSolver):
                 values = matrix @ step
                 excess = np.maximum(lba - values, values - uba)
                 excess[kept] = 0.0
-                if not np.any(excess > 0):
-                    return step, status
                 broken = np.flatnonzero(excess > 0)
+                if broken.size == 0:
+                    return step, status
                 if kept.size + broken.size > width:
                     broken = _worst_nearby(excess)
                 kept = np.union1d(kept, broken)

@@ -79,6 +79,11 @@ def subintervals(control, grid: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     return points[:-1], points[1:]
 
 
+def bernstein_count(derivative: int) -> int:
+    """Bernstein coefficients per sub-interval of a cubic's ``derivative``-th derivative."""
+    return 4 - derivative
+
+
 def bernstein_rows(control, starts, ends, derivative: int) -> np.ndarray:
     """Bernstein coefficients of the ``derivative``-th derivative per sub-interval.
 
@@ -86,7 +91,7 @@ def bernstein_rows(control, starts, ends, derivative: int) -> np.ndarray:
     is ``rows[i, j] @ p``. The coefficients come from d + 1 interior samples, so a derivative that
     jumps at a breakpoint is taken from the side of the sub-interval.
     """
-    degree = 3 - derivative
+    degree = bernstein_count(derivative) - 1
     s = (np.arange(degree + 1) + 0.5) / (degree + 1)
     j = np.arange(degree + 1)
     binomials = np.array([comb(degree, k) for k in j])
@@ -152,7 +157,7 @@ class LinearBounds:
         heave = _heave(scene, samples.ravel()).reshape(samples.shape)
         lower, upper, derivatives, times = [], [], [], []
         for derivative, low, high, _ in winch_limits(scene):
-            count = 4 - derivative  # Bernstein coefficients of the cubic's derivative
+            count = bernstein_count(derivative)
             shift_low = heave.min(axis=1) if derivative == 0 else np.zeros(starts.size)
             shift_high = heave.max(axis=1) if derivative == 0 else np.zeros(starts.size)
             low, high = shrunk(low - shift_low, high - shift_high, margin)
@@ -232,7 +237,7 @@ def _piece_extrema(angle, starts, ends, derivative):
     ``angle(t)`` gives the angle, rate and acceleration (a control's ``angle_function``).
     Candidates are both ends of each piece and the roots of its derivative inside it.
     """
-    degree = 3 - derivative
+    degree = bernstein_count(derivative) - 1
     s = (np.arange(degree + 1) + 0.5) / (degree + 1)
     times = starts[:, None] + s[None, :] * (ends - starts)[:, None]
     values = angle(times.ravel())[derivative].reshape(times.shape)
