@@ -87,3 +87,35 @@ def test_the_runs_own_bond_check_is_the_residual_of_its_states(hill):
     again = bond_residuals(model, trajectory.states, trajectory.inputs, compiled=True)
     assert residual == pytest.approx(float(again[1:].max()), rel=1e-12)
     assert 0 < residual < hill.numerics.constraint_tolerance
+
+
+def test_a_profile_verified_again_at_the_same_step_gets_its_verdict_without_a_run(
+    hill, monkeypatch
+):
+    """A model-correction solve that does not move the profile (7 of whole-space seed 0's first
+    20 scenes) has it verified once: the same parameters at the same step (the scene's, however
+    asked for) get the last verdict back; a profile one ulp away, or another step, is run."""
+    from types import SimpleNamespace
+
+    from cable_ocp.control import optimization
+
+    runs = []
+
+    def counted(scene, control, parameters, **options):
+        runs.append(options.get("step"))
+        return verify_profile(scene, control, parameters, **options)
+
+    monkeypatch.setattr(optimization, "verify_profile", counted)
+    control = HermiteIntervals(hill.numerics.duration, 8)
+    problem = SimpleNamespace(scene=hill, control=control)
+    verify, elapsed = optimization._timed_verify(problem, quiet=True, compiled=True)
+    parameters = 0.5 * np.sin(np.arange(control.size))
+    coarse = verify(parameters, 0.2)
+    spent = elapsed()
+    assert verify(parameters.copy(), 0.2) is coarse and len(runs) == 1 and elapsed() == spent
+    fine = verify(parameters)
+    assert fine is not coarse and fine.step == pytest.approx(hill.numerics.step)
+    assert verify(parameters, hill.numerics.step) is fine and len(runs) == 2
+    moved = parameters.copy()
+    moved[3] = np.nextafter(moved[3], 1.0)
+    assert verify(moved) is not fine and len(runs) == 3
