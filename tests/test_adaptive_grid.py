@@ -436,3 +436,42 @@ def test_a_scene_with_nothing_to_hold_gives_its_zero_omega_on_the_adaptive_grid(
     result = co.optimize(name, quiet=True, grid=GridSettings(adaptive=True))
     assert result.success, result.status
     assert result.omega == pytest.approx(0.0, abs=1e-9)
+
+
+def test_a_failed_solve_after_a_profile_that_broke_the_clearance_falls_back_on_the_default_grid(
+    default_hill, monkeypatch
+):
+    """The nodes kept: a first profile whose full-model run breaks the minimum clearance (the
+    run is what the correction learns from), then a solve that fails. The default grid goes on
+    from its own optimum and run, not from the nodes' parameters (whole-space seed 0 case 14 had
+    raised a shape error there), and reaches the uniform grid's Omega."""
+    from dataclasses import replace
+
+    from cable_ocp.control import gauss_newton, optimization
+    from cable_ocp.control.verification import verify_profile
+
+    def clearance_broken(scene, control, parameters, **options):
+        checked = verify_profile(scene, control, parameters, **options)
+        if isinstance(control, HermiteNodes) and checked.trajectory is not None:
+            return replace(checked, trajectory=None, reason="under the minimum clearance (test)")
+        return checked
+
+    on_nodes_solves = []
+    original = gauss_newton.GaussNewton.run
+
+    def second_fails(self, *arguments):
+        outcome = original(self, *arguments)
+        if isinstance(self.problem.control, HermiteNodes):
+            on_nodes_solves.append(outcome.success)
+            if len(on_nodes_solves) == 2:
+                return replace(outcome, success=False, status="failed (test)")
+        return outcome
+
+    monkeypatch.setattr(optimization, "verify_profile", clearance_broken)
+    monkeypatch.setattr(gauss_newton.GaussNewton, "run", second_fails)
+    result = co.optimize("paper_hill", quiet=True, grid=GridSettings(adaptive=True))
+    assert len(on_nodes_solves) == 2
+    assert result.success, result.status
+    assert "abandoned (failed (test)): default grid kept" in result.notes
+    assert result.control == default_hill.control
+    assert result.omega == pytest.approx(default_hill.omega, rel=1e-3)

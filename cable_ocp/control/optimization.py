@@ -535,6 +535,7 @@ def solve_verified(
                     correction,
                     values,
                     landing_bias,
+                    learned,
                 )
                 problem, parameters = coarsening.problem, coarsening.parameters
                 if coarsening.values is not values:  # the candidates' own grid
@@ -555,11 +556,14 @@ def solve_verified(
         outcome = nlp.solve(values, parameters)
         outcomes.append(outcome)
         if fallback is not None and best is None and not outcome.success:
-            # The first solve on the nodes kept failed: the default grid goes on, as it would
-            # have without them (one solve more, so that it still has all its corrections).
+            # No profile on the nodes kept verified and a solve on them failed: the default grid
+            # goes on from its own optimum and full-model run, as it would have without them
+            # (one solve more, so that it still has all its corrections). A first solve whose
+            # run broke the minimum clearance had left its own run to learn from: not the
+            # default grid's (whole-space seed 0 case 14 then solved on the wrong parameters).
             abandoned = f"{coarsening.describe()} abandoned ({outcome.status}): default grid kept"
             (problem, nlp, verify, best, best_outcome, checked, best_solve, correction, values,
-             landing_bias) = fallback  # fmt: skip
+             landing_bias, learned) = fallback  # fmt: skip
             fallback, coarsening, adapt, solves = None, None, None, solves + 1
             verified.append(float("nan"))
             continue
