@@ -92,7 +92,7 @@ def test_the_runs_own_bond_check_is_the_residual_of_its_states(hill):
 def test_a_profile_verified_again_at_the_same_step_gets_its_verdict_without_a_run(
     hill, monkeypatch
 ):
-    """A model-correction solve that does not move the profile (7 of whole-space seed 0's first
+    """A model-correction solve that does not move the profile (6 of whole-space seed 0's first
     20 scenes) has it verified once: the same parameters at the same step (the scene's, however
     asked for) get the last verdict back; a profile one ulp away, or another step, is run."""
     from types import SimpleNamespace

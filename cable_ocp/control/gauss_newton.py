@@ -369,11 +369,6 @@ class GaussNewton(ProblemSolver):
         function_time += time.perf_counter() - begun
         history, status, success, iterations = [], "", False, 0
         refreshed = False  # the Jacobian in use was evaluated at the current point
-        # Jacobians are kept between accepted points (simplified Newton) until one that was
-        # evaluated elsewhere fails its line search: from then on this solve evaluates it at
-        # every accepted point, since on a reach-limited run every kept one failed (whole-space
-        # seed 0 case 23: 15 of 15, each a QP and a line search for nothing).
-        keeping = True
         if self.log is not None:
             self.log.restart()
         if not current.finite:
@@ -431,7 +426,7 @@ class GaussNewton(ProblemSolver):
                 begun = time.perf_counter()
                 current = self.linearisation(values, parameters)
                 function_time += time.perf_counter() - begun
-                refreshed, keeping = True, False
+                refreshed = True
                 continue
             if not accepted:
                 # Round-off: near the optimum the predicted decrease is below what the
@@ -444,12 +439,9 @@ class GaussNewton(ProblemSolver):
                     + (f" (the end {breach:.3g} m under the minimum clearance)" if breach else "")
                 )
                 break
+            refreshed = False
             begun = time.perf_counter()
-            if keeping:
-                current = self._linearised_after(values, current, candidate, trial, fraction * step)
-            else:
-                current = self.linearisation(values, trial)
-            refreshed = not keeping
+            current = self._linearised_after(values, current, candidate, trial, fraction * step)
             function_time += time.perf_counter() - begun
             parameters, cost = trial, trial_cost
             history.append(cost)

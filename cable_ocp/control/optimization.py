@@ -425,7 +425,7 @@ def _timed_verify(problem: WinchProblem, quiet: bool, compiled: bool):
     """:func:`verify_profile` on the problem's scene and control that adds up its wall time.
 
     Returns (verify, elapsed) callables. A profile verified again at the same step (bit for bit
-    the same parameters: a model-correction solve that did not move them, on 7 of whole-space
+    the same parameters: a model-correction solve that did not move them, on 6 of whole-space
     seed 0's first 20 scenes) gets the last verdict back without a second run: the run is
     deterministic, so it would be the same (0.11-1.1 s, a fifth to a third of ``optimize``).
     """
