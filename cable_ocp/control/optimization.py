@@ -560,7 +560,8 @@ def solve_verified(
             # goes on from its own optimum and full-model run, as it would have without them
             # (one solve more, so that it still has all its corrections). A first solve whose
             # run broke the minimum clearance had left its own run to learn from: not the
-            # default grid's (whole-space seed 0 case 14 then solved on the wrong parameters).
+            # default grid's (whole-space seed 0 case 14, under a Gauss-Newton variant tried on
+            # 2026-12-06, then solved on the nodes' parameters and raised).
             abandoned = f"{coarsening.describe()} abandoned ({outcome.status}): default grid kept"
             (problem, nlp, verify, best, best_outcome, checked, best_solve, correction, values,
              landing_bias, learned) = fallback  # fmt: skip
