@@ -57,7 +57,7 @@ from cable_ocp.drive.winch import (
 from cable_ocp.result_files import dataset, format_1, netcdf
 from cable_ocp.result_files.units import units_of
 from cable_ocp.scene.given import scene_given
-from cable_ocp.scene.schema import scene_of
+from cable_ocp.scene.schema import Scene, scene_of
 from cable_ocp.simulation.progress import check_verbosity
 from cable_ocp.simulation.statics import check_scene_start
 from cable_ocp.simulation.trajectory import OMEGA_RTOL, Trajectory, check_kept
@@ -841,9 +841,7 @@ def optimize(
     started = time.perf_counter()
     model_text = "the optimisation model"
     try:
-        settings, derived = chosen.resolve(scene, settings)
-        scene, fitted = full_model_scene(scene, settings)
-        derived = "; ".join(text for text in (derived, fitted) if text)
+        settings, scene, derived = resolved_scene(chosen, scene, settings)
         model_text = (
             f"the optimisation model ({settings.elements} elements at h = {settings.step:.4g} s"
             f"{'; ' + derived if derived else ''})"
@@ -866,6 +864,20 @@ def optimize(
     notes = "; ".join(text for text in (result.notes, derived) if text)
     ran = result.trajectory.scene_record if result.trajectory is not None else scene.to_dict()
     return replace(result, notes=notes, scene_record=ran, settings=settings.record())
+
+
+def resolved_scene(
+    transcription, scene: Scene, settings: OcpSettings
+) -> tuple[OcpSettings, Scene, str]:
+    """What ``optimize`` derives before it builds its problem: the settings and the scene.
+
+    Returns the settings resolved on ``scene`` by ``transcription`` (model, step, grid), the
+    scene whose full model verifies (its step fitted to the control's nodes where needed,
+    :func:`~cable_ocp.control.shooting.full_model_scene`) and the notes on what was derived.
+    """
+    settings, derived = transcription.resolve(scene, settings)
+    scene, fitted = full_model_scene(scene, settings)
+    return settings, scene, "; ".join(text for text in (derived, fitted) if text)
 
 
 def _adaptation(problem: WinchProblem, chosen, requested, settings, compiled: bool) -> Adaptation:

@@ -28,7 +28,7 @@ from cable_ocp.control.gauss_newton import (
     GaussNewton,
     GaussNewtonSettings,
 )
-from cable_ocp.control.shooting import full_model_scene
+from cable_ocp.control.optimization import resolved_scene
 from cable_ocp.control.solvers import SOLVERS, ocp_settings
 from cable_ocp.scene.bundled import scene_path
 from cable_ocp.scene.schema import load_scene
@@ -93,8 +93,7 @@ def first_solve_qps(scene) -> list[QpTiming]:
     """The QPs of the default ``optimize``'s first Gauss-Newton solve of ``scene``, both ways."""
     settings = ocp_settings(None, None, None, None, None)
     entry = SOLVERS[settings.solver]
-    settings, _ = entry.transcription.resolve(scene, settings)
-    scene, _ = full_model_scene(scene, settings)
+    settings, scene, _ = resolved_scene(entry.transcription, scene, settings)
     problem = entry.transcription.problem(scene, settings, entry.needs_compiled)
     solver = BothQps(problem, GaussNewtonSettings())
     solver.solve(problem.parameter_values(), problem.first_guess(compiled=True))
