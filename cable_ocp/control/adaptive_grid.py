@@ -9,18 +9,16 @@ the scene's model and of the candidates' optimisation model, so that any subset 
 coarsens, with the error measured in the objective itself (Betts' equidistribution, run from the
 fine end):
 
-1. The model correction's first solve and its full-model run are the uniform default grid's own
-   (its problem, model step and correction step): they give its optimum ``p0`` and the reduced
-   model's bias ``b``.
-2. At ``p0`` the corrected clearance error is linearised in the default grid's parameters (the
+1. The first solve is the uniform default grid's own (its problem, model step and bound rows),
+   on the optimisation model as it is: it gives its optimum ``p0``, and no full-model run yet.
+2. At ``p0`` the clearance error is linearised in the default grid's parameters (the
    Gauss-Newton solver's last Jacobian; another solver's takes one sensitivity sweep):
-   ``r = W (e + b)``, ``A = W J``, Omega^2 ~ ``|r + A d|^2``. Its QP step within the winch bounds
-   (and the minimum clearance) predicts the default grid's corrected optimum, Omega*. With
-   finer candidates, their problem is built then (its model step derived from their interval,
+   ``r = W e``, ``A = W J``, Omega^2 ~ ``|r + A d|^2``. Its QP step within the winch bounds
+   (and the minimum clearance) predicts the default grid's optimum, Omega*. With finer
+   candidates, their problem is built then (its model step derived from their interval,
    :func:`cable_ocp.control.shooting.candidate_settings`: a shorter one where the default step
-   does not split, the bias then taken again on its grid from the same full-model run), the
-   same model is taken once more in their parameters (one sweep at ``p0``) and moved to its
-   QP's optimum.
+   does not split), the same model is taken once more in their parameters (one sweep at
+   ``p0``) and moved to its QP's optimum.
 3. Nodes go, cheapest first, while the model's Omega^2 of the profile that interpolates the
    optimum on the nodes left stays within ``((1 + adaptive_tolerance) Omega* +
    OMEGA_ROUND_OFF)^2``. A node's cost is the exact change of that quadratic when one cubic
@@ -28,23 +26,26 @@ fine end):
    bound row keeps its node; a pass removes no two neighbours, and passes repeat until no node
    fits in what is left. The model is then re-optimised on the nodes kept (its QP within their
    bounds) and coarsened again, up to :data:`REOPTIMISED` times.
-4. The model-correction solves that remain run on the nodes kept, from the model's optimum on
-   them, and the verification is the usual one (their correction runs at a step that fits the
-   nodes kept: :func:`cable_ocp.control.verification.fitted_step`). The first of them starts
-   with the default grid's Jacobian carried onto the nodes kept (no sensitivity sweep) when one
-   run confirms the error it predicts (:meth:`GaussNewton.start_from`), and it is judged as the
-   default grid's next solve would have been, so that the correction stops as it would there.
-   If it fails (among the default grid's nodes, whole-space seed 1 case 10 blew the reduced
-   model up at the model's optimum on 14 intervals), the default grid goes on as it would have
+4. The model correction then runs on the nodes kept, as it would on the default grid: its
+   first solve from the model's optimum on them, its full-model runs at a step that fits them
+   (:func:`cable_ocp.control.verification.fitted_step`), the verification the usual one. That
+   first solve starts with the default grid's Jacobian carried onto the nodes (no sensitivity
+   sweep) when one run confirms the error it predicts (:meth:`GaussNewton.start_from`). The
+   default grid's profile is never run on the full model: the runs are the nodes' own, as many
+   as the uniform grid's, and a last correction solve that does not move gets its verdict back
+   as on the uniform grid. If a solve on the nodes fails before one of their profiles verified
+   (among the default grid's nodes, whole-space seed 1 case 10 blew the reduced model up at the
+   model's optimum on 14 intervals), the default grid goes on from ``p0`` as it would have
    alone, and the notes say so.
 
 Why from the fine end: a solve's cost hardly depends on its parameters (a sensitivity sweep of
 paper_hill's reduced model took 0.126 s on 22 parameters, 0.142 s on 84, 0.206 s on 168: the
 model's Jacobians at every RK4 stage dominate it), so refinement rounds from a coarse grid each
-cost about a default solve, and the coarse grid's model error (before any correction) misled
-them. The winch bounds and the minimum clearance are rows at every RK4 point of every grid, so
-no constraint is lost between coarse nodes (the verification checks the full model at its own
-steps). CONVENTIONS.md §5 states the rule and its measurements.
+cost about a default solve, and a coarse grid's optimum misled them where it was far from the
+fine one's; coarsening needs only the fine optimum that the first solve gives. The winch bounds
+and the minimum clearance are rows at every RK4 point of every grid, so no constraint is lost
+between coarse nodes (the verification checks the full model at its own steps).
+CONVENTIONS.md §5 states the rule and its measurements.
 """
 
 from __future__ import annotations
@@ -111,22 +112,22 @@ class Coarsening:
     problem : WinchProblem
         The problem on the chosen nodes.
     parameters : array
-        The default grid's predicted corrected optimum ``p*`` on them (rad, rad/s).
+        The default grid's predicted optimum ``p*`` on them (rad, rad/s).
     intervals : int
         Intervals of the default grid.
     predicted : float, m
-        Omega* on the default grid, predicted (Gauss-Newton, corrected model).
+        Omega* on the default grid, predicted (Gauss-Newton, the optimisation model).
     omega : float, m
         The model's Omega of ``p*`` interpolated on the chosen nodes (before their solves).
     candidates : array, s
         The nodes they were chosen among.
     linearised : Linearised
-        The corrected error at ``parameters`` and its Jacobian in their parameters, predicted
+        The error at ``parameters`` and its Jacobian in their parameters, predicted
         from the default grid's linearisation (the first solve on the nodes starts from it when
         a run confirms the error: :meth:`GaussNewton.start_from`).
     values : ProblemParameters
-        The named parameters of :attr:`problem`, with the model correction's bias: the first
-        problem's, or the candidates' own where their model step is shorter.
+        The named parameters of :attr:`problem`: the first problem's, or the candidates' own
+        where their model step is shorter.
     default_step : float, s
         The first problem's model step.
     """
@@ -149,7 +150,7 @@ class Coarsening:
             finer += f" at h = {self.problem.step:.4g} s"
         return (
             f"adaptive grid of {self.problem.control.intervals} intervals{finer} (the default "
-            f"grid's {self.intervals}: predicted Omega on the corrected model {self.omega:.3g} "
+            f"grid's {self.intervals}: predicted Omega on the optimisation model {self.omega:.3g} "
             f"m against its {self.predicted:.3g} m)"
         )
 
@@ -219,6 +220,12 @@ class Quadratic:
                 if cost + rise > allowed:
                     break
                 if j - 1 in touched or j + 1 in touched:
+                    continue
+                # Its cost at the profile as the pass has moved it so far (the model couples
+                # spans: deep_lift's 2000 m elastic line had reached 6.5 times the allowed
+                # Omega on costs taken at the pass's start).
+                rise = span.rise + 2 * span.change @ slope[span.columns]
+                if cost + rise > allowed:
                     continue
                 touched.add(j)
                 removed.append(kept[j])
@@ -345,10 +352,10 @@ class Adaptation:
     def __init__(self, tolerance: float, candidates: Callable[[], WinchProblem] | None = None):
         self.tolerance, self._candidates, self.finer = tolerance, candidates, None
 
-    def __call__(self, problem: WinchProblem, solver, values, parameters, corrected) -> Coarsening:
+    def __call__(self, problem: WinchProblem, solver, values, parameters) -> Coarsening:
         """:func:`coarsen` with these settings."""
         finer = self._finer if self._candidates is not None else None
-        return coarsen(problem, solver, values, parameters, self.tolerance, corrected, finer)
+        return coarsen(problem, solver, values, parameters, self.tolerance, finer)
 
     def _finer(self) -> WinchProblem:
         if self.finer is None:
@@ -362,10 +369,9 @@ def coarsen(
     values,
     parameters: np.ndarray,
     tolerance: float,
-    corrected: Callable | None = None,
     finer: Callable[[], WinchProblem] | None = None,
 ) -> Coarsening:
-    """The nodes to keep, at the corrected optimum of ``problem``'s first solve (docstring).
+    """The nodes to keep, at the optimum of ``problem``'s first solve (module docstring).
 
     Parameters
     ----------
@@ -375,16 +381,12 @@ def coarsen(
         Its solver, which solved it last at ``parameters``: a Gauss-Newton solver's last
         linearisation is taken again; another solver's problem is linearised anew.
     values : ProblemParameters
-        The problem's named parameters with the model correction's bias.
+        The problem's named parameters, as its first solve took them.
     parameters : array
         The first solve's optimum on the default grid (rad, rad/s).
     tolerance : float
         ``GridSettings.adaptive_tolerance``: the nodes kept predict Omega within it of the
         default grid's prediction.
-    corrected : callable, optional
-        ``corrected(other, parameters)``: another problem's named parameters with the model
-        correction's bias on its own grid, from the same full-model run (needed with ``finer``
-        when its model step is not ``problem``'s).
     finer : callable, optional
         Builds the problem on the candidate nodes (a grid ``adaptive_finest`` times finer,
         holding the default grid's nodes); None: the default grid's nodes are the candidates.
@@ -404,7 +406,7 @@ def coarsen(
         model = GaussNewton(candidates, GaussNewtonSettings())
         start = on_nodes(problem.control, parameters, times)
         if not np.array_equal(candidates.grid, problem.grid):  # a shorter model step
-            values = corrected(candidates, start)
+            values = candidates.parameter_values()
         linearised = model.linearisation(values, start)
         quadratic = _optimum(model, linearised, start)
     allowed = ((1 + tolerance) * predicted + OMEGA_ROUND_OFF) ** 2

@@ -476,9 +476,9 @@ def solve_verified(
         Verify on the compiled full model (default: as the transcription is compiled).
     adapt : Adaptation, optional
         An adaptive grid's coarsening (:class:`cable_ocp.control.adaptive_grid.Adaptation`),
-        called once after the first solve's full-model run with the corrected values; the
-        solves after it run on the problem it returns (at least one, also where the model is
-        the scene's), and the model correction's runs on them take a step that fits their nodes
+        called on the first solve's optimum before any full-model run; the model correction's
+        solves (as many as the default grid's, at least one) then run on the problem it returns,
+        their full-model runs at a step that fits its nodes
         (:func:`cable_ocp.control.verification.fitted_step`).
 
     Returns
@@ -494,7 +494,7 @@ def solve_verified(
     build_time, compile_time = nlp.build_time, nlp.compile_time
     compiled = settings.compiled if verify_compiled is None else verify_compiled
     verify, verification_time = _timed_verify(problem, quiet, compiled)
-    coarsening, reference = None, None
+    coarsening = None
     outcomes: list[SolverOutcome] = []
     verified: list[float] = []
     best_outcome, best, checked, failure = None, None, None, None
@@ -502,11 +502,13 @@ def solve_verified(
     landing_bias = values.bias  # a landing's reference (-e_ref), zero on other scenes
     parameters = problem.first_guess(compiled=settings.compiled)
     solver_name = solver.label
-    solves = max(1 + (refinements if problem.reduced else 0), 1 + (adapt is not None))
+    default_solves = 1 + (refinements if problem.reduced else 0)
+    # The adaptive grid's first solve, on the default grid, only chooses the nodes.
+    solves = default_solves + (adapt is not None)
     # Full-model runs that only steer the model correction take a coarser step; the profile
     # reported is verified at the scene's.
     correction = None
-    if solves > 1:
+    if default_solves > 1:
         correction = correction_step(problem.scene, compiled, problem.control.breakpoints)
     learned = None  # (full-model run, outcome) the next model correction starts from
     best_solve = None
@@ -519,55 +521,39 @@ def solve_verified(
             values = _corrected(
                 problem, values, landing_bias, run, parameters, source.states, settings.compiled
             )
-            if adapt is not None and coarsening is None:
-                # The adaptive grid: the solves from here on run on the nodes kept, and only
-                # their profiles are the result's.
-                corrected = _learned_from(run, settings.compiled)
-                coarsening = adapt(problem, nlp, values, parameters, corrected)
-                fallback = (
-                    problem,
-                    nlp,
-                    verify,
-                    best,
-                    best_outcome,
-                    checked,
-                    best_solve,
-                    correction,
-                    values,
-                    landing_bias,
-                    learned,
-                )
-                problem, parameters = coarsening.problem, coarsening.parameters
-                if coarsening.values is not values:  # the candidates' own grid
-                    values = coarsening.values
-                    landing_bias = problem.landing_bias()
-                nodes = problem.control.breakpoints
-                correction = fitted_step(correction, problem.scene.numerics.step, nodes)
-                nlp = solver.build(problem, settings, quiet, verbose, 0.0)
-                if hasattr(nlp, "start_from"):  # the default grid's Jacobian, carried over
-                    nlp.start_from(values, parameters, coarsening.linearised)
-                build_time += nlp.build_time
-                compile_time += nlp.compile_time
-                verify, timed = _timed_verify(problem, quiet, compiled)
-                verification_time = _summed(verification_time, timed)
-                # The default grid's verified run judges the first gain (the model correction
-                # stops as it would on the default grid), but is not the answer.
-                reference, best_outcome, best, checked, best_solve = best, None, None, None, None
         outcome = nlp.solve(values, parameters)
         outcomes.append(outcome)
+        if adapt is not None and coarsening is None and outcome.success:
+            # The adaptive grid: the default grid's optimum chooses the nodes, before any
+            # full-model run; the solves from here on (the model correction's) run on them.
+            coarsening = adapt(problem, nlp, values, outcome.parameters)
+            fallback = (problem, nlp, verify, correction, values, landing_bias, outcome)
+            problem, parameters = coarsening.problem, coarsening.parameters
+            if coarsening.values is not values:  # the candidates' own grid
+                values = coarsening.values
+                landing_bias = problem.landing_bias()
+            if correction is not None:
+                nodes = problem.control.breakpoints
+                correction = fitted_step(correction, problem.scene.numerics.step, nodes)
+            nlp = solver.build(problem, settings, quiet, verbose, 0.0)
+            if hasattr(nlp, "start_from"):  # the default grid's Jacobian, carried over
+                nlp.start_from(values, parameters, coarsening.linearised)
+            build_time += nlp.build_time
+            compile_time += nlp.compile_time
+            verify, timed = _timed_verify(problem, quiet, compiled)
+            verification_time = _summed(verification_time, timed)
+            verified.append(float("nan"))  # not run on the full model: not the answer
+            continue
         if fallback is not None and best is None and not outcome.success:
             # No profile on the nodes kept verified and a solve on them failed: the default grid
-            # goes on from its own optimum and full-model run, as it would have without them
-            # (one solve more, so that it still has all its corrections). A first solve whose
-            # run broke the minimum clearance had left its own run to learn from: not the
-            # default grid's (whole-space seed 0 case 14, under a Gauss-Newton variant tried on
-            # 2026-12-06, then solved on the nodes' parameters and raised).
+            # goes on from its own optimum, verified as its first solve, with all its
+            # corrections still to come (whole-space seed 1 case 10 blew the reduced model up
+            # on the nodes kept; a run on them that broke the minimum clearance is not learned
+            # from).
             abandoned = f"{coarsening.describe()} abandoned ({outcome.status}): default grid kept"
-            (problem, nlp, verify, best, best_outcome, checked, best_solve, correction, values,
-             landing_bias, learned) = fallback  # fmt: skip
-            fallback, coarsening, adapt, solves = None, None, None, solves + 1
-            verified.append(float("nan"))
-            continue
+            problem, nlp, verify, correction, values, landing_bias, outcome = fallback
+            fallback, coarsening, adapt, learned = None, None, None, None
+            solves = solve + default_solves
         if not outcome.success:
             failure = f"{solver_name} did not converge: {outcome.status}"
             if best is None:  # show where the failed solve got to, still marked as failed
@@ -576,14 +562,9 @@ def solve_verified(
                 best_outcome = outcome if best is not None else None
                 verified.append(best.omega if best is not None else float("nan"))
             break
-        last = best if best is not None else reference
-        # Omega on the corrected model, against the last verified one: the first solve on the
-        # adaptive grid's nodes is judged as the default grid's next solve would have been (by
-        # the Omega that the coarsening predicted for it), so that the model correction stops
-        # as it would there, not on the grid's own gain.
-        first_on_nodes = coarsening is not None and best is None and last is not None
-        corrected = coarsening.predicted if first_on_nodes else outcome.omega
-        trial = verify(outcome.parameters, _run_step(correction, corrected, last, solve, solves))
+        trial = verify(
+            outcome.parameters, _run_step(correction, outcome.omega, best, solve, solves)
+        )
         if trial.trajectory is None:
             verified.append(float("nan"))
             failure = (
@@ -599,8 +580,7 @@ def solve_verified(
         verified.append(trial.trajectory.omega)
         if best is not None and trial.trajectory.omega >= best.omega:
             break
-        achieved = corrected if first_on_nodes else trial.trajectory.omega
-        gain = 0.0 if last is None else _gain(achieved, last.omega)
+        gain = 0.0 if best is None else _gain(trial.trajectory.omega, best.omega)
         best_outcome, best, checked, best_solve = outcome, trial.trajectory, trial, solve
         learned = (best, best_outcome)
         if gain > SMALL_GAIN:
@@ -665,19 +645,6 @@ def _corrected(
     if states is None:
         states = problem.simulate(parameters, compiled=compiled)
     return replace(values, bias=landing_bias + full_error - problem.clearance(states))
-
-
-def _learned_from(run, compiled: bool):
-    """``corrected(problem, parameters)``: any problem's named parameters corrected by ``run``.
-
-    The bias on the problem's own grid (:func:`_corrected`), its model run under ``parameters``.
-    """
-
-    def corrected(problem: WinchProblem, parameters: np.ndarray) -> ProblemParameters:
-        bare = problem.parameter_values()
-        return _corrected(problem, bare, bare.bias, run, parameters, None, compiled)
-
-    return corrected
 
 
 def _summed(*timers):
