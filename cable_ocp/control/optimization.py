@@ -114,7 +114,9 @@ class OcpResult(result_files.KeptInFolder):
         Omega of the full model after each solve; more than one entry with model
         correction. The reported solve's is its verification at the scene's step, the others'
         come from the correction runs at a coarser step (``notes`` gives it;
-        :func:`cable_ocp.control.verification.correction_step`).
+        :func:`cable_ocp.control.verification.correction_step`). NaN where a solve's profile
+        had no run: the adaptive grid's first solve, which only chooses its nodes, and a solve
+        whose run failed.
     compile_time : float, s
         Of ``build_time``, compiling C (0 when the libraries came from the disk cache).
     verification_time : float, s
