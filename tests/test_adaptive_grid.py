@@ -473,7 +473,7 @@ def test_a_failed_solve_after_a_profile_that_broke_the_clearance_falls_back_on_t
 ):
     """The nodes kept: a first profile whose full-model run breaks the minimum clearance (the
     run is what the correction learns from), then a solve that fails. The default grid goes on
-    from its own optimum and run, not from the nodes' parameters (whole-space seed 0 case 14, under
+    from its own first optimum, not from the nodes' parameters (whole-space seed 0 case 14, under
     a Gauss-Newton variant tried on 2026-12-06, had raised a shape error there), and reaches the
     uniform grid's Omega."""
     from dataclasses import replace

@@ -4,9 +4,9 @@ One run solves every scene twice with the default ``optimize`` (Gauss-Newton, mo
 verified on the scene's model): on the uniform default grid (about 5 s intervals) and with
 ``GridSettings(adaptive=True)`` (:mod:`cable_ocp.control.adaptive_grid`), after an untimed solve
 on each grid that compiles the scene's models and makes each grid's arrays once, in alternating
-order. The scenes are the robustness bench's
-whole-space scenes of two seeds (:mod:`cable_ocp.studies.scene_space`) and ``paper_hill``. The
-acceptance of issue 43, printed per seed:
+order. The scenes are the robustness bench's whole-space scenes of two seeds
+(:mod:`cable_ocp.studies.scene_space`) and ``paper_hill``. The acceptance of issue 43, printed
+per seed:
 
 - Omega: the adaptive grid's within :data:`OMEGA_SHARE` of the uniform one's (or better), as a
   median and as the share of the cases;
@@ -63,7 +63,7 @@ def compare(scene, order: int = 0) -> dict:
     (cached on disk), which the first timed solve would pay alone (10-20 s against 1-5 s on
     whole-space seed 1, measured 2026-12-05), and makes each grid's arrays once (the adaptive
     grid's candidates, their bound rows and sweep: whole-space seed 0 case 8's coarsening took
-    1.02 s in the first adaptive solve of its process, 0.65 s in the next, measured 2026-12-06,
+    1.04 s in the first adaptive solve of its process, 0.68 s in the next, measured 2026-12-06,
     where only the uniform grid had been solved before); ``order`` odd then runs the adaptive
     grid first.
     """
