@@ -506,3 +506,36 @@ def test_a_failed_solve_after_a_profile_that_broke_the_clearance_falls_back_on_t
     assert "abandoned (failed (test)): default grid kept" in result.notes
     assert result.control == default_hill.control
     assert result.omega == pytest.approx(default_hill.omega, rel=1e-3)
+
+
+def test_nodes_whose_every_profile_fails_verification_hand_over_to_the_default_grid(
+    default_hill, monkeypatch
+):
+    """Whole-space seed 2 case 2: every profile on the nodes kept failed its verification with
+    no run to learn from (its drum passed its bound between the heave's samples), and the
+    adaptive grid returned a failure where the uniform grid succeeds. The default grid goes on
+    from its own first optimum, verified as its first solve, and reaches the uniform grid's
+    Omega."""
+    from dataclasses import replace
+
+    from cable_ocp.control import optimization
+    from cable_ocp.control.verification import verify_profile
+
+    failed_on_nodes = []
+
+    def drum_beyond_its_bound(scene, control, parameters, **options):
+        checked = verify_profile(scene, control, parameters, **options)
+        if isinstance(control, HermiteNodes):
+            failed_on_nodes.append(True)
+            return replace(checked, trajectory=None, run=None, reason="the drum turned (test)")
+        return checked
+
+    monkeypatch.setattr(optimization, "verify_profile", drum_beyond_its_bound)
+    result = co.optimize("paper_hill", quiet=True, grid=GridSettings(adaptive=True))
+    assert len(failed_on_nodes) == 1  # no run to learn from: no second solve on the nodes
+    assert result.success, result.status
+    assert "abandoned (no profile on them verified): default grid kept" in result.notes
+    assert result.nodes == [] and result.control == default_hill.control
+    assert result.omega == pytest.approx(default_hill.omega, rel=1e-9)
+    finite = [omega for omega in result.refinements if np.isfinite(omega)]
+    assert finite == pytest.approx(default_hill.refinements, rel=1e-9)

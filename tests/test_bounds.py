@@ -12,7 +12,9 @@ from cable_ocp.control.optimization import optimize
 from cable_ocp.control.settings import GridSettings, ModelSettings
 from cable_ocp.drive.bounds import (
     BOUND_TOLERANCE,
+    HEAVE_SAMPLES,
     LinearBounds,
+    angle_bounds,
     bernstein_rows,
     subintervals,
     violation,
@@ -107,6 +109,34 @@ def test_a_dip_between_samples_is_caught(short):
     reason = violation(scene, control, p)
     assert reason is not None and "winch angle" in reason and "winch.angle_min/max" in reason
     assert LinearBounds.build(scene, control, grid).excess(p) > 2e-4
+
+
+def test_the_angle_rows_hold_the_heave_between_its_samples(short):
+    """Heave compensation on 5 s sub-intervals (17 samples 0.31 s apart, a 7 s sea): each angle
+    row leaves room for the heave part's true extremes on its sub-interval (on a 1 ms grid),
+    which the samples alone miss (whole-space seed 2 case 2's drum passed its bound between
+    them)."""
+    scene = short.updated(
+        {
+            "top.heave.sea_state.significant_height": 2.0,
+            "top.heave.sea_state.peak_period": 7.0,
+            "top.heave.compensation": True,
+        }
+    )
+    grid = np.arange(5) * 5.0
+    bounds = LinearBounds.build(scene, HermiteIntervals(20.0, 4), grid)
+    low, high = bounds.lower[bounds.derivatives == 0], bounds.upper[bounds.derivatives == 0]
+    starts = bounds.starts[bounds.derivatives == 0]
+    lowest, highest = angle_bounds(scene)
+    missed = 0.0
+    for start in np.unique(starts):
+        on = starts == start
+        dense = start + np.linspace(0.0, 5.0, 5001)
+        heave = Drive.from_scene(scene).winch_angle(dense)[0]
+        samples = heave[:: 5000 // (HEAVE_SAMPLES - 1)]
+        assert np.all(high[on] + heave.max() <= highest) and np.all(low[on] + heave.min() >= lowest)
+        missed = max(missed, heave.max() - samples.max(), samples.min() - heave.min())
+    assert missed > 1e-4  # the samples alone miss the heave's extremes by this much
 
 
 def test_top_length_check_accepts_the_tolerance(short):

@@ -515,16 +515,25 @@ def solve_verified(
     learned = None  # (full-model run, outcome) the next model correction starts from
     best_solve = None
     fallback, abandoned = None, ""  # the default grid's state while the adaptive grid is tried
+    handing_over = ""  # why the nodes kept are given up, the default grid's first optimum next
     solve = -1
     while (solve := solve + 1) < solves:
-        if learned is not None:
-            run, source = learned
-            parameters = source.parameters
-            values = _corrected(
-                problem, values, landing_bias, run, parameters, source.states, settings.compiled
-            )
-        outcome = nlp.solve(values, parameters)
-        outcomes.append(outcome)
+        if handing_over:
+            # No profile on the nodes kept verified: the default grid goes on from its own first
+            # optimum, verified as its first solve, with all its corrections still to come.
+            abandoned = f"{coarsening.describe()} abandoned ({handing_over}): default grid kept"
+            problem, nlp, verify, correction, values, landing_bias, outcome = fallback
+            fallback, coarsening, adapt, learned, handing_over = None, None, None, None, ""
+            solves = solve + default_solves
+        else:
+            if learned is not None:
+                run, source = learned
+                parameters = source.parameters
+                values = _corrected(
+                    problem, values, landing_bias, run, parameters, source.states, settings.compiled
+                )
+            outcome = nlp.solve(values, parameters)
+            outcomes.append(outcome)
         if adapt is not None and coarsening is None and outcome.success:
             # The adaptive grid: the default grid's optimum chooses the nodes, before any
             # full-model run; the solves from here on (the model correction's) run on them.
@@ -547,15 +556,11 @@ def solve_verified(
             verified.append(float("nan"))  # not run on the full model: not the answer
             continue
         if fallback is not None and best is None and not outcome.success:
-            # No profile on the nodes kept verified and a solve on them failed: the default grid
-            # goes on from its own optimum, verified as its first solve, with all its
-            # corrections still to come (whole-space seed 1 case 10 blew the reduced model up
-            # on the nodes kept; a run on them that broke the minimum clearance is not learned
-            # from).
-            abandoned = f"{coarsening.describe()} abandoned ({outcome.status}): default grid kept"
-            problem, nlp, verify, correction, values, landing_bias, outcome = fallback
-            fallback, coarsening, adapt, learned = None, None, None, None
-            solves = solve + default_solves
+            # A solve on the nodes kept failed before one of their profiles verified (whole-space
+            # seed 1 case 10 blew the reduced model up on them; a run on them that broke the
+            # minimum clearance is not learned from).
+            handing_over, solves = outcome.status, max(solves, solve + 2)
+            continue
         if not outcome.success:
             failure = f"{solver_name} did not converge: {outcome.status}"
             if best is None:  # show where the failed solve got to, still marked as failed
@@ -576,6 +581,11 @@ def solve_verified(
                 # The full model broke the minimum clearance that the reduced one held: correct
                 # the model by that run and solve again.
                 learned = (trial.run, outcome)
+                continue
+            if fallback is not None and best is None:
+                # The last profile on the nodes kept failed too (whole-space seed 2 case 2's
+                # drum passed its bound between the heave's samples, before they were widened).
+                handing_over, solves = "no profile on them verified", max(solves, solve + 2)
                 continue
             break
         failure = None

@@ -9,7 +9,10 @@ conservative only by about ``w^2 |phi''| / 8`` on sub-intervals of width ``w`` (
 ``w = 0.5 s`` and ``|phi''| = 0.01 rad/s^2``).
 
 The angle bound applies to the angle the winch turns to, heave compensation included (``z_A / r_D``,
-eq. 38); on each sub-interval the heave part is bounded by its extreme of 17 samples. The rate and
+eq. 38); on each sub-interval the heave part is bounded by its extreme of 17 samples, widened by
+``|z''| d^2 / 8`` (``d`` the samples' spacing, ``|z''|`` the largest second derivative of the heave
+part at them): the most a smooth function rises between two samples (the samples alone had let a
+whole-space scene's drum pass its bound between them, seed 2 case 2). The rate and
 acceleration bounds (``winch.rate_max``, ``winch.acceleration_max``) apply to the commanded profile,
 the heave compensation comes on top.
 
@@ -110,9 +113,28 @@ def _bound_matrix(scene, control, starts: np.ndarray, ends: np.ndarray) -> np.nd
     return np.vstack(blocks)
 
 
-def _heave(scene, times: np.ndarray) -> np.ndarray:
-    """Heave-compensation part of the winch angle at the times (rad; zeros without it)."""
-    return Drive.from_scene(scene).winch_angle(times)[0]
+def _heave(scene, times: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Heave-compensation part of the winch angle at the times, and its second derivative.
+
+    Returns (rad, rad/s^2), zeros without heave compensation.
+    """
+    angle, _, acceleration = Drive.from_scene(scene).winch_angle(times)
+    return angle, acceleration
+
+
+def _heave_range(scene, starts: np.ndarray, ends: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """The heave part's lowest and highest angle (rad) on each sub-interval ``[start, end]``.
+
+    The extremes of :data:`HEAVE_SAMPLES` samples, widened by ``|z''| d^2 / 8`` (module
+    docstring): between samples ``d`` apart a function whose second derivative stays within
+    ``|z''|`` rises at most that far above them.
+    """
+    fraction = np.linspace(0.0, 1.0, HEAVE_SAMPLES)
+    samples = starts[:, None] + fraction * (ends - starts)[:, None]
+    heave, curvature = (part.reshape(samples.shape) for part in _heave(scene, samples.ravel()))
+    spacing = (ends - starts) / (HEAVE_SAMPLES - 1)
+    reach = np.abs(curvature).max(axis=1) * spacing**2 / 8
+    return heave.min(axis=1) - reach, heave.max(axis=1) + reach
 
 
 def shrunk(lower, upper, margin) -> tuple[np.ndarray, np.ndarray]:
@@ -153,13 +175,12 @@ class LinearBounds:
     def build(cls, scene, control, grid: np.ndarray, margin: float = BOUND_TOLERANCE / 2):
         """Constraints of the scene's winch bounds on ``control``, cut at the times ``grid``."""
         starts, ends = subintervals(control, grid)
-        samples = starts[:, None] + np.linspace(0.0, 1.0, HEAVE_SAMPLES) * (ends - starts)[:, None]
-        heave = _heave(scene, samples.ravel()).reshape(samples.shape)
+        lowest, highest = _heave_range(scene, starts, ends)
         lower, upper, derivatives, times = [], [], [], []
         for derivative, low, high, _ in winch_limits(scene):
             count = bernstein_count(derivative)
-            shift_low = heave.min(axis=1) if derivative == 0 else np.zeros(starts.size)
-            shift_high = heave.max(axis=1) if derivative == 0 else np.zeros(starts.size)
+            shift_low = lowest if derivative == 0 else np.zeros(starts.size)
+            shift_high = highest if derivative == 0 else np.zeros(starts.size)
             low, high = shrunk(low - shift_low, high - shift_high, margin)
             lower.append(np.repeat(low, count))
             upper.append(np.repeat(high, count))
@@ -275,7 +296,7 @@ def violation(scene, control, parameters, grid: np.ndarray | None = None) -> str
             dense = dense.ravel()
             times = np.concatenate([times, dense])
             values = np.concatenate([values, angle(dense)[0]])
-            values = values + _heave(scene, times)
+            values = values + _heave(scene, times)[0]
         excess = np.maximum(low - values, values - high)
         k = int(np.argmax(excess))
         if excess[k] > BOUND_TOLERANCE:
