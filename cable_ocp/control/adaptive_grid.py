@@ -35,8 +35,8 @@ fine end):
    as the uniform grid's, and a last correction solve that does not move gets its verdict back
    as on the uniform grid. If a solve on the nodes fails before one of their profiles verified
    (among the default grid's nodes, whole-space seed 1 case 10 blew the reduced model up at the
-   model's optimum on 14 intervals), the default grid goes on from ``p0`` as it would have
-   alone, and the notes say so.
+   model's optimum on 14 intervals), or none of their profiles verifies, the default grid goes
+   on from ``p0`` as it would have alone, and the notes say so.
 
 Why from the fine end: a solve's cost hardly depends on its parameters (a sensitivity sweep of
 paper_hill's reduced model took 0.126 s on 22 parameters, 0.142 s on 84, 0.206 s on 168: the
