@@ -250,7 +250,10 @@ def test_the_grid_bench_summary_judges_issue_43s_acceptance():
     assert figures["ratio_median"] == pytest.approx(1.02)
     assert figures["ratio_worst"] == pytest.approx(1.1)
     assert (figures["uniform_parameters"], figures["adaptive_parameters"]) == (100, 40)
+    assert (figures["uniform_wall_total"], figures["adaptive_wall_total"]) == (6.0, 4.7)
+    assert figures["wall_ratio_median"] == pytest.approx(0.75) and figures["faster"] == 2
     assert figures["accepted"] and "acceptance: met" in summary_text(figures, "seed 0")
+    assert "in all: uniform 6.0 s, adaptive 4.7 s" in summary_text(figures, "seed 0")
     rows[0]["adaptive"]["parameters"] = 90  # the median of parameters over half the uniform's
     assert not summary(rows)["accepted"]
 

@@ -79,10 +79,11 @@ class GridSettings:
         ``control_intervals``.
     adaptive : bool
         Choose the nodes among candidates by coarsening (:mod:`cable_ocp.control.adaptive_grid`):
-        after the first solve on the default grid and its full-model run, remove the candidates
-        whose removal keeps the corrected model's predicted Omega within ``adaptive_tolerance``
-        of the candidates' own optimum, and solve on the nodes left. Hermite control and the
-        shooting solvers only.
+        after the first solve on the default grid, before any full-model run, remove the
+        candidates whose removal keeps the model's predicted Omega within ``adaptive_tolerance``
+        of the default grid's predicted optimum, and run the model correction on the nodes left.
+        Off by default: it does not yet measure better in wall time (CONVENTIONS.md section 5).
+        Hermite control and the shooting solvers only.
     adaptive_tolerance : float
         The coarsening's relative tolerance on Omega (CONVENTIONS.md §5).
     adaptive_finest : int

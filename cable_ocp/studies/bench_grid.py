@@ -11,7 +11,8 @@ per seed:
 - Omega: the adaptive grid's within :data:`OMEGA_SHARE` of the uniform one's (or better), as a
   median and as the share of the cases;
 - parameters: the adaptive median at most :data:`PARAMETER_SHARE` of the uniform median;
-- wall time: the medians side by side (the adaptive one not higher).
+- wall time: the medians side by side (the adaptive one not higher), with the totals and the
+  median of the per-scene ratio.
 
 :func:`chart_points` adds the speed-accuracy points of the control grid: uniform grids of several
 sizes, the adaptive grid and the paper's knots (a spline, by Gauss-Newton), Omega against the
@@ -133,6 +134,10 @@ def summary(rows: list[dict]) -> dict:
     for grid in GRIDS:
         figures[f"{grid}_parameters"] = median(grid, "parameters")
         figures[f"{grid}_wall"] = median(grid, "wall")
+        figures[f"{grid}_wall_total"] = float(sum(r[grid]["wall"] for r in both))
+    per_scene = [r["adaptive"]["wall"] / r["uniform"]["wall"] for r in both]
+    figures["wall_ratio_median"] = float(np.median(per_scene)) if both else float("nan")
+    figures["faster"] = int(sum(ratio < 1.0 for ratio in per_scene))
     figures["accepted"] = bool(
         both
         and figures["ratio_median"] <= OMEGA_SHARE
@@ -155,6 +160,9 @@ def summary_text(figures: dict, what: str) -> str:
             f"{f['adaptive_parameters']:g} (goal: at most {PARAMETER_SHARE:g} of it)",
             f"  optimize wall time, median: uniform {f['uniform_wall']:.2f} s, adaptive "
             f"{f['adaptive_wall']:.2f} s",
+            f"    in all: uniform {f['uniform_wall_total']:.1f} s, adaptive "
+            f"{f['adaptive_wall_total']:.1f} s; per scene adaptive / uniform: median "
+            f"{f['wall_ratio_median']:.3f}, faster on {f['faster']} of {f['both']}",
             f"  issue 43's acceptance: {'met' if f['accepted'] else 'not met'}",
         ]
     )
