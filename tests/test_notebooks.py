@@ -11,6 +11,8 @@ from nbclient import NotebookClient
 
 ROOT = Path(__file__).resolve().parent.parent
 NOTEBOOKS = sorted((ROOT / "notebooks").glob("*.ipynb"))
+# The longest two (61 and 43 s of the default run's 812 s on 2 cores) run with -m slow.
+SLOW = {"07_deploy.ipynb", "09_policy.ipynb"}
 # Code that draws or displays a figure: pyplot, cable_ocp.plots, an image file shown by IPython.
 PLOTTING = re.compile(r"\bplt\.\w+\(|\bplots\.\w+\(|\bImage\(")
 
@@ -19,7 +21,11 @@ def images(cell) -> int:
     return sum("image/png" in out.get("data", {}) for out in cell.get("outputs", []))
 
 
-@pytest.mark.parametrize("path", NOTEBOOKS, ids=lambda p: p.name)
+@pytest.mark.parametrize(
+    "path",
+    [pytest.param(p, marks=pytest.mark.slow) if p.name in SLOW else p for p in NOTEBOOKS],
+    ids=lambda p: p.name,
+)
 def test_notebook_runs_and_shows_its_figures(path, monkeypatch):
     monkeypatch.setenv("CABLE_OCP_QUICK", "1")
     # As in a user's Jupyter: the kernel picks the inline backend only if no backend is forced.

@@ -4,6 +4,9 @@ The site executes the notebooks through myst-nb's cache, which ``tests/test_note
 with its own runs: this file is named to run after it, so that a test run executes each notebook
 once. Needs the ``docs`` extra; the browser test needs Debian's headless Chromium
 (``apt-get install chromium-headless-shell``, as ``.ci/run`` does).
+
+Slow (``python -m pytest -m slow``): the build took 121 s of the default run's 812 s on 2 cores,
+which has to stay under 10 minutes.
 """
 
 from __future__ import annotations
@@ -24,6 +27,7 @@ import cable_ocp
 from cable_ocp.scene.fields import field_rows, schema_sections
 
 pytest.importorskip("sphinx", reason="the site needs the docs extra (pip install -e '.[docs]')")
+pytestmark = pytest.mark.slow
 
 ROOT = Path(__file__).resolve().parent.parent
 DOCS = ROOT / "docs"
