@@ -515,7 +515,9 @@ def solve_verified(
     learned = None  # (full-model run, outcome) the next model correction starts from
     best_solve = None
     fallback, abandoned = None, ""  # the default grid's state while the adaptive grid is tried
-    handing_over = ""  # why the nodes kept are given up, the default grid's first optimum next
+    # Why the nodes kept are given up: the next pass takes the default grid's first optimum, and
+    # its corrections the default grid's solves after it.
+    handing_over = ""
     solve = -1
     while (solve := solve + 1) < solves:
         if handing_over:
@@ -524,7 +526,6 @@ def solve_verified(
             abandoned = f"{coarsening.describe()} abandoned ({handing_over}): default grid kept"
             problem, nlp, verify, correction, values, landing_bias, outcome = fallback
             fallback, coarsening, adapt, learned, handing_over = None, None, None, None, ""
-            solves = solve + default_solves
         else:
             if learned is not None:
                 run, source = learned
@@ -559,7 +560,7 @@ def solve_verified(
             # A solve on the nodes kept failed before one of their profiles verified (whole-space
             # seed 1 case 10 blew the reduced model up on them; a run on them that broke the
             # minimum clearance is not learned from).
-            handing_over, solves = outcome.status, max(solves, solve + 2)
+            handing_over, solves = outcome.status, solve + 1 + default_solves
             continue
         if not outcome.success:
             failure = f"{solver_name} did not converge: {outcome.status}"
@@ -585,7 +586,8 @@ def solve_verified(
             if fallback is not None and best is None:
                 # The last profile on the nodes kept failed too (whole-space seed 2 case 2's
                 # drum passed its bound between the heave's samples, before they were widened).
-                handing_over, solves = "no profile on them verified", max(solves, solve + 2)
+                handing_over = "no profile on them verified"
+                solves = solve + 1 + default_solves
                 continue
             break
         failure = None
