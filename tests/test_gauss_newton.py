@@ -318,3 +318,52 @@ def test_sensitivities_from_the_step_ends_stay_close_to_the_exact_ones(problem):
         gaps.append(np.linalg.norm(ends.jacobian - exact.jacobian) / np.linalg.norm(exact.jacobian))
     assert max(gaps) < 1e-5
     assert gaps[1] < gaps[0] / 2
+
+
+def test_a_sweep_carried_onto_a_finer_control_is_that_controls_own_sweep(problem):
+    """The stage Jacobians of one sweep, propagated through a finer control's map (the adaptive
+    grid's candidates, ErrorLinearisation.carried), give that control's own Jacobian at the same
+    profile to round-off; the coarse Jacobian is its restriction; after another sweep has written
+    the shared arrays, nothing is carried."""
+    from cable_ocp.control.adaptive_grid import on_nodes
+
+    times, left = stage_times(problem.grid[:-1], problem.step)
+
+    def built(control):
+        return ErrorLinearisation(
+            problem.model, problem.step, problem.grid.size - 1, control,
+            problem.scene.winch.drum_radius, problem.scene.seabed, times, left,
+        )  # fmt: skip
+
+    coarse_control, fine_control = HermiteIntervals(30.0, 3), HermiteIntervals(30.0, 6)
+    coarse, fine = built(coarse_control), built(fine_control)
+    values = problem.parameter_values()
+    profile = 0.2 * np.random.default_rng(5).normal(size=coarse_control.size)
+    swept = coarse(values, profile)
+    carried = fine.carried(coarse, swept.jacobian)
+    embedding = on_nodes(coarse_control, np.eye(coarse_control.size), fine_control.breakpoints)
+    own = fine(values, embedding @ profile)
+    scale = np.max(np.abs(own.jacobian))
+    np.testing.assert_allclose(carried, own.jacobian, rtol=0, atol=1e-12 * scale)
+    np.testing.assert_allclose(carried @ embedding, swept.jacobian, rtol=0, atol=1e-12 * scale)
+    assert fine.carried(coarse, swept.jacobian) is None  # the fine sweep wrote the arrays since
+    assert fine.carried(coarse, swept.jacobian.copy()) is None  # not the sweep's own Jacobian
+
+
+def test_a_converged_solve_keeps_the_qp_step_it_ended_on(problem):
+    """GaussNewton.final_step is the QP step a fresh call takes at the solve's end, bit for bit,
+    and only there: not for another point, nor for another bias."""
+    from dataclasses import replace
+
+    solver = _solver(problem)
+    values = problem.parameter_values()
+    outcome = solver.solve(values, np.zeros(problem.control.size))
+    assert outcome.success, outcome.status
+    kept = solver.final_step(values, outcome.parameters)
+    bounds = problem.bounds
+    linearised = solver.linearised_at(values, outcome.parameters)
+    fresh, _, _ = solver.step(linearised, outcome.parameters, bounds.lower, bounds.upper, {})
+    np.testing.assert_array_equal(kept, fresh)
+    assert solver.final_step(values, outcome.parameters + 1e-9) is None
+    shifted = replace(values, bias=values.bias + 1e-3)
+    assert solver.final_step(shifted, outcome.parameters) is None

@@ -359,3 +359,20 @@ def test_a_result_keeps_its_resolved_settings_and_solves_again_from_its_file(sho
     retired = {**kept.settings, "grid": {**kept.settings["grid"], "adaptive_start": 4,
                                          "adaptive_rounds": 4}}  # fmt: skip
     assert ocp_settings_from_record(retired) == settings  # a file of the first adaptive rule
+
+
+def test_a_correction_that_does_not_lower_its_model_is_not_run_on_the_full_model():
+    """The share a solve lowered its model's Omega^2 by, from either unit of history: a solve
+    below UNMOVED is not verified (its run could not change the digits reported)."""
+    from types import SimpleNamespace
+
+    from cable_ocp.control.optimization import UNMOVED, _model_gain
+
+    def outcome(history):
+        return SimpleNamespace(history=history)
+
+    assert _model_gain(outcome([4.0, 1.0, 2.0]), "m2") == pytest.approx(0.75)
+    assert _model_gain(outcome([2.0, 1.0]), "m") == pytest.approx(0.75)  # Omega: 4 -> 1 m^2
+    assert _model_gain(outcome([9.0]), "m2") == 0.0  # not one step taken
+    assert _model_gain(outcome([0.0, 0.0]), "m2") == 1.0  # nothing to hold: not "unmoved"
+    assert _model_gain(outcome([1.0, 1.0 - UNMOVED / 2]), "m2") < UNMOVED

@@ -395,19 +395,25 @@ def coarsen(
     if not hasattr(model, "linearised_at"):  # a solver that keeps no linearisation of its own
         model = GaussNewton(problem, GaussNewtonSettings())
     linearised = model.linearised_at(values, parameters)
-    quadratic = _optimum(model, linearised, parameters)
+    quadratic = _optimum(model, linearised, parameters, model.final_step(values, parameters))
     predicted = float(np.sqrt(max(quadratic.objective, 0.0)))
     if finer is not None and predicted > REACH_LIMITED * quadratic.unbounded():
         finer = None  # the winch's reach, not the grid, limits Omega: finer nodes cannot help
     candidates = problem if finer is None else finer()
     times = candidates.control.breakpoints
     start = parameters
-    if finer is not None:  # one sensitivity sweep on the candidates, from the same profile
-        model = GaussNewton(candidates, GaussNewtonSettings())
+    if finer is not None:  # the model in the candidates' parameters, from the same profile
+        default, model = model, GaussNewton(candidates, GaussNewtonSettings())
         start = on_nodes(problem.control, parameters, times)
-        if not np.array_equal(candidates.grid, problem.grid):  # a shorter model step
-            values = candidates.parameter_values()
-        linearised = model.linearisation(values, start)
+        carried = None
+        if np.array_equal(candidates.grid, problem.grid):  # the default grid's sweep, carried
+            carried = model.linearisation.carried(default.linearisation, linearised.jacobian)
+        if carried is not None:
+            linearised = Linearised(linearised.states, linearised.error, carried, True)
+        else:  # one sensitivity sweep on the candidates (a shorter model step: their values)
+            if not np.array_equal(candidates.grid, problem.grid):
+                values = candidates.parameter_values()
+            linearised = model.linearisation(values, start)
         quadratic = _optimum(model, linearised, start)
     allowed = ((1 + tolerance) * predicted + OMEGA_ROUND_OFF) ** 2
     kept = np.arange(times.size)
@@ -445,13 +451,20 @@ def coarsen(
     )
 
 
-def _optimum(model: GaussNewton, linearised, profile: np.ndarray) -> Quadratic:
-    """The Gauss-Newton model at ``profile``, moved to its QP's optimum within the bounds."""
+def _optimum(
+    model: GaussNewton, linearised, profile: np.ndarray, step: np.ndarray | None = None
+) -> Quadratic:
+    """The Gauss-Newton model at ``profile``, moved to its QP's optimum within the bounds.
+
+    ``step``: that QP's step where the solve that ended at ``profile`` took it last
+    (:meth:`GaussNewton.final_step`); None: solved here.
+    """
     quadratic = Quadratic(
         model.weights * linearised.error, model.weights[:, None] * linearised.jacobian, profile
     )
-    bounds = model.problem.bounds
-    step, _, _ = model.step(linearised, profile, bounds.lower, bounds.upper, {})
+    if step is None:
+        bounds = model.problem.bounds
+        step, _, _ = model.step(linearised, profile, bounds.lower, bounds.upper, {})
     if step is not None:
         quadratic.moved(step)
     return quadratic

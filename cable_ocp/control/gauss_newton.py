@@ -186,6 +186,9 @@ class GaussNewton(ProblemSolver):
             self.linearisation  # noqa: B018 (built here, not at the first sample)
         self.softened = 0.0  # m: the slack of the last step
         self._last: tuple[ProblemParameters, np.ndarray, Linearised] | None = None
+        # The QP step the last solve took at its end, within the problem's own bounds (None:
+        # it ended elsewhere), which the adaptive grid's coarsening takes again.
+        self._final_step: np.ndarray | None = None
         self.build_time = time.perf_counter() - started
 
     @cached_property
@@ -368,6 +371,7 @@ class GaussNewton(ProblemSolver):
         current = self.linearised_at(values, parameters)
         function_time += time.perf_counter() - begun
         history, status, success, iterations = [], "", False, 0
+        final_step = None
         refreshed = False  # the Jacobian in use was evaluated at the current point
         if self.log is not None:
             self.log.restart()
@@ -381,6 +385,7 @@ class GaussNewton(ProblemSolver):
             check(seen)
             iterations += 1
             step, predicted, qp_status = self.step(current, parameters, lower, upper, fixed)
+            final_step = step  # the QP at the end, until the iterations move on
             if step is None:
                 status = f"the QP failed: {qp_status}"
                 break
@@ -443,7 +448,7 @@ class GaussNewton(ProblemSolver):
             begun = time.perf_counter()
             current = self._linearised_after(values, current, candidate, trial, fraction * step)
             function_time += time.perf_counter() - begun
-            parameters, cost = trial, trial_cost
+            parameters, cost, final_step = trial, trial_cost, None
             history.append(cost)
             self._report(history, parameters, lower, upper)
             if _stalled(history) and trial_breach <= BREACH_TOLERANCE:
@@ -462,6 +467,9 @@ class GaussNewton(ProblemSolver):
         # Where the next solve may start (copied: a caller may refill its arrays in place); a
         # real-time iteration ends away from its last linearisation.
         self._last = None if settings.real_time else (deepcopy(values), parameters, current)
+        own_bounds = not fixed and lower is bounds.lower and upper is bounds.upper
+        kept = own_bounds and current.finite and not settings.real_time
+        self._final_step = final_step if kept else None
         omega = float(np.sqrt(max(history[-1], 0.0))) if history else float("nan")
         outcome = SolverOutcome(
             parameters=parameters,
@@ -523,7 +531,7 @@ class GaussNewton(ProblemSolver):
         if not run.finite or not self._predicts(predicted.error, run.error):
             return False
         kept = Linearised(run.states, run.error, predicted.jacobian, True)
-        self._last = (deepcopy(values), parameters, kept)
+        self._last, self._final_step = (deepcopy(values), parameters, kept), None
         return True
 
     def linearised_at(self, values: ProblemParameters, parameters: np.ndarray) -> Linearised:
@@ -543,6 +551,23 @@ class GaussNewton(ProblemSolver):
                 error = last.error + (values.bias - last_values.bias)
                 return Linearised(last.states, error, last.jacobian, True)
         return self.linearisation(values, parameters)
+
+    def final_step(self, values: ProblemParameters, parameters: np.ndarray) -> np.ndarray | None:
+        """The QP step that the last solve took at its end, if it ended at ``parameters``.
+
+        The step :meth:`step` gives from there within the problem's own bounds (nothing fixed),
+        for ``values`` the solve's own (the same run and bias); None where the solve did not
+        end on a QP at that point (it stalled, or stopped at ``max_iter``). The adaptive grid's
+        coarsening starts from it (whole-space seed 1 case 45: a QP of 0.22 s, on 158 parameters
+        and 6952 rows).
+        """
+        if self._final_step is None or self._last is None:
+            return None
+        last_values, last_parameters, _ = self._last
+        same = np.array_equal(parameters, last_parameters) and values.same_run(last_values)
+        if not same or not np.array_equal(values.bias, last_values.bias):
+            return None
+        return self._final_step
 
     def _report(self, history: list[float], parameters, lower, upper) -> None:
         """One log line: the iteration, Omega and the excess over the bounds."""

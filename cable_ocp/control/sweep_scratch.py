@@ -49,6 +49,9 @@ class SweepScratch:
         The stage Jacobians, transposed (CasADi's column-major layout).
     lock : threading.Lock
         Held while a linearisation writes and reads the arrays.
+    sweeps : int
+        Sweeps written into the arrays so far (a linearisation that reads them again checks
+        that no other sweep has written them since its own).
     """
 
     def __init__(self, steps: int, states: int, inputs: int, width: int, at_ends: bool):
@@ -58,6 +61,7 @@ class SweepScratch:
         shape = (steps + 1, width, states) if at_ends else (steps, 4, width, states)
         self.jacobians = np.zeros(shape)
         self.lock = threading.Lock()
+        self.sweeps = 0
 
     @cached_property
     def views(self) -> list[tuple[memoryview, ...]]:
