@@ -434,7 +434,8 @@ def _timed_verify(problem: WinchProblem, quiet: bool, compiled: bool):
 
     Returns (verify, elapsed) callables. A profile verified again at the same step (bit for bit
     the same parameters: a model-correction solve that did not move them, on 6 of whole-space
-    seed 0's first 20 scenes) gets the last verdict back without a second run: the run is
+    seed 0's first 20 scenes before such a solve from the best profile was left unrun,
+    :data:`UNMOVED`) gets the last verdict back without a second run: the run is
     deterministic, so it would be the same (0.11-1.1 s, a fifth to a third of ``optimize``).
     """
     elapsed = [0.0]

@@ -23,9 +23,11 @@ samples of the heave part), compared with the bounds widened by :data:`BOUND_TOL
 from __future__ import annotations
 
 from dataclasses import dataclass, replace
+from functools import cached_property
 from math import comb
 
 import numpy as np
+from scipy import sparse
 
 from cable_ocp.drive.drive import Drive
 
@@ -170,6 +172,14 @@ class LinearBounds:
     upper: np.ndarray
     derivatives: np.ndarray
     starts: np.ndarray
+
+    @cached_property
+    def sparse_matrix(self) -> sparse.csr_array:
+        """:attr:`matrix` as a sparse array, made once.
+
+        Each row holds one sub-interval's cubic: a few nonzeros.
+        """
+        return sparse.csr_array(self.matrix)
 
     @classmethod
     def build(cls, scene, control, grid: np.ndarray, margin: float = BOUND_TOLERANCE / 2):
