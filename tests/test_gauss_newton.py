@@ -367,3 +367,22 @@ def test_a_converged_solve_keeps_the_qp_step_it_ended_on(problem):
     assert solver.final_step(values, outcome.parameters + 1e-9) is None
     shifted = replace(values, bias=values.bias + 1e-3)
     assert solver.final_step(shifted, outcome.parameters) is None
+
+
+def test_candidates_between_the_default_nodes_are_all_that_a_carried_sweep_propagates(problem):
+    """The adaptive grid's candidates' Jacobian from the default grid's sweep, propagated only
+    through the candidates between the default nodes (the rest from J_default = J_finer E),
+    is the Jacobian propagated through all of them, to round-off."""
+    from cable_ocp.control.adaptive_grid import _carried
+    from cable_ocp.control.gauss_newton import GaussNewton, GaussNewtonSettings
+
+    coarse = problem.with_control(HermiteIntervals(30.0, 3))
+    fine = problem.with_control(HermiteIntervals(30.0, 6))
+    default, finer = (GaussNewton(p, GaussNewtonSettings()) for p in (coarse, fine))
+    values = coarse.parameter_values()
+    profile = 0.2 * np.random.default_rng(7).normal(size=coarse.control.size)
+    jacobian = default.linearisation(values, profile).jacobian
+    whole = finer.linearisation.carried(default.linearisation, jacobian)
+    halved = _carried(default, finer, jacobian)
+    scale = np.max(np.abs(whole))
+    np.testing.assert_allclose(halved, whole, rtol=0, atol=1e-12 * scale)

@@ -435,7 +435,9 @@ class ErrorLinearisation:
             self._swept = (scratch.sweeps, slope, jacobian)
         return Linearised(states, error, jacobian, True)
 
-    def carried(self, source: ErrorLinearisation, jacobian: np.ndarray) -> np.ndarray | None:
+    def carried(
+        self, source: ErrorLinearisation, jacobian: np.ndarray, columns: np.ndarray | None = None
+    ) -> np.ndarray | None:
         """The Jacobian of ``source``'s sweep that gave ``jacobian``, in this control's parameters.
 
         The sweep's stage Jacobians do not depend on the control, only their map onto its
@@ -446,7 +448,7 @@ class ErrorLinearisation:
         The result is what this linearisation's own sweep would give at the profile that
         ``source`` swept, the control's nodes holding ``source``'s. None where ``jacobian`` is
         not ``source``'s last sweep's, another sweep has written the arrays since, or the two
-        differ in model, step or grid.
+        differ in model, step or grid. ``columns``: only those parameters' (None: all).
         """
         swept = source._swept
         same = (
@@ -463,8 +465,9 @@ class ErrorLinearisation:
         with self._scratch.lock:
             if self._scratch.sweeps != count:
                 return None
+            winch = self.winch if columns is None else self.winch[:, :, columns]
             sensitivities = propagate_sensitivities(
-                self._scratch.jacobians, self.winch, self.step, kept=3
+                self._scratch.jacobians, winch, self.step, kept=3
             )
         return np.einsum("ik,ksi->ks", slope, sensitivities)
 
