@@ -363,7 +363,7 @@ def test_a_result_keeps_its_resolved_settings_and_solves_again_from_its_file(sho
 
 def test_a_correction_that_does_not_lower_its_model_is_not_run_on_the_full_model():
     """The share a solve lowered its model's Omega^2 by, from either unit of history: a solve
-    below UNMOVED is not verified (its run could not change the digits reported)."""
+    below UNMOVED is not verified (its run could lower Omega by about half that share)."""
     from types import SimpleNamespace
 
     from cable_ocp.control.optimization import UNMOVED, _model_gain
