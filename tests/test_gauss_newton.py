@@ -24,13 +24,18 @@ def problem(models_dir):
     return WinchProblem.from_scene(scene, HermiteIntervals(30.0, 6), elements=2, step=0.5)
 
 
-@pytest.fixture(scope="module")
-def linearisation(problem):
+def _linearisation(problem, control):
+    """The error's linearisation of ``problem`` (its model, step and grid) under ``control``."""
     times, left = stage_times(problem.grid[:-1], problem.step)
     return ErrorLinearisation(
-        problem.model, problem.step, problem.grid.size - 1, problem.control,
+        problem.model, problem.step, problem.grid.size - 1, control,
         problem.scene.winch.drum_radius, problem.scene.seabed, times, left,
     )  # fmt: skip
+
+
+@pytest.fixture(scope="module")
+def linearisation(problem):
+    return _linearisation(problem, problem.control)
 
 
 def test_sensitivities_of_a_linear_system_follow_its_rk4_step():
@@ -243,15 +248,7 @@ def test_linearisations_of_one_shape_share_their_sweep_arrays_and_not_their_resu
     """Two linearisations of one model and horizon (two controls) share one set of work arrays
     (:mod:`cable_ocp.control.sweep_scratch`); interleaved, each returns what it returns alone,
     bit for bit."""
-    times, left = stage_times(problem.grid[:-1], problem.step)
-
-    def built(control):
-        return ErrorLinearisation(
-            problem.model, problem.step, problem.grid.size - 1, control,
-            problem.scene.winch.drum_radius, problem.scene.seabed, times, left,
-        )  # fmt: skip
-
-    coarse, fine = built(HermiteIntervals(30.0, 3)), built(HermiteIntervals(30.0, 6))
+    coarse, fine = (_linearisation(problem, HermiteIntervals(30.0, n)) for n in (3, 6))
     assert coarse._scratch is fine._scratch
     values = problem.parameter_values()
     rng = np.random.default_rng(3)
@@ -327,16 +324,8 @@ def test_a_sweep_carried_onto_a_finer_control_is_that_controls_own_sweep(problem
     the shared arrays, nothing is carried."""
     from cable_ocp.control.adaptive_grid import on_nodes
 
-    times, left = stage_times(problem.grid[:-1], problem.step)
-
-    def built(control):
-        return ErrorLinearisation(
-            problem.model, problem.step, problem.grid.size - 1, control,
-            problem.scene.winch.drum_radius, problem.scene.seabed, times, left,
-        )  # fmt: skip
-
     coarse_control, fine_control = HermiteIntervals(30.0, 3), HermiteIntervals(30.0, 6)
-    coarse, fine = built(coarse_control), built(fine_control)
+    coarse, fine = (_linearisation(problem, c) for c in (coarse_control, fine_control))
     values = problem.parameter_values()
     profile = 0.2 * np.random.default_rng(5).normal(size=coarse_control.size)
     swept = coarse(values, profile)

@@ -313,18 +313,18 @@ class _Spans:
         first = np.cumsum(inside_counts) - inside_counts  # its span's first inside node
         inside = left[owner] + 1 + np.arange(total) - first[owner]
         columns, change = self._moves(left[owner], right[owner], inside)
-        # Each span's columns: its angles, then its rates; padded to the widest span's.
+        # Each span's angles and rates, padded to the widest span's (a zero move adds nothing).
         widest = int(inside_counts.max())
         place = np.arange(total) - first[owner]
         padded_columns = np.zeros((len(pairs), 2, widest), dtype=int)
         padded_change = np.zeros((len(pairs), 2, widest))
         padded_columns[owner, :, place] = columns.T
         padded_change[owner, :, place] = change.T
-        padded_columns = padded_columns.reshape(len(pairs), 2 * widest)
-        padded_change = padded_change.reshape(len(pairs), 2 * widest)
+        flat_columns = padded_columns.reshape(len(pairs), 2 * widest)
+        flat_change = padded_change.reshape(len(pairs), 2 * widest)
         hessian = self.quadratic.hessian
-        blocks = hessian[padded_columns[:, :, None], padded_columns[:, None, :]]
-        rises = np.einsum("sa,sab,sb->s", padded_change, blocks, padded_change)
+        blocks = hessian[flat_columns[:, :, None], flat_columns[:, None, :]]
+        rises = np.einsum("sa,sab,sb->s", flat_change, blocks, flat_change)
         shifts = None
         if self.bounds is not None:  # every span's shift of the bound rows it enters
             moves = sparse.csc_array(
@@ -334,9 +334,9 @@ class _Spans:
             shifts = sparse.csc_array(self.bounds.sparse_matrix @ moves)
             shifts.sort_indices()
         for s, pair in enumerate(map(tuple, pairs)):
-            width = 2 * int(inside_counts[s])
-            kept = padded_columns[s].reshape(2, widest)[:, : width // 2].ravel()
-            moved = padded_change[s].reshape(2, widest)[:, : width // 2].ravel()
+            inside_span = slice(0, int(inside_counts[s]))  # its angles, then its rates
+            kept = padded_columns[s, :, inside_span].ravel()
+            moved = padded_change[s, :, inside_span].ravel()
             touched = shift = None
             if shifts is not None:
                 cut = slice(shifts.indptr[s], shifts.indptr[s + 1])
@@ -439,13 +439,13 @@ def coarsen(
     if finer is not None:  # the model in the candidates' parameters, from the same profile
         default, model = model, GaussNewton(candidates, GaussNewtonSettings())
         start = on_nodes(problem.control, parameters, times)
-        carried = None
-        if np.array_equal(candidates.grid, problem.grid):  # the default grid's sweep, carried
-            carried = _carried(default, model, linearised.jacobian)
+        same_step = np.array_equal(candidates.grid, problem.grid)
+        # The default grid's sweep carried onto them, or one sweep of their own.
+        carried = _carried(default, model, linearised.jacobian) if same_step else None
         if carried is not None:
             linearised = Linearised(linearised.states, linearised.error, carried, True)
-        else:  # one sensitivity sweep on the candidates (a shorter model step: their values)
-            if not np.array_equal(candidates.grid, problem.grid):
+        else:
+            if not same_step:  # a shorter model step: their own values
                 values = candidates.parameter_values()
             linearised = model.linearisation(values, start)
         quadratic = _optimum(model, linearised, start)

@@ -468,8 +468,7 @@ class GaussNewton(ProblemSolver):
         # real-time iteration ends away from its last linearisation.
         self._last = None if settings.real_time else (deepcopy(values), parameters, current)
         own_bounds = not fixed and lower is bounds.lower and upper is bounds.upper
-        kept = own_bounds and current.finite and not settings.real_time
-        self._final_step = final_step if kept else None
+        self._final_step = final_step if own_bounds and current.finite else None
         omega = float(np.sqrt(max(history[-1], 0.0))) if history else float("nan")
         outcome = SolverOutcome(
             parameters=parameters,

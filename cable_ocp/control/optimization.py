@@ -694,8 +694,10 @@ def _model_gain(outcome: SolverOutcome, unit: str) -> float:
     ``unit``: its history's (:attr:`Solver.history_unit`), ``"m2"`` or ``"m"``.
     """
     history = np.asarray(outcome.history, dtype=float) ** (1 if unit == "m2" else 2)
-    if history.size < 2 or not history[0] > 0:
-        return 0.0 if history.size < 2 else 1.0
+    if history.size < 2:  # no step taken
+        return 0.0
+    if not history[0] > 0:  # nothing to lower: never "unmoved"
+        return 1.0
     return float((history[0] - np.min(history)) / history[0])
 
 
