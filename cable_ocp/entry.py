@@ -8,12 +8,22 @@ SIGTERM is handled as SIGINT, by whatever handles SIGINT at that moment (a resul
 holds it to its end, a solve turns it into an interrupt, elsewhere it is a KeyboardInterrupt): the
 folder lock is released and the scratch folders removed as after a Ctrl-C, and the exit code is
 143 (128 + SIGTERM) where a Ctrl-C gives 130.
+
+``cable-ocp bench`` runs numpy's BLAS on one thread (set here, before numpy loads; a thread count
+the user sets wins): its wall times then do not depend on how many cores the machine's BLAS
+takes, and two benchmarks side by side do not share them (the grid bench's figures in the README
+were measured so).
 """
 
 from __future__ import annotations
 
+import os
 import signal
 import sys
+from collections.abc import MutableMapping
+
+# The BLAS libraries' thread counts (OpenBLAS, as numpy's wheels bundle it; OpenMP; MKL).
+BLAS_THREADS = ("OPENBLAS_NUM_THREADS", "OMP_NUM_THREADS", "MKL_NUM_THREADS")
 
 # Exit codes of an interrupted command, 128 + the signal's number as a shell reports it.
 INTERRUPTED = 128 + signal.SIGINT  # 130
@@ -44,6 +54,7 @@ def main(argv: list[str] | None = None) -> int:
         handler(signal.SIGINT, frame)
 
     previous = signal.signal(signal.SIGTERM, terminate)
+    one_blas_thread_for_bench(sys.argv[1:] if argv is None else argv, os.environ)
     try:
         from cable_ocp.cli import main as command_line
 
@@ -54,3 +65,13 @@ def main(argv: list[str] | None = None) -> int:
     finally:
         signal.signal(signal.SIGTERM, previous)
     return TERMINATED if terminated and code == INTERRUPTED else code
+
+
+def one_blas_thread_for_bench(argv: list[str], environ: MutableMapping[str, str]) -> None:
+    """Set :data:`BLAS_THREADS` to 1 in ``environ`` for ``cable-ocp bench`` (module docstring).
+
+    Only the ones not set already; other commands are left alone (a solve may use both cores).
+    """
+    if argv and argv[0] == "bench":
+        for name in BLAS_THREADS:
+            environ.setdefault(name, "1")

@@ -90,3 +90,16 @@ def test_qp_bench_solves_each_qp_of_a_solve_both_ways_to_the_same_step(capsys):
         assert timing.difference <= QP_MARGIN
     assert "screened against" in capsys.readouterr().out
     assert build_parser().parse_args(["bench", "--only", "qp"]).only == ["qp"]
+
+
+def test_bench_runs_blas_on_one_thread_unless_told_otherwise():
+    """``cable-ocp bench`` sets the BLAS thread counts the user left unset; other commands not."""
+    from cable_ocp.entry import BLAS_THREADS, one_blas_thread_for_bench
+
+    environ = {"OMP_NUM_THREADS": "2"}
+    one_blas_thread_for_bench(["bench", "--only", "grid"], environ)
+    assert environ == {**dict.fromkeys(BLAS_THREADS, "1"), "OMP_NUM_THREADS": "2"}
+    untouched: dict[str, str] = {}
+    one_blas_thread_for_bench(["optimize", "models/paper_hill.toml"], untouched)
+    one_blas_thread_for_bench([], untouched)
+    assert untouched == {}
