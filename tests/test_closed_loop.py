@@ -11,6 +11,7 @@ from cable_ocp.control.closed_loop import MpcSettings, mpc, reference_runs
 from cable_ocp.control.closed_loop.forecast import BlendedHeight, HeightFilter, TopForecast
 from cable_ocp.control.closed_loop.projection import project_state
 from cable_ocp.control.closed_loop.result import MpcResult
+from cable_ocp.control.hermite_nodes import HermiteNodes
 from cable_ocp.control.ipopt import IpoptSettings
 from cable_ocp.control.settings import ModelSettings
 from cable_ocp.drive.bounds import BOUND_TOLERANCE
@@ -50,6 +51,9 @@ def closed_loop(short_hill):
             "sample = 5.02 s",
         ),
         ({"interval": 3.0}, "interval = 3.0 s: must divide horizon = 20.0 s"),
+        ({"first_interval": 0.0}, "first_interval = 0.0 s: must be > 0"),
+        ({"first_interval": 6.0}, "first_interval = 6.0 s: must be at most interval = 5.0 s"),
+        ({"first_interval": 2.5}, "step = 1.0 s: must divide first_interval = 2.5 s"),
         ({"solver": "sqp"}, "solver = 'sqp': must be one of gauss-newton, ipopt"),
         ({"rate_weight": float("nan")}, "rate_weight = nan s.2: must be finite"),
         ({"model": ModelSettings(16, 1.0)}, "model.elements = 16: the controller's model needs"),
@@ -204,6 +208,46 @@ def test_free_start_hermite_rates_are_the_derivatives():
     )  # fmt: skip
     past = [b @ parameters for b in control.basis(np.array([25.0]))]
     assert moved[4] == pytest.approx(past[0][0]) and moved[-1] == pytest.approx(past[1][0])
+
+
+def test_free_start_nodes_are_the_equal_intervals_on_theirs_and_move_on_exactly_at_nodes():
+    """The plan on any nodes (a first interval of one sample): the same layout and angle."""
+    t = np.linspace(0.0, 25.0, 2501)
+    equal = HermiteIntervals(20.0, 4, free_start=True)
+    on_nodes = HermiteNodes(np.arange(5) * 5.0, free_start=True)
+    for a, b in zip(equal.basis(t), on_nodes.basis(t), strict=True):
+        np.testing.assert_allclose(b, a, atol=1e-12)
+    assert on_nodes.node_indices(0) == equal.node_indices(0) == (0, 5)
+    blocked = HermiteNodes(np.array([0.0, 1.0, 5.0, 10.0, 15.0, 20.0]), free_start=True)
+    plan = np.random.default_rng(3).normal(size=blocked.size)
+    assert blocked.size == 12 and blocked.node_indices(1) == (1, 7)
+    for a, b in zip(blocked.evaluate(plan, t), blocked.basis(t), strict=True):
+        np.testing.assert_allclose(a, b @ plan, atol=1e-12)
+    # Moved on by one sample: node k takes the angle and rate at t_k + 1 s, exactly.
+    moved = blocked.resampled(plan, 1.0)
+    at = blocked.breakpoints
+    np.testing.assert_allclose(moved[:6], blocked.evaluate(plan, at + 1.0)[0], atol=1e-12)
+    np.testing.assert_allclose(moved[6:], blocked.evaluate(plan, at + 1.0)[1], atol=1e-12)
+    np.testing.assert_allclose(blocked.evaluate(moved, at)[0], moved[:6], atol=1e-12)
+
+
+def test_a_first_plan_interval_of_one_sample_halves_omega_where_the_winch_can_follow(models_dir):
+    """Move blocking on the README's heave case, against the equal intervals on the same plant.
+
+    Measured 2026-12-06: Omega 0.0118 m against 0.0234 m (0.50), every solve converging both
+    ways; the record keeps the first interval, and a record without one (written before it was
+    a setting) planned on equal intervals.
+    """
+    scene = load_scene(models_dir / "paper_hill.toml", HEAVE)
+    equal = mpc(scene, quiet=True)
+    blocked = mpc(scene, quiet=True, first_interval=1.0)
+    assert equal.success and blocked.success, (equal.status, blocked.status)
+    assert blocked.omega < 0.6 * equal.omega
+    assert equal.settings["first_interval"] == equal.settings["interval"] == 5.0
+    assert blocked.settings["first_interval"] == 1.0
+    assert MpcSettings.from_record(blocked.settings).first_interval == 1.0
+    earlier = {k: v for k, v in equal.settings.items() if k != "first_interval"}
+    assert MpcSettings.from_record(earlier).first_interval == 5.0
 
 
 def test_settings_are_one_dataclass_for_the_api_and_the_command_line(short_hill):

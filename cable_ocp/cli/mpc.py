@@ -41,6 +41,9 @@ SETTINGS_OPTIONS = {
                    "fraction nearest 1 s that the plant's steps divide)"),
     "interval": dict(type=positive, help="interval of the plan [s] (default: the multiple of "
                      "--sample nearest 5 s)"),
+    "first_interval": dict(type=positive, help="the plan's first interval [s], at most "
+                           "--interval (move blocking: one sample roughly halves Omega where "
+                           "the winch can follow; default: --interval)"),
     "heave_filter": dict(type=positive, help="time constant of the heave low-pass [s]"),
     "heave_margin": dict(type=fraction, help="room kept for the heave feedback, 0..1"),
     "limiter_band": dict(type=positive, help="width of the plant's soft limiter at each end of "

@@ -1,12 +1,15 @@
-"""A piecewise cubic Hermite winch angle on nodes at any times: the adaptive grid's control.
+"""A piecewise cubic Hermite winch angle on nodes at any times (the adaptive grid's control).
 
 :class:`HermiteNodes` is :class:`~cable_ocp.drive.controls.HermiteIntervals` on nodes
 ``0 = t_0 < t_1 < ... < t_K = T`` that need not be equally spaced: the angle and its rate at
-``t_1 .. t_K`` are the parameters, ``phi(0) = phi'(0) = 0`` held fixed, the angle C1 with its
+``t_1 .. t_K`` are the parameters, ``phi(0) = phi'(0) = 0`` held fixed (or, with ``free_start``,
+a receding horizon's plan, node 0's too: a closed loop's plan with a shorter first interval,
+``MpcSettings.first_interval``), the angle C1 with its
 acceleration jumping at the nodes (so each node must fall on an RK4 step end of every model that
 runs it: :mod:`cable_ocp.control.adaptive_grid` takes them from the uniform default grid). The
 same interface as the other controls (``size``, ``breakpoints``, ``basis``, ``evaluate``,
-``angle_function``), with ``left`` as theirs; beyond ``T`` the angle comes to rest C2 over one
+``angle_function``, and a receding horizon's ``node_indices`` and ``resampled``), with ``left``
+as theirs; beyond ``T`` the angle comes to rest C2 over one
 last interval (:func:`~cable_ocp.drive.winch.coming_to_rest`). A uniform grid keeps
 ``HermiteIntervals``, so that today's optima stay bit for bit.
 """
@@ -17,7 +20,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from cable_ocp.drive.controls import hermite_rows, hermite_values
+from cable_ocp.drive.controls import HermiteParameters, hermite_rows, hermite_values
 from cable_ocp.drive.winch import coming_to_rest
 
 # Share of the shortest interval within which a time counts as on a node.
@@ -48,13 +51,15 @@ def check_nodes(nodes, duration: float, name: str = "GridSettings.nodes") -> np.
 
 
 @dataclass(frozen=True, eq=False)
-class HermiteNodes:
+class HermiteNodes(HermiteParameters):
     """Piecewise cubic Hermite angle on the nodes ``times`` (s, from 0 to the duration).
 
-    Parameters are ``[phi_1..phi_K, phi'_1..phi'_K]`` at ``t_1 .. t_K`` (module docstring).
+    Parameters are ``[phi_1..phi_K, phi'_1..phi'_K]`` at ``t_1 .. t_K``, with ``free_start``
+    ``[phi_0..phi_K, phi'_0..phi'_K]`` (module docstring).
     """
 
     times: np.ndarray
+    free_start: bool = False
 
     def __post_init__(self):
         times = np.asarray(self.times, dtype=float)
@@ -69,11 +74,6 @@ class HermiteNodes:
     def intervals(self) -> int:
         """Number of intervals ``K``."""
         return self.times.size - 1
-
-    @property
-    def size(self) -> int:
-        """Number of parameters."""
-        return 2 * self.intervals
 
     @property
     def breakpoints(self) -> np.ndarray:
@@ -93,7 +93,8 @@ class HermiteNodes:
         there (node 0 to the first); beyond the duration, the extension that comes to rest.
         """
         t_given, beyond, k, s = self._located(t, left)
-        out = hermite_rows(k, s, self.widths[k], 1, self.intervals, self.size)  # node 0 at rest
+        rates = self.intervals + self.free_start
+        out = hermite_rows(k, s, self.widths[k], self.first_node, rates, self.size)
         if np.any(beyond):
             out[:, beyond] = self._extension(out[:, beyond], t_given[beyond] - self.duration)
         return out[0], out[1], out[2]
@@ -107,10 +108,7 @@ class HermiteNodes:
         run's stage times).
         """
         t_given, beyond, k, s = self._located(t, left)
-        parameters = np.asarray(parameters, dtype=float)
-        angles = np.r_[0.0, parameters[: self.intervals]]  # node 0 at rest
-        rates = np.r_[0.0, parameters[self.intervals :]]
-        out = hermite_values(k, s, self.widths[k], angles, rates)
+        out = hermite_values(k, s, self.widths[k], *self.node_values(parameters))
         if beyond.any():
             tail = self._extension(out[:, beyond, None], t_given[beyond] - self.duration)
             out[:, beyond] = tail[..., 0]

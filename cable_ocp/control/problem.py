@@ -127,25 +127,31 @@ class WinchProblem:
         return scene, feedforward
 
     @classmethod
-    def receding(
-        cls, scene, horizon: float, interval: float, elements: int, step: float
-    ) -> WinchProblem:
+    def receding(cls, scene, nodes: np.ndarray, elements: int, step: float) -> WinchProblem:
         """The problem over one horizon of a receding-horizon controller (a closed loop).
 
-        The control is a free-start Hermite angle on intervals of ``interval`` seconds (its node
-        0 is where the winch is when the solve starts); the bounds hold between the samples as in
-        the open loop. The defaults of :meth:`parameter_values` are the scene's first horizon; a
+        The control is a free-start Hermite angle on the plan's ``nodes`` (its node 0 is where
+        the winch is when the solve starts): :class:`HermiteIntervals` where they are equally
+        spaced, :class:`HermiteNodes` otherwise. The bounds hold between the samples as in the
+        open loop. The defaults of :meth:`parameter_values` are the scene's first horizon; a
         controller sets them from its estimate and forecasts at every sample.
 
         Parameters
         ----------
         scene : Scene
-        horizon, interval, step : float, s
-            ``interval`` divides ``horizon`` and ``step`` divides ``interval``.
+        nodes : array, s
+            The plan's node times, 0 to the horizon (:attr:`MpcSettings.plan_nodes`), each a
+            whole multiple of ``step``.
         elements : int
             Elements of the controller's model.
+        step : float, s
         """
-        control = HermiteIntervals(horizon, round(horizon / interval), free_start=True)
+        nodes = np.asarray(nodes, dtype=float)
+        horizon, intervals = float(nodes[-1]), nodes.size - 1
+        if np.allclose(nodes, np.linspace(0.0, horizon, intervals + 1), rtol=0, atol=1e-9):
+            control = HermiteIntervals(horizon, intervals, free_start=True)
+        else:
+            control = HermiteNodes(nodes, free_start=True)
         return cls._over(scene, control, elements, step, horizon)
 
     @classmethod

@@ -96,6 +96,53 @@ def hermite_rows(
     return out
 
 
+class HermiteParameters:
+    """The parameter layout of a piecewise cubic Hermite angle on ``intervals`` intervals.
+
+    ``[phi_0..phi_N, phi'_0..phi'_N]`` at the nodes, node 0 left out (held at rest) unless
+    ``free_start``; shared by :class:`HermiteIntervals` and
+    :class:`cable_ocp.control.hermite_nodes.HermiteNodes`, which provide ``intervals``,
+    ``free_start``, ``breakpoints`` and ``basis``.
+    """
+
+    @property
+    def size(self) -> int:
+        """Number of parameters."""
+        return 2 * (self.intervals + self.free_start)
+
+    @property
+    def first_node(self) -> int:
+        """The first node with parameters (1 where node 0 is held at rest)."""
+        return 0 if self.free_start else 1
+
+    def node_indices(self, node: int) -> tuple[int, int]:
+        """Indices of the angle and the rate of ``node`` (0 .. intervals) in the parameters."""
+        first = self.first_node
+        if node < first:
+            raise ValueError(f"node {node} is held at rest: it has no parameters")
+        return node - first, self.intervals + self.free_start + node - first
+
+    def node_values(self, parameters: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """Angles and rates (rad, rad/s) at every node, node 0 included."""
+        parameters = np.asarray(parameters, dtype=float)
+        nodes, first = self.intervals + 1, self.first_node
+        angles, rates = np.zeros(nodes), np.zeros(nodes)
+        angles[first:], rates[first:] = parameters[: nodes - first], parameters[nodes - first :]
+        return angles, rates
+
+    def resampled(self, parameters: np.ndarray, offset: float) -> np.ndarray:
+        """Free-start parameters of the same angle moved on by ``offset`` (s): a warm start.
+
+        The new nodes take the angle and rate at ``offset + t_k``: exact where the nodes fall on
+        old ones (an offset of whole intervals of a uniform grid), a C1 interpolation between
+        them otherwise; beyond the old end it follows the extension that comes to rest.
+        """
+        if not self.free_start:
+            raise ValueError("only a free-start control (a receding horizon) can be resampled")
+        b0, b1, _ = self.basis(offset + self.breakpoints)
+        return np.concatenate([b0 @ parameters, b1 @ parameters])
+
+
 @dataclass(frozen=True)
 class KnotSpline:
     """The paper's cubic spline through ``knots`` values (rad) on ``[0, duration]`` (s)."""
@@ -132,7 +179,7 @@ class KnotSpline:
 
 
 @dataclass(frozen=True)
-class HermiteIntervals:
+class HermiteIntervals(HermiteParameters):
     """Piecewise cubic Hermite angle on ``intervals`` equal intervals of ``[0, duration]``.
 
     Parameters are ``[phi_1..phi_N, phi'_1..phi'_N]`` at the nodes ``t_k = k T / N``, node 0
@@ -149,21 +196,9 @@ class HermiteIntervals:
     free_start: bool = False
 
     @property
-    def size(self) -> int:
-        """Number of parameters."""
-        return 2 * (self.intervals + self.free_start)
-
-    @property
     def breakpoints(self) -> np.ndarray:
         """Times (s) between which the angle is one cubic polynomial: the nodes."""
         return np.linspace(0.0, self.duration, self.intervals + 1)
-
-    def node_indices(self, node: int) -> tuple[int, int]:
-        """Indices of the angle and the rate of ``node`` (0 .. intervals) in the parameters."""
-        first = 0 if self.free_start else 1
-        if node < first:
-            raise ValueError(f"node {node} is held at rest: it has no parameters")
-        return node - first, self.intervals + self.free_start + node - first
 
     def basis(self, t: np.ndarray, left=None) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """``B0, B1, B2`` at the times ``t``: arrays (len(t), size).
@@ -173,9 +208,9 @@ class HermiteIntervals:
         ends there (node 0 to the first). Beyond ``duration``: the C2 extension (class docstring).
         """
         t_given, beyond, k, s = self._located(t, left)
-        first = 0 if self.free_start else 1  # node 0 is fixed at phi = phi' = 0 unless free
         rates = self.intervals + self.free_start
-        out = hermite_rows(k, s, self.duration / self.intervals, first, rates, self.size)
+        width = self.duration / self.intervals
+        out = hermite_rows(k, s, width, self.first_node, rates, self.size)
         if np.any(beyond):
             out[:, beyond] = self._extension(out[:, beyond], (t_given[beyond] - self.duration))
         return out[0], out[1], out[2]
@@ -189,14 +224,7 @@ class HermiteIntervals:
         at every sample's stage times, where the basis's (3, len(t), size) rows cost 3x more.
         """
         t_given, beyond, k, s = self._located(t, left)
-        width = self.duration / self.intervals
-        first = 0 if self.free_start else 1
-        nodes = self.intervals + 1
-        parameters = np.asarray(parameters, dtype=float)
-        angles = np.zeros(nodes)
-        rates = np.zeros(nodes)
-        angles[first:], rates[first:] = parameters[: nodes - first], parameters[nodes - first :]
-        out = hermite_values(k, s, width, angles, rates)
+        out = hermite_values(k, s, self.duration / self.intervals, *self.node_values(parameters))
         if beyond.any():
             tail = self._extension(out[:, beyond, None], (t_given[beyond] - self.duration))
             out[:, beyond] = tail[..., 0]
@@ -223,18 +251,6 @@ class HermiteIntervals:
     def _extension(self, end: np.ndarray, tau: np.ndarray) -> np.ndarray:
         """Rows (3, k, size) of the angle ``tau`` (s) past the end, from its rows there."""
         return np.stack(coming_to_rest(*end, tau[:, None], self.duration / self.intervals))
-
-    def resampled(self, parameters: np.ndarray, offset: float) -> np.ndarray:
-        """Free-start parameters of the same angle moved on by ``offset`` (s): a warm start.
-
-        The new nodes take the angle and rate at ``offset + t_k``: exact where the nodes fall on
-        old ones (an offset of whole intervals), a C1 interpolation between them otherwise;
-        beyond the old end it follows the extension that comes to rest.
-        """
-        if not self.free_start:
-            raise ValueError("only a free-start control (a receding horizon) can be resampled")
-        b0, b1, _ = self.basis(offset + self.breakpoints)
-        return np.concatenate([b0 @ parameters, b1 @ parameters])
 
     def angle_function(self, parameters: np.ndarray):
         """The winch angle history of a parameter vector (it takes ``left`` as :meth:`basis`)."""

@@ -1,12 +1,12 @@
 """The controller: the receding-horizon winch problem, transcribed once and solved every sample.
 
-The problem over one horizon (:meth:`cable_ocp.control.problem.WinchProblem.receding`) is the
-open loop's, on the controller's reduced model: a free-start Hermite angle on intervals of
-``MpcSettings.interval``, the winch bounds held between the samples
-(:mod:`cable_ocp.drive.bounds`), the same stage grid and clearance error. Its named parameters
-(:mod:`cable_ocp.control.parameters`) take the estimate at each sample: the reduced state, the
-forecast top motion, the end force over the horizon, the end offset (measured end minus the
-reduced end, :mod:`.projection`), the clearance reference, and on a landing its reference over
+The problem over one horizon (:meth:`cable_ocp.control.problem.WinchProblem.receding`) is the open
+loop's, on the controller's reduced model: a free-start Hermite angle on intervals of
+``MpcSettings.interval`` (its first ``MpcSettings.first_interval`` long), the winch bounds held
+between the samples (:mod:`cable_ocp.drive.bounds`), the same stage grid and clearance error. Its
+named parameters (:mod:`cable_ocp.control.parameters`) take the estimate at each sample: the reduced
+state, the forecast top motion, the end force over the horizon, the end offset (measured end minus
+the reduced end, :mod:`.projection`), the clearance reference, and on a landing its reference over
 the horizon (in the bias, :mod:`cable_ocp.simulation.landing_reference`). The solver is the open
 loop's transcription: one Gauss-Newton step from the plan in force moved on to the sample (the
 real-time iteration), or IPOPT on the multiple-shooting NLP (the earlier path, kept as the
@@ -106,7 +106,7 @@ class RecedingHorizon:
     def __init__(self, scene, settings: MpcSettings):
         self.scene, self.settings = scene, settings
         self.problem = problem = WinchProblem.receding(
-            scene, settings.horizon, settings.interval, settings.elements, settings.step
+            scene, settings.plan_nodes, settings.elements, settings.step
         )
         self.model, self.control = problem.model, problem.control
         self.entry = entry = SOLVERS[settings.solver]
