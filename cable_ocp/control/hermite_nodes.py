@@ -2,16 +2,15 @@
 
 :class:`HermiteNodes` is :class:`~cable_ocp.drive.controls.HermiteIntervals` on nodes
 ``0 = t_0 < t_1 < ... < t_K = T`` that need not be equally spaced: the angle and its rate at
-``t_1 .. t_K`` are the parameters, ``phi(0) = phi'(0) = 0`` held fixed (or, with ``free_start``,
-a receding horizon's plan, node 0's too: a closed loop's plan with a shorter first interval,
-``MpcSettings.first_interval``), the angle C1 with its
-acceleration jumping at the nodes (so each node must fall on an RK4 step end of every model that
-runs it: :mod:`cable_ocp.control.adaptive_grid` takes them from the uniform default grid). The
-same interface as the other controls (``size``, ``breakpoints``, ``basis``, ``evaluate``,
-``angle_function``, and a receding horizon's ``node_indices`` and ``resampled``), with ``left``
-as theirs; beyond ``T`` the angle comes to rest C2 over one
-last interval (:func:`~cable_ocp.drive.winch.coming_to_rest`). A uniform grid keeps
-``HermiteIntervals``, so that today's optima stay bit for bit.
+``t_1 .. t_K`` are the parameters, ``phi(0) = phi'(0) = 0`` held fixed (or, with ``free_start``, a receding horizon's
+plan, node 0's too: a closed loop's plan with a shorter first interval,
+``MpcSettings.first_interval``), the angle C1 with its acceleration jumping at the nodes (so each
+node must fall on an RK4 step end of every model that runs it:
+:mod:`cable_ocp.control.adaptive_grid` takes them from the uniform default grid). The same interface
+as the other controls (``size``, ``breakpoints``, ``basis``, ``evaluate``, ``angle_function``, and a
+receding horizon's ``node_indices`` and ``resampled``), with ``left`` as theirs; beyond ``T`` the
+angle comes to rest C2 over one last interval (:func:`~cable_ocp.drive.winch.coming_to_rest`). A
+uniform grid keeps ``HermiteIntervals``, so that today's optima stay bit for bit.
 """
 
 from __future__ import annotations
