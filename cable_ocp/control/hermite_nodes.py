@@ -2,8 +2,8 @@
 
 :class:`HermiteNodes` is :class:`~cable_ocp.drive.controls.HermiteIntervals` on nodes
 ``0 = t_0 < t_1 < ... < t_K = T`` that need not be equally spaced: the angle and its rate at
-``t_1 .. t_K`` are the parameters, ``phi(0) = phi'(0) = 0`` held fixed (or, with ``free_start``, a receding horizon's
-plan, node 0's too: a closed loop's plan with a shorter first interval,
+``t_1 .. t_K`` are the parameters, ``phi(0) = phi'(0) = 0`` held fixed (or, with ``free_start``, a
+receding horizon's plan, node 0's too: a closed loop's plan with a shorter first interval,
 ``MpcSettings.first_interval``), the angle C1 with its acceleration jumping at the nodes (so each
 node must fall on an RK4 step end of every model that runs it:
 :mod:`cable_ocp.control.adaptive_grid` takes them from the uniform default grid). The same interface
