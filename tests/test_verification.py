@@ -119,3 +119,25 @@ def test_a_profile_verified_again_at_the_same_step_gets_its_verdict_without_a_ru
     moved = parameters.copy()
     moved[3] = np.nextafter(moved[3], 1.0)
     assert verify(moved) is not fine and len(runs) == 3
+
+
+def test_a_profile_under_which_the_rope_pushes_fails_with_the_remedy(models_dir):
+    """The hanging rope with a 1 t load paid out 10 m in 3 s (tests/test_cli_physics.py): the
+    verification fails, says where the rope pushed and what the winch's limits can change."""
+    from cable_ocp.drive.controls import KnotSpline
+
+    scene = load_scene(
+        models_dir / "hanging.toml",
+        {
+            "numerics.duration": 6.0, "numerics.step": 0.01,
+            "numerics.constraint_tolerance": 1e-4, "winch.top_length_max": 60.0,
+            "winch.angle_max": 100.0,
+            "end.payload": {"mass": 1000.0, "volume": 0.1, "drag_area": 1.0},
+        },
+    )  # fmt: skip
+    tau = np.clip(np.arange(1, 15) * 6.0 / 14 / 3.0, 0.0, 1.0)
+    knots = 10.0 / 0.5 * tau**3 * (10 - 15 * tau + 6 * tau**2)  # 10 m on the 0.5 m drum
+    checked = verify_profile(scene, KnotSpline(6.0, 14), knots)
+    assert checked.trajectory is None
+    assert "the verified run is not physical: rope pushes" in checked.reason
+    assert checked.reason.endswith(verification.PUSHING_REMEDY)
