@@ -19,7 +19,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from cable_ocp.drive.controls import HermiteParameters, hermite_rows, hermite_values
+from cable_ocp.drive.controls import HermiteParameters, hermite_values
 from cable_ocp.drive.winch import coming_to_rest
 
 # Share of the shortest interval within which a time counts as on a node.
@@ -92,8 +92,7 @@ class HermiteNodes(HermiteParameters):
         there (node 0 to the first); beyond the duration, the extension that comes to rest.
         """
         t_given, beyond, k, s = self._located(t, left)
-        rates = self.intervals + self.free_start
-        out = hermite_rows(k, s, self.widths[k], self.first_node, rates, self.size)
+        out = self.rows(k, s, self.widths[k])
         if np.any(beyond):
             out[:, beyond] = self._extension(out[:, beyond], t_given[beyond] - self.duration)
         return out[0], out[1], out[2]

@@ -426,11 +426,9 @@ class ErrorLinearisation:
             if self.at_ends:
                 sensitivities = self._step_end_sensitivities()
             else:
-                sensitivities = propagate_sensitivities(
-                    scratch.jacobians, self.winch, self.step, kept=3
-                )
+                sensitivities = self._swept_sensitivities(self.winch)
         error, slope = self._error_and_slope(values, states)
-        jacobian = np.einsum("ik,ksi->ks", slope, sensitivities)
+        jacobian = _error_jacobian(slope, sensitivities)
         if not self.at_ends:
             self._swept = (scratch.sweeps, slope, jacobian)
         return Linearised(states, error, jacobian, True)
@@ -466,10 +464,12 @@ class ErrorLinearisation:
             if self._scratch.sweeps != count:
                 return None
             winch = self.winch if columns is None else self.winch[:, :, columns]
-            sensitivities = propagate_sensitivities(
-                self._scratch.jacobians, winch, self.step, kept=3
-            )
-        return np.einsum("ik,ksi->ks", slope, sensitivities)
+            sensitivities = self._swept_sensitivities(winch)
+        return _error_jacobian(slope, sensitivities)
+
+    def _swept_sensitivities(self, winch: np.ndarray) -> np.ndarray:
+        """The end's ``S_k`` (K + 1, size, 3) of the sweep in the scratch, through ``winch``."""
+        return propagate_sensitivities(self._scratch.jacobians, winch, self.step, kept=3)
 
     def _error_and_slope(
         self, values: ProblemParameters, states: np.ndarray
@@ -483,3 +483,8 @@ class ErrorLinearisation:
         arguments = [states[:, :3], offsets, np.full(count, values.reference)]
         evaluate_into(self.slope, arguments, [error, slope])
         return error + values.bias, np.ascontiguousarray(slope.T)
+
+
+def _error_jacobian(slope: np.ndarray, sensitivities: np.ndarray) -> np.ndarray:
+    """``de/dp`` (K + 1, size): the seabed slope (K + 1, 3) times the end's sensitivities."""
+    return np.einsum("ik,ksi->ks", slope, sensitivities)

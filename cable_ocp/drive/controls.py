@@ -106,29 +106,41 @@ class HermiteParameters:
     """
 
     @property
-    def size(self) -> int:
-        """Number of parameters."""
-        return 2 * (self.intervals + self.free_start)
-
-    @property
     def first_node(self) -> int:
         """The first node with parameters (1 where node 0 is held at rest)."""
         return 0 if self.free_start else 1
+
+    @property
+    def first_rate(self) -> int:
+        """Index of the first node's rate among the parameters (the nodes' angles come first)."""
+        return self.intervals + self.free_start
+
+    @property
+    def size(self) -> int:
+        """Number of parameters."""
+        return 2 * self.first_rate
 
     def node_indices(self, node: int) -> tuple[int, int]:
         """Indices of the angle and the rate of ``node`` (0 .. intervals) in the parameters."""
         first = self.first_node
         if node < first:
             raise ValueError(f"node {node} is held at rest: it has no parameters")
-        return node - first, self.intervals + self.free_start + node - first
+        return node - first, self.first_rate + node - first
 
     def node_values(self, parameters: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """Angles and rates (rad, rad/s) at every node, node 0 included."""
         parameters = np.asarray(parameters, dtype=float)
-        nodes, first = self.intervals + 1, self.first_node
-        angles, rates = np.zeros(nodes), np.zeros(nodes)
-        angles[first:], rates[first:] = parameters[: nodes - first], parameters[nodes - first :]
+        first, split = self.first_node, self.first_rate
+        angles, rates = np.zeros(self.intervals + 1), np.zeros(self.intervals + 1)
+        angles[first:], rates[first:] = parameters[:split], parameters[split:]
         return angles, rates
+
+    def rows(self, k: np.ndarray, s: np.ndarray, width) -> np.ndarray:
+        """Basis rows (3, len(s), size) of times in intervals ``k`` at places ``s`` (0 to 1).
+
+        ``width`` (s): the intervals' width, one or each time's (:func:`hermite_rows`).
+        """
+        return hermite_rows(k, s, width, self.first_node, self.first_rate, self.size)
 
     def resampled(self, parameters: np.ndarray, offset: float) -> np.ndarray:
         """Free-start parameters of the same angle moved on by ``offset`` (s): a warm start.
@@ -208,9 +220,7 @@ class HermiteIntervals(HermiteParameters):
         ends there (node 0 to the first). Beyond ``duration``: the C2 extension (class docstring).
         """
         t_given, beyond, k, s = self._located(t, left)
-        rates = self.intervals + self.free_start
-        width = self.duration / self.intervals
-        out = hermite_rows(k, s, width, self.first_node, rates, self.size)
+        out = self.rows(k, s, self.duration / self.intervals)
         if np.any(beyond):
             out[:, beyond] = self._extension(out[:, beyond], (t_given[beyond] - self.duration))
         return out[0], out[1], out[2]
