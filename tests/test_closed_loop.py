@@ -19,6 +19,7 @@ from cable_ocp.drive.controls import HermiteIntervals
 from cable_ocp.drive.drive import Drive
 from cable_ocp.model.cable import CableModel
 from cable_ocp.model.layout import INPUTS
+from cable_ocp.plots.drum import drum_rates, drum_use, on_limit_share
 from cable_ocp.result_files.dataset import fields_equal
 from cable_ocp.scene.schema import load_scene
 from cable_ocp.simulation.statics import equilibrium
@@ -376,7 +377,7 @@ def test_mpc_command_writes_results_and_figures(models_dir, tmp_path, capsys):
     )  # fmt: skip
     assert args.run(args) == 0
     written = sorted(p.name for p in out.iterdir() if not p.name.startswith("."))
-    assert written == ["clearance.png", "mpc.nc", "solve_times.png", "summary.json",
+    assert written == ["clearance.png", "drum.png", "mpc.nc", "solve_times.png", "summary.json",
                        "winch_angle.png"]  # fmt: skip
     printed = capsys.readouterr().out
     assert '"omega"' in printed and '"reference_omegas"' in printed
@@ -499,7 +500,9 @@ def test_the_estimator_controller_and_command_guard_their_arguments(short_hill):
     assert parts.plant.make_step(angle, parts.settings.sample).now == parts.settings.sample
 
 
-def test_the_plants_drum_saturates_at_the_winchs_limits_and_says_when(short_hill, closed_loop):
+def test_the_plants_drum_saturates_at_the_winchs_limits_and_says_when(
+    short_hill, closed_loop, tmp_path
+):
     """Under a 1 m heave of 8 s the heave feedback asks the line for 0.79 m/s and 0.64 m/s^2;
     a drum of 0.6 m/s and 0.4 m/s^2 (0.5 m radius) never exceeds them in the plant, and the
     result says when and how long it saturated. Unlimited, the run is the drum-free one.
@@ -539,6 +542,20 @@ def test_the_plants_drum_saturates_at_the_winchs_limits_and_says_when(short_hill
     # The plant's signed top tension: the rope pulled throughout.
     assert 0 < summary["top_tension_min"] < summary["top_tension_max"]
     assert summary["top_tension_min"] == result.trajectory.top_tension.min()
+    # Its figure: the drum's rate and acceleration (the line's over r_D) against the limits.
+    drum_rate, drum_acceleration = drum_rates(result.trajectory, radius)
+    np.testing.assert_allclose(drum_rate * radius, rate, rtol=1e-14, atol=0)
+    np.testing.assert_allclose(drum_acceleration * radius, acceleration, rtol=1e-14, atol=0)
+    # At its limits: the acceleration 60 % of the run, the rate 12 % (measured).
+    assert on_limit_share(drum_acceleration, 0.8) > 0.3 and on_limit_share(drum_rate, None) == 0
+    assert 0 < on_limit_share(drum_rate, 0.6 / radius) < 0.5
+    figure = drum_use([result, closed_loop], ["0.6 m/s", "unlimited"], tmp_path / "drum.png")
+    assert (tmp_path / "drum.png").stat().st_size > 1000
+    legend = [text.get_text() for text in figure.axes[1].get_legend().get_texts()]
+    assert "winch.acceleration_max = 0.800" in legend
+    assert any(t.startswith("0.6 m/s: at or past the limit") for t in legend)
+    shown = [" ".join(text.get_text().split()) for text in figure.axes[0].get_legend().get_texts()]
+    assert f"0.6 m/s: {result.saturation}" in shown
 
 
 def test_a_new_plan_starts_at_a_lagging_drums_angle(short_hill):

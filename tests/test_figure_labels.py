@@ -20,6 +20,7 @@ import cable_ocp as co  # noqa: E402
 from cable_ocp import cli, plots  # noqa: E402
 from cable_ocp.control.closed_loop import SolveLog  # noqa: E402
 from cable_ocp.plots import closed_loop  # noqa: E402
+from cable_ocp.plots.drum import drum_use  # noqa: E402
 from cable_ocp.simulation import progress  # noqa: E402
 from cable_ocp.simulation.trajectory_dataset import state_names  # noqa: E402
 
@@ -128,6 +129,28 @@ def test_the_catenary_legend_covers_neither_the_curve_nor_a_tick_label():
     assert "scene catenary" in ax.get_title() and "n = 15" in ax.get_title()
     assert_units(ax)
     plt.close(fig)
+
+
+def test_the_drum_figure_names_scene_runs_units_and_limits(runs, models_dir):
+    locked, _ = runs
+    winch = {**locked.scene_record["winch"], "rate_max": 2.0}
+    limited = dataclasses.replace(locked, scene_record={**locked.scene_record, "winch": winch})
+    fig = drum_use(limited, ["locked winch"])
+    assert "paper_hill" in fig.axes[0].get_title() and "locked winch" in fig.axes[0].get_title()
+    assert UNIT.search(fig.axes[0].get_ylabel())
+    assert_units(fig.axes[1])  # the time axis is the lower panel's
+    texts = legend_texts(fig.axes[0])
+    assert "winch.rate_max = 2.00" in texts
+    assert "locked winch: at or past the limit 0% of the time" in texts
+    # No acceleration limit: none drawn, and the legend says so.
+    assert legend_texts(fig.axes[1]) == ["locked winch", "winch.acceleration_max: none set"]
+    plt.close(fig)
+    # A closed loop's file of format 2 kept only the end and the top: refused, saying so.
+    earlier = co.Trajectory.from_positions(locked.time, locked.end, locked.top,
+                                           locked.winch_angle, locked.clearance_error,
+                                           locked.omega, locked.scene_record)  # fmt: skip
+    with pytest.raises(ValueError, match="holds no winch inputs at its steps"):
+        drum_use(earlier)
 
 
 def _run(t: np.ndarray, error: np.ndarray, omega: float) -> co.Trajectory:

@@ -129,6 +129,7 @@ def run_mpc_command(args: argparse.Namespace) -> int:
     from cable_ocp.control.closed_loop.loop import mpc
     from cable_ocp.control.closed_loop.references import reference_runs
     from cable_ocp.plots import closed_loop
+    from cable_ocp.plots.drum import drum_use
     from cable_ocp.scene.output import json_text
 
     scene = scene_from(args)
@@ -156,6 +157,7 @@ def run_mpc_command(args: argparse.Namespace) -> int:
                         seabed.minimum_clearance, zoom=True)  # fmt: skip
         closed_loop.solve_times(result, folder / "solve_times.png", scene.name)
         plots.winch_angle(result, bounds=result.angle_range, path=folder / "winch_angle.png")
+        drum_use(result, path=folder / "drum.png")
         (folder / "summary.json").write_text(json_text(figures))
     summary = {k: v for k, v in figures.items() if k != "failures"}
     print(json_text(summary))

@@ -61,6 +61,7 @@ def run_optimize_command(args: argparse.Namespace) -> int:
     from cable_ocp import plots
     from cable_ocp.cli.exports import winch_csv
     from cable_ocp.control.optimization import optimize
+    from cable_ocp.plots.drum import drum_use
     from cable_ocp.scene.output import json_text
 
     scene = scene_from(args)
@@ -85,6 +86,8 @@ def run_optimize_command(args: argparse.Namespace) -> int:
             plots.clearance(pair, seabed.clearance, labels, folder / "clearance.png",
                             seabed.minimum_clearance)  # fmt: skip
             plots.winch_angle(pair, labels, bounds, path=folder / "winch_angle.png")
+            if result.trajectory is not None:  # the optimum's drum (the locked one stands still)
+                drum_use(result, path=folder / "drum.png")
             plots.cable_shapes(pair[-1], seabed=seabed, path=folder / "cable_shapes.png")
             if args.animate:
                 plots.animate(pair[-1], folder / "animation.gif", seabed.clearance)
