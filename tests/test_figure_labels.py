@@ -151,6 +151,8 @@ def test_the_drum_figure_names_scene_runs_units_and_limits(runs, models_dir):
                                            locked.omega, locked.scene_record)  # fmt: skip
     with pytest.raises(ValueError, match="holds no winch inputs at its steps"):
         drum_use(earlier)
+    with pytest.raises(TypeError, match="not str"):
+        drum_use([locked, "run.nc"])
 
 
 def _run(t: np.ndarray, error: np.ndarray, omega: float) -> co.Trajectory:

@@ -49,9 +49,18 @@ def drum_use(
     ------
     ValueError
         A run holds no winch inputs (a result of an earlier format kept only its end and top).
+    TypeError
+        A run is none of those, or a result holds no run (a failed optimisation's).
     """
     runs = [runs] if isinstance(runs, Trajectory) or hasattr(runs, "trajectory") else list(runs)
-    trajectories = [run if isinstance(run, Trajectory) else run.trajectory for run in runs]
+    trajectories = [run if isinstance(run, Trajectory) else getattr(run, "trajectory", None)
+                    for run in runs]  # fmt: skip
+    for run, trajectory in zip(runs, trajectories, strict=True):
+        if not isinstance(trajectory, Trajectory):
+            raise TypeError(
+                f"drum_use draws a Trajectory, OcpResult or MpcResult with a run, not "
+                f"{type(run).__name__} (a line paid out by elements: plots.line_run)"
+            )
     if labels is None:
         labels = [run_label(t) if t is run else result_label(run)
                   for run, t in zip(runs, trajectories, strict=True)]  # fmt: skip
