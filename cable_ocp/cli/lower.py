@@ -67,6 +67,7 @@ def run_lower_command(args: argparse.Namespace) -> int:
     from cable_ocp.lowering.landing import land, landing_scene
     from cable_ocp.lowering.plan import plan_landing
     from cable_ocp.plots import landing, survey
+    from cable_ocp.plots.drum import drum_use
     from cable_ocp.scene.output import json_text
     from cable_ocp.simulation.run import simulate
 
@@ -127,11 +128,13 @@ def run_lower_command(args: argparse.Namespace) -> int:
                     label += f" ({result.result.solver})"
                 landing.landing(run, report=result.report, label=label,
                                 path=folder / f"hover_{name}.png")  # fmt: skip
+                drum_use(result.result, [label], folder / f"hover_{name}_drum.png")
         if held is not None:
             result_files.save(held.mpc, folder / "hold.nc")
             plots.clearance([locked, held.mpc], held.scene.seabed.clearance,
                             ["winch locked", "closed loop"], folder / "hold_clearance.png",
                             zoom=True)  # fmt: skip
+            drum_use(held.mpc, ["closed loop"], folder / "hold_drum.png")
     print(f"landing: {plan.status}")
     if held is not None:
         print(f"hold: {held.status}; {held.mpc.real_time_factor:.0f}x faster than real time")
