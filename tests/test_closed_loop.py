@@ -19,7 +19,7 @@ from cable_ocp.drive.controls import HermiteIntervals
 from cable_ocp.drive.drive import Drive
 from cable_ocp.model.cable import CableModel
 from cable_ocp.model.layout import INPUTS
-from cable_ocp.plots.drum import drum_rates, drum_use, on_limit_share
+from cable_ocp.plots.drum_limits import drum_rates, drum_use, on_limit_share
 from cable_ocp.result_files.dataset import fields_equal
 from cable_ocp.scene.schema import load_scene
 from cable_ocp.simulation.statics import equilibrium

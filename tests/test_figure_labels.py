@@ -20,7 +20,7 @@ import cable_ocp as co  # noqa: E402
 from cable_ocp import cli, plots  # noqa: E402
 from cable_ocp.control.closed_loop import SolveLog  # noqa: E402
 from cable_ocp.plots import closed_loop  # noqa: E402
-from cable_ocp.plots.drum import drum_use  # noqa: E402
+from cable_ocp.plots.drum_limits import drum_use  # noqa: E402
 from cable_ocp.simulation import progress  # noqa: E402
 from cable_ocp.simulation.trajectory_dataset import state_names  # noqa: E402
 

@@ -67,7 +67,7 @@ def run_lower_command(args: argparse.Namespace) -> int:
     from cable_ocp.lowering.landing import land, landing_scene
     from cable_ocp.lowering.plan import plan_landing
     from cable_ocp.plots import landing, survey
-    from cable_ocp.plots.drum import drum_use
+    from cable_ocp.plots.drum_limits import drum_use
     from cable_ocp.scene.output import json_text
     from cable_ocp.simulation.run import simulate
 

@@ -129,7 +129,7 @@ def run_mpc_command(args: argparse.Namespace) -> int:
     from cable_ocp.control.closed_loop.loop import mpc
     from cable_ocp.control.closed_loop.references import reference_runs
     from cable_ocp.plots import closed_loop
-    from cable_ocp.plots.drum import drum_use
+    from cable_ocp.plots.drum_limits import drum_use
     from cable_ocp.scene.output import json_text
 
     scene = scene_from(args)

@@ -61,7 +61,7 @@ def run_optimize_command(args: argparse.Namespace) -> int:
     from cable_ocp import plots
     from cable_ocp.cli.exports import winch_csv
     from cable_ocp.control.optimization import optimize
-    from cable_ocp.plots.drum import drum_use
+    from cable_ocp.plots.drum_limits import drum_use
     from cable_ocp.scene.output import json_text
 
     scene = scene_from(args)
