@@ -9,10 +9,6 @@ import nbformat
 import pytest
 from nbclient import NotebookClient
 
-# One worker of a parallel run executes them in turn, then builds the site from their cache
-# (tests/test_site.py); they write beside themselves in notebooks/.
-pytestmark = pytest.mark.xdist_group("notebooks")
-
 ROOT = Path(__file__).resolve().parent.parent
 NOTEBOOKS = sorted((ROOT / "notebooks").glob("*.ipynb"))
 # The longest two (61 and 43 s of the default run's 812 s on 2 cores) run with -m slow.

@@ -1,10 +1,12 @@
 """The documentation site: built by Sphinx with warnings as errors, and looked at in a browser.
 
 The site executes the notebooks through myst-nb's cache, which ``tests/test_notebooks.py`` fills
-with its own runs: this file is named to run after it, on the same worker of a parallel run
-(``xdist_group``), so that a test run executes each notebook once. Needs the ``docs`` extra; the
-browser test needs Debian's headless Chromium (``apt-get install chromium-headless-shell``, as
-``.ci/run`` does).
+with its own runs: this file is named to run after it, so that one process executes each notebook
+once. On pytest-xdist's workers (the default run's two, by files) the site may build beside the
+notebooks and execute those not cached yet itself (pytest-xdist's ``loadgroup``, which could keep
+them on one worker, ignores its groups on pytest 9.2: pytest-xdist issue 1386). Needs the
+``docs`` extra; the browser test needs Debian's headless Chromium
+(``apt-get install chromium-headless-shell``, as ``.ci/run`` does).
 
 Slow (``python -m pytest -m slow``): the build took 121 s of the default run's 812 s on 2 cores,
 which has to stay under 10 minutes.
@@ -28,8 +30,7 @@ import cable_ocp
 from cable_ocp.scene.fields import field_rows, schema_sections
 
 pytest.importorskip("sphinx", reason="the site needs the docs extra (pip install -e '.[docs]')")
-# On the notebooks' worker of a parallel run, after them (their cache is the site's).
-pytestmark = [pytest.mark.slow, pytest.mark.xdist_group("notebooks")]
+pytestmark = pytest.mark.slow
 
 ROOT = Path(__file__).resolve().parent.parent
 DOCS = ROOT / "docs"
