@@ -12,6 +12,7 @@ from __future__ import annotations
 import textwrap
 from collections.abc import Sequence
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 import matplotlib.pyplot as plt
 import numpy as np
@@ -22,13 +23,17 @@ from cable_ocp.plots import result_label, run_label, run_title, significant
 from cable_ocp.plots.figure import finish_figure
 from cable_ocp.simulation.trajectory import Trajectory
 
+if TYPE_CHECKING:  # results are told by what they hold (cable_ocp.plots): no solver is loaded
+    from cable_ocp.control.closed_loop.result import MpcResult
+    from cable_ocp.control.optimization import OcpResult
+
 # A drum within this share of a limit is on it (the closed loop's drum clips to the limit exactly;
 # an optimum's bound rows hold at its RK4 points).
 ON_LIMIT = 0.01
 
 
 def drum_use(
-    runs,
+    runs: Trajectory | OcpResult | MpcResult | Sequence[Trajectory | OcpResult | MpcResult],
     labels: Sequence[str] | None = None,
     path: str | Path | None = None,
 ) -> Figure:
