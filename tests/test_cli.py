@@ -306,7 +306,8 @@ def test_bad_validate_elements_are_refused(capsys, no_heavy_work):
 
 # --- simulate end to end -----------------------------------------------------------------------
 
-FIGURES = {"end_trajectory.png", "clearance.png", "cable_shapes.png", "winch_angle.png"}
+FIGURES = {"end_trajectory.png", "clearance.png", "cable_shapes.png", "winch_angle.png",
+           "tension.png"}  # fmt: skip
 
 
 def test_cli_simulate_writes_results(tmp_path, capsys):

@@ -378,7 +378,7 @@ def test_mpc_command_writes_results_and_figures(models_dir, tmp_path, capsys):
     assert args.run(args) == 0
     written = sorted(p.name for p in out.iterdir() if not p.name.startswith("."))
     assert written == ["clearance.png", "drum.png", "mpc.nc", "solve_times.png", "summary.json",
-                       "winch_angle.png"]  # fmt: skip
+                       "tension.png", "winch_angle.png"]  # fmt: skip
     printed = capsys.readouterr().out
     assert '"omega"' in printed and '"reference_omegas"' in printed
 

@@ -9,11 +9,15 @@ from __future__ import annotations
 
 from dataclasses import replace
 
+import matplotlib.pyplot as plt
 import numpy as np
 import pytest
 import xarray as xr
 
 import cable_ocp as co
+from cable_ocp.model.cable import spec_from_scene
+from cable_ocp.plots import significant
+from cable_ocp.plots.tension import tension_against_static
 from cable_ocp.scene.schema import scene_of
 from cable_ocp.simulation import slack
 from cable_ocp.simulation.line_trajectory import LineTrajectory
@@ -61,6 +65,16 @@ def test_a_drum_paying_out_faster_than_the_load_sinks_fails_and_says_where(loade
     assert 0.0 < worst.first < worst.time < 3.0 and worst.duration > 0.5
     assert worst.bond == run.tensions.shape[1]  # the top bond pushes hardest
     assert any("in compression" in note for note in summary["notes"])
+    # Its figure: the top tension below zero, past the push at which the run fails.
+    figure = tension_against_static(run, ["5 m/s pay-out"])
+    texts = [text.get_text() for text in figure.axes[0].get_legend().get_texts()]
+    push = significant(1e-3 * run.physics.slack.compression_tolerance)
+    assert f"a push of {push} kN fails the run" in texts
+    least = significant(1e-3 * run.top_tension.min())
+    assert texts[0].startswith(f"5 m/s pay-out: least {least} kN (-")  # a push: below 0 %
+    assert "slack line: 10% of static (DNV-RP-H103)" in texts
+    assert figure.axes[0].get_ylabel() == "top tension [kN]"
+    plt.close(figure)
 
 
 def test_the_same_pay_out_slow_enough_passes(loaded_hanging):
@@ -126,6 +140,12 @@ def test_a_line_paid_out_faster_than_the_frame_sinks_fails(tmp_path):
     # Saved and read again, the run keeps its signs and fails the same way.
     back = LineTrajectory.load(run.save(tmp_path / "line"))
     assert back.summary() == summary
+    # A line paid out by elements is drawn too: its static grows with the line out.
+    figure = tension_against_static(back, path=tmp_path / "tension.png")
+    assert (tmp_path / "tension.png").stat().st_size > 1000
+    static = 1e3 * figure.axes[0].get_lines()[1].get_ydata()  # N
+    wire = spec_from_scene(back.scene).element.submerged_weight_per_length  # N/m
+    assert static[-1] - static[0] == pytest.approx(200.0 * wire, rel=1e-3)  # 220 m out, not 20
 
 
 def _flat_grid(path, depth: float):

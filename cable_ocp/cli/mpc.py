@@ -130,6 +130,7 @@ def run_mpc_command(args: argparse.Namespace) -> int:
     from cable_ocp.control.closed_loop.references import reference_runs
     from cable_ocp.plots import closed_loop
     from cable_ocp.plots.drum_limits import drum_use
+    from cable_ocp.plots.tension import tension_against_static
     from cable_ocp.scene.output import json_text
 
     scene = scene_from(args)
@@ -158,6 +159,7 @@ def run_mpc_command(args: argparse.Namespace) -> int:
         closed_loop.solve_times(result, folder / "solve_times.png", scene.name)
         plots.winch_angle(result, bounds=result.angle_range, path=folder / "winch_angle.png")
         drum_use(result, path=folder / "drum.png")
+        tension_against_static(runs, labels, folder / "tension.png")
         (folder / "summary.json").write_text(json_text(figures))
     summary = {k: v for k, v in figures.items() if k != "failures"}
     print(json_text(summary))

@@ -62,6 +62,7 @@ def run_optimize_command(args: argparse.Namespace) -> int:
     from cable_ocp.cli.exports import winch_csv
     from cable_ocp.control.optimization import optimize
     from cable_ocp.plots.drum_limits import drum_use
+    from cable_ocp.plots.tension import tension_against_static
     from cable_ocp.scene.output import json_text
 
     scene = scene_from(args)
@@ -86,6 +87,7 @@ def run_optimize_command(args: argparse.Namespace) -> int:
             plots.clearance(pair, seabed.clearance, labels, folder / "clearance.png",
                             seabed.minimum_clearance)  # fmt: skip
             plots.winch_angle(pair, labels, bounds, path=folder / "winch_angle.png")
+            tension_against_static(pair, labels, folder / "tension.png")
             if result.trajectory is not None:  # the optimum's drum (the locked one stands still)
                 drum_use(result, path=folder / "drum.png")
             plots.cable_shapes(pair[-1], seabed=seabed, path=folder / "cable_shapes.png")

@@ -40,6 +40,7 @@ def write_run(
         same so that it can be looked at; else 0.
     """
     from cable_ocp import plots
+    from cable_ocp.plots.tension import tension_against_static
 
     seabed = scene.seabed
     with results_folder(out) as folder:
@@ -52,6 +53,7 @@ def write_run(
         plots.cable_shapes(trajectory, seabed=seabed, path=folder / "cable_shapes.png")
         plots.winch_angle(trajectory, bounds=(scene.winch.angle_min, scene.winch.angle_max),
                           path=folder / "winch_angle.png")  # fmt: skip
+        tension_against_static(trajectory, path=folder / "tension.png")
         if scene.winch.line is not None:  # a line paid out by elements: n over time
             plots.line_run(trajectory, path=folder / "line_run.png")
         figures = trajectory.summary()

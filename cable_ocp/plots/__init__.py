@@ -5,9 +5,10 @@ Every function takes one or more runs and returns the figure: a
 ``OcpResult``'s verified run, an ``MpcResult``'s plant run; its planned angle too in
 :func:`winch_angle`), so that an open loop and a closed loop are drawn by the same functions. The
 figures of the closed loop's solves are in :mod:`cable_ocp.plots.closed_loop`, the drum against the
-winch's limits in :mod:`cable_ocp.plots.drum_limits`. Importing this module never selects a
-matplotlib backend: matplotlib chooses one (Agg without a display, so the command line and the tests
-run headless; inline in a notebook).
+winch's limits in :mod:`cable_ocp.plots.drum_limits`, the top tension against its static value in
+:mod:`cable_ocp.plots.tension`. Importing this module never selects a matplotlib backend: matplotlib
+chooses one (Agg without a display, so the command line and the tests run headless; inline in a
+notebook).
 
 Who closes a figure:
 
