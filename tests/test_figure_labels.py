@@ -21,6 +21,7 @@ from cable_ocp import cli, plots  # noqa: E402
 from cable_ocp.control.closed_loop import SolveLog  # noqa: E402
 from cable_ocp.plots import closed_loop  # noqa: E402
 from cable_ocp.plots.drum_limits import drum_use  # noqa: E402
+from cable_ocp.plots.tension import tension_against_static  # noqa: E402
 from cable_ocp.simulation import progress  # noqa: E402
 from cable_ocp.simulation.trajectory_dataset import state_names  # noqa: E402
 
@@ -151,6 +152,8 @@ def test_the_drum_figure_names_scene_runs_units_and_limits(runs, models_dir):
                                            locked.omega, locked.scene_record)  # fmt: skip
     with pytest.raises(ValueError, match="holds no winch inputs at its steps"):
         drum_use(earlier)
+    with pytest.raises(ValueError, match="holds no tensions"):
+        tension_against_static(earlier)
     with pytest.raises(TypeError, match="not str"):
         drum_use([locked, "run.nc"])
 

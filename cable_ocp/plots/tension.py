@@ -59,7 +59,8 @@ def tension_against_static(
     TypeError
         A run is none of those, or a result holds no run (a failed optimisation's).
     ValueError
-        A run holds no scene (a file written before scenes were kept).
+        A run holds no scene (a file written before scenes were kept), or no tensions (a closed
+        loop's file of format 1 or 2 kept only its end and top).
     """
     one = isinstance(runs, Trajectory | LineTrajectory) or hasattr(runs, "trajectory")
     runs = [runs] if one else list(runs)
@@ -70,8 +71,13 @@ def tension_against_static(
     fig, ax = plt.subplots(figsize=(10, 4.8))
     lowest = np.inf
     for index, (trajectory, label) in enumerate(zip(trajectories, labels, strict=True)):
-        static = top_values(run_static(trajectory, spec_from_scene(trajectory.scene)))
         tension = trajectory.top_tension
+        if not np.isfinite(tension).any():
+            raise ValueError(
+                f"{trajectory.scene_name} holds no tensions (a closed loop's file of result "
+                "format 1 or 2 kept only its end and top): its tension cannot be drawn"
+            )
+        static = top_values(run_static(trajectory, spec_from_scene(trajectory.scene)))
         colour = f"C{index}"
         share = _shares(tension, static)
         ax.plot(trajectory.time, 1e-3 * tension, color=colour, lw=1.0, label=f"{label}: {share}")
