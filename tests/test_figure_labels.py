@@ -154,7 +154,7 @@ def test_the_drum_figure_names_scene_runs_units_and_limits(runs, models_dir):
         drum_use(earlier)
     with pytest.raises(ValueError, match="holds no tensions"):
         tension_against_static(earlier)
-    with pytest.raises(TypeError, match="not str"):
+    with pytest.raises(ValueError, match="str holds no run to draw"):
         drum_use([locked, "run.nc"])
 
 

@@ -17,6 +17,7 @@ import xarray as xr
 import cable_ocp as co
 from cable_ocp.model.cable import spec_from_scene
 from cable_ocp.plots import significant
+from cable_ocp.plots.drum_limits import drum_use
 from cable_ocp.plots.tension import tension_against_static
 from cable_ocp.scene.schema import scene_of
 from cable_ocp.simulation import slack
@@ -146,6 +147,8 @@ def test_a_line_paid_out_faster_than_the_frame_sinks_fails(tmp_path):
     static = 1e3 * figure.axes[0].get_lines()[1].get_ydata()  # N
     wire = spec_from_scene(back.scene).element.submerged_weight_per_length  # N/m
     assert static[-1] - static[0] == pytest.approx(200.0 * wire, rel=1e-3)  # 220 m out, not 20
+    with pytest.raises(TypeError, match="not LineTrajectory .a line paid out by elements"):
+        drum_use(back)  # its line out is plots.line_run's
 
 
 def _flat_grid(path, depth: float):

@@ -100,8 +100,12 @@ def _run_of(run) -> Trajectory | LineTrajectory:
     return run.trajectory
 
 
-def _runs(runs, labels) -> list[tuple[object, Trajectory | LineTrajectory, str]]:
-    """``(run, its trajectory, its label)`` of one run or several (module docstring)."""
+def labelled_runs(runs, labels) -> list[tuple[object, Trajectory | LineTrajectory, str]]:
+    """``(run, its trajectory, its label)`` of one run or several (module docstring).
+
+    The labels default to what each run is (its scene's name first where the runs' scenes
+    differ); ValueError names a run that holds no trajectory (a failed optimisation's).
+    """
     one = isinstance(runs, Trajectory | LineTrajectory) or hasattr(runs, "trajectory")
     runs = [runs] if one else list(runs)
     trajectories = [_run_of(run) for run in runs]
@@ -119,7 +123,7 @@ def _runs(runs, labels) -> list[tuple[object, Trajectory | LineTrajectory, str]]
 
 def _labelled(runs, labels) -> list[tuple[Trajectory | LineTrajectory, str]]:
     """``(trajectory, label)`` of one run or several."""
-    return [(trajectory, label) for _, trajectory, label in _runs(runs, labels)]
+    return [(trajectory, label) for _, trajectory, label in labelled_runs(runs, labels)]
 
 
 def _scene(run) -> str | None:
@@ -262,7 +266,7 @@ def winch_angle(
     grid's, ``OcpResult.nodes``) has its nodes marked on its angle.
     """
     fig, ax = plt.subplots(figsize=(9, 4.4))
-    runs = _runs(trajectories, labels)
+    runs = labelled_runs(trajectories, labels)
     pairs = [(traj, label) for _, traj, label in runs]
     for run, traj, label in runs:
         if _closed_loop(run):

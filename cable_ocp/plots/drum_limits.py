@@ -19,7 +19,7 @@ import numpy as np
 from matplotlib.figure import Figure
 
 from cable_ocp.model.layout import INPUTS
-from cable_ocp.plots import result_label, run_label, run_title, significant
+from cable_ocp.plots import labelled_runs, run_title, significant
 from cable_ocp.plots.figure import finish_figure
 from cable_ocp.simulation.trajectory import Trajectory
 
@@ -53,26 +53,23 @@ def drum_use(
     Raises
     ------
     ValueError
-        A run holds no winch inputs (a result of an earlier format kept only its end and top).
+        A run holds no trajectory (a failed optimisation's), or no winch inputs (a result of an
+        earlier format kept only its end and top).
     TypeError
-        A run is none of those, or a result holds no run (a failed optimisation's).
+        A run is a line paid out by elements (``LineTrajectory``).
     """
-    runs = [runs] if isinstance(runs, Trajectory) or hasattr(runs, "trajectory") else list(runs)
-    trajectories = [run if isinstance(run, Trajectory) else getattr(run, "trajectory", None)
-                    for run in runs]  # fmt: skip
-    for run, trajectory in zip(runs, trajectories, strict=True):
+    runs = labelled_runs(runs, labels)
+    for run, trajectory, _ in runs:
         if not isinstance(trajectory, Trajectory):
             raise TypeError(
-                f"drum_use draws a Trajectory, OcpResult or MpcResult with a run, not "
-                f"{type(run).__name__} (a line paid out by elements: plots.line_run)"
+                f"drum_use draws a Trajectory, OcpResult or MpcResult, not {type(run).__name__} "
+                "(a line paid out by elements: plots.line_run)"
             )
-    if labels is None:
-        labels = [run_label(t) if t is run else result_label(run)
-                  for run, t in zip(runs, trajectories, strict=True)]  # fmt: skip
+    trajectories, labels = [t for _, t, _ in runs], [label for _, _, label in runs]
     winch = trajectories[0].scene.winch
     limits = (winch.rate_max, winch.acceleration_max)
     fig, axes = plt.subplots(2, 1, figsize=(13, 6.4), sharex=True)
-    for index, (run, trajectory, label) in enumerate(zip(runs, trajectories, labels, strict=True)):
+    for index, (run, trajectory, label) in enumerate(runs):
         series = drum_rates(trajectory, winch.drum_radius)
         saturation = getattr(run, "saturation", "")
         for ax, values, limit in zip(axes, series, limits, strict=True):
@@ -93,7 +90,7 @@ def drum_use(
         ax.grid(alpha=0.3)
         ax.legend(fontsize=8, loc="upper left", bbox_to_anchor=(1.01, 1))  # beside the curves
     axes[0].set_title(run_title("the drum against the winch's limits",
-                                [t.scene_name for t in trajectories], list(labels)))  # fmt: skip
+                                [t.scene_name for t in trajectories], labels))  # fmt: skip
     axes[-1].set_xlabel("t [s]")
     return finish_figure(fig, path)
 

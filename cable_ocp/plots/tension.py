@@ -19,7 +19,7 @@ import numpy as np
 from matplotlib.figure import Figure
 
 from cable_ocp.model.cable import spec_from_scene
-from cable_ocp.plots import result_label, run_label, run_title, significant
+from cable_ocp.plots import labelled_runs, run_title, significant
 from cable_ocp.plots.figure import finish_figure
 from cable_ocp.simulation.line_trajectory import LineTrajectory
 from cable_ocp.simulation.slack import SLACK_FRACTION, run_static, top_values
@@ -56,18 +56,13 @@ def tension_against_static(
 
     Raises
     ------
-    TypeError
-        A run is none of those, or a result holds no run (a failed optimisation's).
     ValueError
-        A run holds no scene (a file written before scenes were kept), or no tensions (a closed
-        loop's file of format 1 or 2 kept only its end and top).
+        A run holds no trajectory (a failed optimisation's), no scene (a file written before
+        scenes were kept), or no tensions (a closed loop's file of format 1 or 2 kept only its
+        end and top).
     """
-    one = isinstance(runs, Trajectory | LineTrajectory) or hasattr(runs, "trajectory")
-    runs = [runs] if one else list(runs)
-    trajectories = [_run_of(run) for run in runs]
-    if labels is None:
-        labels = [run_label(t) if t is run else result_label(run)
-                  for run, t in zip(runs, trajectories, strict=True)]  # fmt: skip
+    runs = labelled_runs(runs, labels)
+    trajectories, labels = [t for _, t, _ in runs], [label for _, _, label in runs]
     fig, ax = plt.subplots(figsize=(10, 4.8))
     lowest = np.inf
     for index, (trajectory, label) in enumerate(zip(trajectories, labels, strict=True)):
@@ -98,20 +93,8 @@ def tension_against_static(
     ax.grid(alpha=0.3)
     ax.legend(fontsize=8, loc="upper left", bbox_to_anchor=(1.01, 1))  # beside the curves
     ax.set_title(run_title("top tension against its static value and the slack line",
-                           [t.scene_name for t in trajectories], list(labels)))  # fmt: skip
+                           [t.scene_name for t in trajectories], labels))  # fmt: skip
     return finish_figure(fig, path)
-
-
-def _run_of(run) -> Trajectory | LineTrajectory:
-    """The trajectory of a run (itself, or the one a result carries); TypeError otherwise."""
-    trajectory = run if isinstance(run, Trajectory | LineTrajectory) else None
-    trajectory = getattr(run, "trajectory", trajectory)
-    if not isinstance(trajectory, Trajectory | LineTrajectory):
-        raise TypeError(
-            "tension_against_static draws a Trajectory, LineTrajectory, OcpResult or MpcResult "
-            f"with a run, not {type(run).__name__}"
-        )
-    return trajectory
 
 
 def _shares(tension: np.ndarray, static: np.ndarray) -> str:
