@@ -372,7 +372,7 @@ def test_the_command_line_lands_holds_and_writes_its_figures(tmp_path, capsys):
     assert summary["hover_closed_loop_compensation_ratio"] > 90
     assert summary["units"]["hover_closed_loop_real_time_factor"] == "1"
     for name in ("landing.nc", "landing.png", "seabed_view.png", "line_run.png",
-                 "hold_clearance.png", "hold_drum.png", "hover_optimised.png",
+                 "hold_clearance.png", "hold_drum.png", "hold_tension.png", "hover_optimised.png",
                  "hover_closed_loop.png", "hover_optimised_drum.png",
                  "hover_closed_loop_drum.png"):  # fmt: skip
         assert (out / name).stat().st_size > 0, name

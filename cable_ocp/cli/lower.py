@@ -68,6 +68,7 @@ def run_lower_command(args: argparse.Namespace) -> int:
     from cable_ocp.lowering.plan import plan_landing
     from cable_ocp.plots import landing, survey
     from cable_ocp.plots.drum_limits import drum_use
+    from cable_ocp.plots.tension import tension_against_static
     from cable_ocp.scene.output import json_text
     from cable_ocp.simulation.run import simulate
 
@@ -135,6 +136,8 @@ def run_lower_command(args: argparse.Namespace) -> int:
                             ["winch locked", "closed loop"], folder / "hold_clearance.png",
                             zoom=True)  # fmt: skip
             drum_use(held.mpc, ["closed loop"], folder / "hold_drum.png")
+            tension_against_static([locked, held.mpc], ["winch locked", "closed loop"],
+                                   folder / "hold_tension.png")  # fmt: skip
     print(f"landing: {plan.status}")
     if held is not None:
         print(f"hold: {held.status}; {held.mpc.real_time_factor:.0f}x faster than real time")
